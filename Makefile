@@ -1,0 +1,63 @@
+# lpfdm — build, test, demo, figures, clean. Plain g++; `make help` lists the targets.
+CXX      ?= g++
+CXXFLAGS ?= -O2
+WARN      = -std=c++17 -Wall -Wextra -Wpedantic
+EIGEN     = -I/usr/include/eigen3
+LIBS      = -lfmt
+OUT      ?= out
+SAN       = -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+PACKAGES  = libeigen3-dev libfmt-dev doctest-dev gnuplot-nox
+TESTS     = $(wildcard tests/test_*.cpp)
+
+.PHONY: all deps test test-unit test-san test-decks demo figures clean help
+all: lpfdm
+
+help:
+	@echo "make lpfdm    build the program (./lpfdm)"
+	@echo "make demo     build and run the collapsing cliff, draw $(OUT)/cliff.png and $(OUT)/cliff.gif"
+	@echo "make test     unit tests (-O2 and ASan+UBSan) and deck tests"
+	@echo "make figures  run the paper's three scenes and draw them into $(OUT)/"
+	@echo "make clean    remove what the build made"
+
+# Missing Debian packages are installed when running as root; otherwise the exact
+# command is printed and the build stops.
+deps:
+	@missing=""; for p in $(PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    echo "installing:$$missing"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing >/dev/null || exit 1; \
+	  else \
+	    echo "missing Debian packages:$$missing"; echo "run: sudo apt-get install$$missing"; exit 1; \
+	  fi; \
+	fi
+
+lpfdm: lpfdm.cpp lpfdm.hpp | deps
+	$(CXX) $(WARN) $(CXXFLAGS) -o $@ lpfdm.cpp $(LIBS)
+
+build/tests: $(TESTS) tests/main.cpp lpfdm.hpp | deps
+	@mkdir -p build
+	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(EIGEN) -o $@ tests/main.cpp $(TESTS) $(LIBS)
+
+build/tests-san: $(TESTS) tests/main.cpp lpfdm.hpp | deps
+	@mkdir -p build
+	$(CXX) $(WARN) -Werror $(SAN) $(EIGEN) -o $@ tests/main.cpp $(TESTS) $(LIBS)
+
+build/lpfdm-san: lpfdm.cpp lpfdm.hpp | deps
+	@mkdir -p build
+	$(CXX) $(WARN) -Werror $(SAN) -o $@ lpfdm.cpp $(LIBS)
+
+test: build/tests build/tests-san lpfdm build/lpfdm-san
+	@bash tests/run.sh
+
+demo: lpfdm
+	@mkdir -p $(OUT)
+	./lpfdm -o $(OUT) decks/cliff.deck
+	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.png'; title='Cliff failure (Fig. 5)'; frame=-1" tools/snapshot.gp
+	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.gif'; title='Cliff failure'; delay=25" tools/animate.gp 2>/dev/null
+	@echo "pictures: $(OUT)/cliff.png $(OUT)/cliff.gif"
+
+clean:
+	rm -rf build $(OUT) lpfdm

@@ -1,0 +1,251 @@
+// lpfdm — command-line program: reads a deck, runs the LPFDM cycle, writes point
+// tables and histories for gnuplot. Usage: lpfdm [options] DECK (see --help).
+#include "lpfdm.hpp"
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace {
+
+volatile std::sig_atomic_t g_interrupted = 0;
+extern "C" void on_sigint(int) { g_interrupted = 1; }
+
+constexpr int kExitBadInput = 2, kExitNumerical = 3, kExitInterrupted = 130;
+
+const char* kUsage =
+    "usage: lpfdm [options] DECK\n"
+    "Runs the Lagrangian Particle Finite Difference Method on the scene of DECK.\n"
+    "\n"
+    "options:\n"
+    "  -o DIR        write output files into DIR (created; default: the current directory)\n"
+    "  --refine K    K times finer lattice: same geometry in metres, dt / K, K times the steps\n"
+    "  --steps N     run N steps instead of the deck's\n"
+    "  --seed N      seed of the strength scatter instead of the deck's SEED\n"
+    "  -q            quiet: no progress line and no summary\n"
+    "  --help        this text\n"
+    "  --version     the version\n"
+    "\n"
+    "exit status: 0 done, 2 bad deck or options, 3 numerical trouble, 130 interrupted\n";
+
+struct Options {
+    std::string deck, outdir = ".";
+    long refine = 1, steps = 0;
+    long long seed = -1;
+    bool quiet = false;
+};
+
+bool parse_long(const char* s, long long lo, long long hi, long long& v) {
+    char* end = nullptr;
+    errno = 0;
+    v = std::strtoll(s, &end, 10);
+    return errno == 0 && end != s && *end == '\0' && v >= lo && v <= hi;
+}
+
+int usage_error(const std::string& m) {
+    std::fprintf(stderr, "lpfdm: error: %s\n%s", m.c_str(), kUsage);
+    return kExitBadInput;
+}
+
+// An output file written as NAME.part and renamed when complete, so a stopped run
+// never leaves a table that looks complete.
+struct OutFile {
+    std::string final_path, part_path;
+    std::FILE* f = nullptr;
+    const lpfdm::Output* spec = nullptr;
+    bool first_frame = true;
+};
+
+bool make_dir(const std::string& d) {
+    if (d.empty()) return false;
+    std::string cur;
+    for (std::size_t i = 0; i <= d.size(); ++i) {
+        if (i == d.size() || d[i] == '/') {
+            if (!cur.empty() && mkdir(cur.c_str(), 0777) != 0 && errno != EEXIST) return false;
+        }
+        if (i < d.size()) cur += d[i];
+    }
+    struct stat st;
+    return stat(d.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+double physical_memory_bytes() {
+    const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+    return pages > 0 && size > 0 ? double(pages) * double(size) : 0.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Options opt;
+    for (int a = 1; a < argc; ++a) {
+        const std::string s = argv[a];
+        auto value = [&](const char* name) -> const char* {
+            if (a + 1 >= argc) return nullptr;
+            (void)name;
+            return argv[++a];
+        };
+        long long v = 0;
+        if (s == "--help" || s == "-h") { std::fputs(kUsage, stdout); return 0; }
+        if (s == "--version") { std::printf("lpfdm %s\n", lpfdm::kVersion); return 0; }
+        if (s == "-q") { opt.quiet = true; continue; }
+        if (s == "-o") {
+            const char* d = value("-o");
+            if (!d) return usage_error("-o needs a directory");
+            opt.outdir = d;
+        } else if (s == "--refine") {
+            const char* d = value("--refine");
+            if (!d || !parse_long(d, 1, 64, v)) return usage_error("--refine needs a whole number from 1 to 64");
+            opt.refine = long(v);
+        } else if (s == "--steps") {
+            const char* d = value("--steps");
+            if (!d || !parse_long(d, 1, 1'000'000'000LL, v)) return usage_error("--steps needs a whole number from 1 to 1e9");
+            opt.steps = long(v);
+        } else if (s == "--seed") {
+            const char* d = value("--seed");
+            if (!d || !parse_long(d, 0, 9'007'199'254'740'992LL, v)) return usage_error("--seed needs a whole number >= 0");
+            opt.seed = v;
+        } else if (!s.empty() && s[0] == '-' && s != "-") {
+            return usage_error("unknown option '" + s + "'");
+        } else {
+            if (!opt.deck.empty()) return usage_error("only one deck, please");
+            opt.deck = s;
+        }
+    }
+    if (opt.deck.empty()) return usage_error("no deck given");
+
+    // --- read and check everything before the first step ---
+    lpfdm::Scene scene;
+    std::string text;
+    lpfdm::Diagnostics diags = lpfdm::load_file(opt.deck, text);
+    if (diags.empty()) diags = lpfdm::parse_deck_text(text, opt.deck, scene);
+    if (diags.empty()) {
+        if (opt.refine > 1) {
+            if (long(scene.mx) * opt.refine > 1'000'000 || long(scene.my) * opt.refine > 1'000'000)
+                diags.push_back({scene.grid_pos, "--refine " + std::to_string(opt.refine) + " makes the lattice larger than 1e6 cells a side"});
+            else
+                lpfdm::refine(scene, int(opt.refine));
+        }
+        if (opt.steps > 0) scene.steps = opt.steps;
+        if (opt.seed >= 0) scene.seed = std::uint64_t(opt.seed);
+    }
+    if (diags.empty()) diags = lpfdm::validate(scene);
+    if (diags.empty()) {
+        const double points = lpfdm::count_points(scene);
+        const double need = lpfdm::estimate_bytes(scene, points), have = physical_memory_bytes();
+        if (have > 0 && need > 0.8 * have)
+            diags.push_back({scene.grid_pos, fmt::format("the scene needs about {:.3g} GiB ({:.0f} points on {} x {} cells); this machine has {:.3g} GiB",
+                                                         need / 1073741824.0, points, scene.mx, scene.my, have / 1073741824.0)});
+    }
+    if (!diags.empty()) {
+        for (const auto& d : diags) std::fprintf(stderr, "%s\n", d.str().c_str());
+        return kExitBadInput;
+    }
+
+    // --- outputs: NAME.part until complete ---
+    if (!make_dir(opt.outdir)) {
+        std::fprintf(stderr, "lpfdm: error: cannot create the output directory '%s': %s\n", opt.outdir.c_str(), std::strerror(errno));
+        return kExitBadInput;
+    }
+    lpfdm::Simulation sim(scene);
+    std::vector<OutFile> outs;
+    for (const auto& o : sim.scene().outputs) {
+        OutFile of;
+        of.final_path = opt.outdir + "/" + o.file;
+        of.part_path = of.final_path + ".part";
+        of.spec = &o;
+        of.f = std::fopen(of.part_path.c_str(), "wb");
+        if (!of.f) {
+            std::fprintf(stderr, "%s:%d:%d: error: cannot write '%s': %s\n", o.pos.file.c_str(), o.pos.line, o.pos.col, of.part_path.c_str(), std::strerror(errno));
+            for (auto& p : outs) { std::fclose(p.f); std::remove(p.part_path.c_str()); }
+            return kExitBadInput;
+        }
+        if (o.kind == lpfdm::Output::Points) {
+            lpfdm::write_points_header(of.f, sim, opt.deck);
+            lpfdm::write_points_frame(of.f, sim, true);
+            of.first_frame = false;
+        } else {
+            lpfdm::write_history_header(of.f, sim, opt.deck);
+        }
+        outs.push_back(of);
+    }
+    auto finish_outputs = [&](const std::string& note) {
+        bool ok = true;
+        for (auto& o : outs) {
+            if (!note.empty()) std::fprintf(o.f, "# %s\n", note.c_str());
+            ok &= std::fclose(o.f) == 0;
+            ok &= std::rename(o.part_path.c_str(), o.final_path.c_str()) == 0;
+        }
+        if (!ok) std::fprintf(stderr, "lpfdm: error: writing the output files failed\n");
+        return ok;
+    };
+
+    std::signal(SIGINT, on_sigint);
+    const long steps = scene.steps;
+    const bool progress = !opt.quiet && isatty(2);
+    const auto t0 = std::chrono::steady_clock::now();
+    auto last_print = t0;
+    double particle_steps = 0;
+    int status = 0;
+    std::string note;
+    for (long n = 1; n <= steps; ++n) {
+        particle_steps += double(sim.points().size());
+        sim.step();
+        if (!sim.healthy()) {
+            const long k = sim.first_nonfinite_point();
+            std::string where;
+            if (k >= 0) {
+                const auto& p = sim.points();
+                where = fmt::format("; first bad point: id {} in cell ({}, {})", p.id[std::size_t(k)], p.cell[std::size_t(k)] % sim.mx(), p.cell[std::size_t(k)] / sim.mx());
+            }
+            const std::string why = std::isfinite(sim.kinetic_energy())
+                ? fmt::format("a node moved {:.3g} m in one step, more than half a cell: the run is unstable", sim.max_du())
+                : "a non-finite value appeared";
+            std::fprintf(stderr, "lpfdm: error: numerical trouble at step %ld (t = %.6g s): %s%s\n", n, sim.time(), why.c_str(), where.c_str());
+            note = fmt::format("run stopped at step {}: numerical trouble; the frames above are the last good ones", n);
+            status = kExitNumerical;
+            break;
+        }
+        for (auto& o : outs) {
+            const long every = o.spec->every;
+            if (o.spec->kind == lpfdm::Output::History) {
+                if (n % (every > 0 ? every : 1) == 0) lpfdm::write_history_row(o.f, sim);
+            } else if ((every > 0 && n % every == 0) || n == steps) {
+                lpfdm::write_points_frame(o.f, sim, o.first_frame);
+            }
+        }
+        if (g_interrupted) {
+            for (auto& o : outs) {
+                if (o.spec->kind == lpfdm::Output::History) lpfdm::write_history_row(o.f, sim);
+                else if (!(o.spec->every > 0 && n % o.spec->every == 0)) lpfdm::write_points_frame(o.f, sim, false);
+            }
+            note = fmt::format("run interrupted at step {} of {}", n, steps);
+            std::fprintf(stderr, "\nlpfdm: interrupted at step %ld of %ld; the last frame and a history row were written\n", n, steps);
+            status = kExitInterrupted;
+            break;
+        }
+        if (progress) {
+            const auto now = std::chrono::steady_clock::now();
+            if (std::chrono::duration<double>(now - last_print).count() > 0.5 || n == steps) {
+                last_print = now;
+                const double el = std::chrono::duration<double>(now - t0).count();
+                std::fprintf(stderr, "\rstep %ld/%ld (%3.0f%%)  ke %.4g J/m  %.0f s left   ", n, steps, 100.0 * n / steps, sim.kinetic_energy(),
+                             el / n * (steps - n));
+            }
+        }
+    }
+    if (progress) std::fputc('\n', stderr);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!finish_outputs(note) && status == 0) status = kExitBadInput;
+    if (!opt.quiet)
+        std::printf("lpfdm: %ld steps, %zu points, %.3f s, %.3g particle-steps/s; mass inside %.9g, outflow %.9g, initial %.9g kg/m\n",
+                    sim.step_count(), sim.points().size(), wall, wall > 0 ? particle_steps / wall : 0.0, sim.mass_inside(), sim.mass_outflow(),
+                    sim.mass_initial());
+    return status;
+}

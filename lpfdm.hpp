@@ -1,0 +1,1577 @@
+// lpfdm.hpp — Lagrangian Particle Finite Difference Method (Konagai & Johansson, 2001)
+// for 2D plane-strain large deformations of soil. One header, C++17.
+//
+// WHAT IT DOES
+//   Unconnected material points carry every Lagrangian quantity (stress, volume,
+//   strength, plastic strain) across a fixed square lattice. Each step runs FLAC's
+//   explicit cycle on the lattice, moves the points with the lattice, and resets the
+//   lattice. No global matrix, no iteration. Equation numbers in comments (// eq. 5a)
+//   are those of the paper.
+//
+// USE
+//   #include "lpfdm.hpp"                        // needs Eigen-free C++17 only (+fmt for I/O)
+//   lpfdm::Scene s;                             // build in code ...
+//   s.mx = 40; s.my = 24; s.cell_m = 0.5;       //   lattice: 40 x 24 cells of 0.5 m
+//   s.materials.push_back(lpfdm::Material::elastic(1, 2e7, 0.25, 2000));
+//   s.clusters.push_back({1, {0, 0, 20, 12}, 2});       // mat, box [m], 2x2 points/cell
+//   s.fixes.push_back({lpfdm::kFixX | lpfdm::kFixY, {0, 0, 20, 0}});
+//   s.gravity_y = -9.81; s.damping = 0.8; s.dt_s = 1e-3; s.steps = 6000;
+//   // ... or read a deck:  lpfdm::Scene s; auto diags = lpfdm::read_deck("col.deck", s);
+//   auto diags = lpfdm::validate(s);            // empty when the scene can run
+//   lpfdm::Simulation sim(s);                   // points created, nothing allocated later
+//   for (long n = 0; n < s.steps; ++n) sim.step();
+//   const lpfdm::Points& p = sim.points();      // p.x[k], p.syy[k], ... (structure of arrays)
+//   A constitutive model of your own: sim.set_user_model(mat_id, callable) where the
+//   callable has eq. 6's signature  void(const StrainIncrement&, Stress&, PointState&).
+//
+// CONFIGURATION (define before including)
+//   LPFDM_NO_IO   leave out the deck reader and the writers; the rest needs only the
+//                 C++17 standard library (no fmt, no exceptions on the hot path).
+//
+// CHOICES WHERE THE PAPER IS OPEN (each is tested in tests/)
+//   * Nodal forces are the exact transpose of eq. 5 (virtual work), not the printed
+//     eq. 9, whose node order [k-1], [k+1] is ambiguous: sum_a F[a].du[a] = -L^2 sig:deps.
+//   * The Jaumann rotation by eq. 5f's d_theta is applied as an exact orthogonal
+//     rotation (Cayley form, no trigonometric call): stress invariants are preserved to
+//     rounding. It equals the usual linearised update to first order in d_theta.
+//   * Eq. 8 divides sum V sigma by max(L^2, sum V): identical to the paper while the
+//     points' volume fits the cell; where points crossing cell edges pack more than one
+//     cell's volume into a cell, its smeared stress is their volume average instead of
+//     an overcount (that overcount made cells stiffer in proportion to their number of
+//     points, and errors grew under refinement: see tests/test_cycle.cpp).
+//   * Eq. 12 uses the strain increments of the cell containing x_node - du_node; a
+//     lookup outside the lattice or into an empty cell compensates nothing (an empty
+//     cell has no strain: taken from nodes at rest beside moving ones, it made every
+//     free surface brake and stretch, an instability seen in free fall). A node that had no mass in the
+//     previous step has no increment of its own to compensate: it takes the mass-
+//     weighted mean increment of its neighbours that had mass (the material arriving
+//     brings its motion). With the paper's literal du = 0 a falling block is braked at
+//     every new row of cells it enters (tests: free fall at exactly g).
+//   * Eq. 14 uses sgn(0) = 0 and the compensated du; a node without mass has du = 0.
+//   * Point volume follows V <- V (1 + d_eps_xx + d_eps_yy); a rigid rotation keeps it.
+//   * A point belongs to the cell floor(x/L), floor(y/L); the lattice is the half-open
+//     box [0, mx L) x [0, my L). A point outside it has left: it is removed and its mass
+//     is counted as outflow.
+//   * Point masses are rounded to multiples of one ulp of the total mass, so that every
+//     mass sum is exact in double precision: mass inside + outflow == initial, bit for bit.
+//   * Mohr-Coulomb: FLAC's closed-form return (shear, tension, and both at the corner),
+//     with sigma_zz among the principal stresses. A point that yields for the first time
+//     is returned to its intact surface and from then on keeps (1 - SOFTEN) of its cohesion.
+//   * Scatter: c and phi per point from a truncated Gaussian (resampled when outside
+//     c >= 0, 0 < phi < 90 deg), drawn from the project's own xoshiro256** stream with
+//     its own logarithm and sine, so the same seed gives the same numbers everywhere.
+//   * Moving walls: all nodes of a wall get (vx, vy) dt each step; after each whole cell
+//     of travel along an axis the wall passes to the next line of nodes on that axis.
+//     Where a wall meets a fixed node, the fixed direction wins.
+//   * Stability: dt must not exceed L / c_p of the stiffest material, c_p = sqrt((K +
+//     4G/3)/rho): the limit of the lumped-mass, one-point-strain lattice (see tests).
+#ifndef LPFDM_HPP
+#define LPFDM_HPP
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#ifndef LPFDM_NO_IO
+#include <cerrno>
+#include <charconv>
+#include <fstream>
+#include <sstream>
+#include <fmt/format.h>
+#endif
+
+namespace lpfdm {
+
+inline constexpr const char* kVersion = "0.1.0";
+
+// ---------------------------------------------------------------- types ---
+
+// Where a card or field came from: printed as file:line:column (GNU style).
+struct Pos {
+    std::string file;
+    int line = 0, col = 0;
+};
+
+struct Diagnostic {
+    Pos pos;
+    std::string message;
+    std::string str() const {
+        std::string where = pos.file.empty() ? std::string("scene") : pos.file;
+        if (pos.line > 0) where += ":" + std::to_string(pos.line) + ":" + std::to_string(pos.col);
+        return where + ": error: " + message;
+    }
+};
+using Diagnostics = std::vector<Diagnostic>;
+
+// Axis-aligned box in metres; a degenerate box selects a line of nodes.
+struct Box {
+    double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+
+// Strain increments of one cell, eq. 5a-5d (d_eps_xy = d(du_x)/dy, d_eps_yx = d(du_y)/dx).
+struct StrainIncrement {
+    double xx = 0, yy = 0, xy = 0, yx = 0;
+    double gamma() const { return xy + yx; }          // eq. 5e
+    double theta() const { return 0.5 * (yx - xy); }  // eq. 5f
+};
+
+// Point stress, tension positive, plane strain (zz carried).
+struct Stress {
+    double xx = 0, yy = 0, xy = 0, zz = 0;
+};
+
+enum class Model : std::uint8_t { Elastic, MohrCoulomb, User };
+
+// Isotropic elastic constants and, for MohrCoulomb, the strength (mean values).
+struct Material {
+    int id = 0;
+    Model model = Model::Elastic;
+    double E = 0, nu = 0, rho = 0;               // Pa, -, kg/m^3
+    double phi_deg = 0, c = 0, psi_deg = 0;      // friction, cohesion [Pa], dilation
+    double tension = -1;                         // tension limit [Pa]; < 0: the apex c/tan(phi)
+    double soften = 0;                           // fraction of c lost at first yield
+    double scatter = 0;                          // coefficient of variation of c and phi
+    Pos pos;                                     // of the card, for messages
+
+    static Material elastic(int id, double E, double nu, double rho) {
+        Material m;
+        m.id = id; m.E = E; m.nu = nu; m.rho = rho;
+        return m;
+    }
+    static Material mohr(int id, double E, double nu, double rho, double phi_deg, double c,
+                         double psi_deg = 0, double tension = -1, double soften = 0,
+                         double scatter = 0) {
+        Material m = elastic(id, E, nu, rho);
+        m.model = Model::MohrCoulomb;
+        m.phi_deg = phi_deg; m.c = c; m.psi_deg = psi_deg; m.tension = tension;
+        m.soften = soften; m.scatter = scatter;
+        return m;
+    }
+    double bulk() const { return E / (3 * (1 - 2 * nu)); }
+    double shear() const { return E / (2 * (1 + nu)); }
+    double p_wave_speed() const { return std::sqrt((bulk() + 4 * shear() / 3) / rho); }
+};
+
+struct Cluster {
+    int mat = 0;
+    Box box;
+    int ppc = 2;  // points per cell along each axis
+    Pos pos;
+};
+
+enum : int { kFixX = 1, kFixY = 2 };
+
+struct Fix {
+    int dirs = kFixX | kFixY;
+    Box box;
+    Pos pos;
+};
+
+struct Wall {
+    int id = 0;
+    Box box;
+    double vx = 0, vy = 0;  // m/s
+    Pos pos;
+};
+
+struct Output {
+    enum Kind { Points, History } kind = Points;
+    std::string file;
+    long every = 0;  // 0: points: first and last frame only; history: every step
+    Pos pos;
+};
+
+// Everything a run needs; built by the deck reader or in code. Zero means unset.
+struct Scene {
+    std::string title;
+    int mx = 0, my = 0;
+    double cell_m = 0;                  // L
+    std::vector<Material> materials;
+    std::vector<Cluster> clusters;
+    std::vector<Fix> fixes;
+    std::vector<Wall> walls;
+    double gravity_x = 0, gravity_y = 0;
+    double damping = 0;                 // alpha of eq. 14
+    std::uint64_t seed = 1;
+    double dt_s = 0;
+    long steps = 0;
+    std::vector<Output> outputs;
+    Pos grid_pos, step_pos, damping_pos, end_pos;
+
+    const Material* material(int id) const {
+        for (const auto& m : materials) if (m.id == id) return &m;
+        return nullptr;
+    }
+};
+
+// ------------------------------------------------------------ numerics ---
+
+namespace detail {
+
+// Deterministic log and sine from + - * / only, so that the scatter of strengths is
+// the same on every machine and standard library (libm results may differ in the last bit).
+inline double log_det(double x) {
+    int e = 0;
+    double m = std::frexp(x, &e);  // x = m 2^e, m in [0.5, 1)
+    if (m < 0.70710678118654752440) { m *= 2; --e; }
+    const double z = (m - 1) / (m + 1), z2 = z * z;  // log m = 2 atanh z, |z| < 0.172
+    double term = z, sum = 0;
+    for (int k = 1; k < 40; k += 2) { sum += term / k; term *= z2; }
+    return 2 * sum + e * 0.69314718055994530942;
+}
+
+inline double sin_det(double x) {  // for |x| <= pi/2, Taylor series to rounding
+    const double x2 = x * x;
+    double term = x, sum = 0;
+    for (int k = 1; k < 40; k += 2) { sum += term; term *= -x2 / ((k + 1) * (k + 2)); }
+    return sum;
+}
+
+constexpr double kPi = 3.14159265358979323846;
+inline double sin_deg(double deg) { return sin_det(deg * kPi / 180); }
+
+// N = (1 + sin a)/(1 - sin a) of a friction or dilation angle in degrees.
+inline double flow_number(double deg) {
+    const double s = sin_deg(deg);
+    return (1 + s) / (1 - s);
+}
+
+}  // namespace detail
+
+// The project's own random stream: xoshiro256** seeded through splitmix64, and a
+// written-out Marsaglia polar transform for normal deviates.
+class Random {
+public:
+    explicit Random(std::uint64_t seed = 1) {
+        for (auto& s : s_) {
+            seed += 0x9E3779B97F4A7C15ull;
+            std::uint64_t z = seed;
+            z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+            z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+            s = z ^ (z >> 31);
+        }
+    }
+    std::uint64_t next() {
+        const std::uint64_t r = rotl(s_[1] * 5, 7) * 9, t = s_[1] << 17;
+        s_[2] ^= s_[0]; s_[3] ^= s_[1]; s_[1] ^= s_[2]; s_[0] ^= s_[3];
+        s_[2] ^= t; s_[3] = rotl(s_[3], 45);
+        return r;
+    }
+    double uniform() { return double(next() >> 11) * 0x1.0p-53; }  // [0, 1)
+    double normal() {
+        if (has_spare_) { has_spare_ = false; return spare_; }
+        double u, v, s;
+        do {
+            u = 2 * uniform() - 1;
+            v = 2 * uniform() - 1;
+            s = u * u + v * v;
+        } while (s >= 1 || s == 0);
+        const double f = std::sqrt(-2 * detail::log_det(s) / s);
+        spare_ = v * f; has_spare_ = true;
+        return u * f;
+    }
+    // Gaussian(mean, sd) resampled until inside [lo, hi] (lo_open: lo excluded).
+    double truncated_normal(double mean, double sd, double lo, double hi, bool lo_open) {
+        for (;;) {
+            const double z = mean + sd * normal();
+            if ((lo_open ? z > lo : z >= lo) && z < hi) return z;
+        }
+    }
+
+private:
+    static std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+    std::uint64_t s_[4];
+    double spare_ = 0;
+    bool has_spare_ = false;
+};
+
+// ----------------------------------------------------------- materials ---
+
+// Elastic constants and strength of a material in the form the step uses.
+struct MaterialConstants {
+    Model model = Model::Elastic;
+    double a1 = 0, a2 = 0, G = 0;   // K + 4G/3, K - 2G/3, G
+    double rho = 0;
+    // Mohr-Coulomb (means; per-point values replace c and n_phi when scattered)
+    double c = 0, n_phi = 1, n_psi = 1, tension = -1, soften = 0;
+    bool scatter = false;
+    int user = -1;                   // index of a user model
+};
+
+inline MaterialConstants constants_of(const Material& m) {
+    MaterialConstants k;
+    k.model = m.model;
+    const double K = m.bulk(), G = m.shear();
+    k.a1 = K + 4 * G / 3; k.a2 = K - 2 * G / 3; k.G = G; k.rho = m.rho;
+    if (m.model == Model::MohrCoulomb) {
+        k.c = m.c; k.n_phi = detail::flow_number(m.phi_deg); k.n_psi = detail::flow_number(m.psi_deg);
+        k.tension = m.tension; k.soften = m.soften; k.scatter = m.scatter > 0;
+    }
+    return k;
+}
+
+// Hooke's law for plane strain, eq. 6 for an elastic point: d_sig = D d_eps, d_sig_zz
+// from the in-plane volume change.
+inline void elastic_increment(const MaterialConstants& k, const StrainIncrement& d, Stress& s) {
+    s.xx += k.a1 * d.xx + k.a2 * d.yy;
+    s.yy += k.a2 * d.xx + k.a1 * d.yy;
+    s.xy += k.G * d.gamma();
+    s.zz += k.a2 * (d.xx + d.yy);
+}
+
+// Strength of one Mohr-Coulomb point at this moment.
+struct MohrStrength {
+    double c = 0, n_phi = 1, n_psi = 1;
+    double tension = -1;  // < 0: apex c / tan(phi)
+};
+
+// What a plastic correction did (principal plastic strains, tension positive).
+struct MohrResult {
+    enum Mode : std::uint8_t { Elastic = 0, Shear = 1, Tension = 2, Corner = 3 } mode = Elastic;
+    double d_gamma_p = 0;  // |d_eps1^p - d_eps3^p|: plastic shear strain increment
+    double d_vol_p = 0;    // d_eps1^p + d_eps2^p + d_eps3^p
+};
+
+// FLAC's Mohr-Coulomb correction of a trial stress (already elastic-updated): sort the
+// principal stresses sig1 <= sig2 <= sig3 with sig_zz among them, test shear
+// f_s = sig1 - sig3 N_phi + 2c sqrt(N_phi) and tension f_t = sig_t - sig3 (failure
+// where negative), and return in closed form along the non-associated flow
+// g_s = sig1 - sig3 N_psi, g_t = -sig3. Where the corrected stress still violates the
+// other surface, both are active (the corner) and a 2x2 system gives the multipliers.
+inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStrength& st, Stress& s) {
+    MohrResult res;
+    const double sq = std::sqrt(st.n_phi);
+    double sig_t = std::numeric_limits<double>::infinity();
+    if (st.n_phi > 1) sig_t = 2 * st.c * sq / (st.n_phi - 1);  // apex: c / tan(phi)
+    if (st.tension >= 0) sig_t = std::min(sig_t, st.tension);
+
+    // In-plane principal stresses about the current principal direction.
+    const double p = 0.5 * (s.xx + s.yy), a = 0.5 * (s.xx - s.yy);
+    const double r = std::sqrt(a * a + s.xy * s.xy);
+    double pr[3] = {p - r, p + r, s.zz};
+    int i1 = 0, i2 = 1, i3 = 2;  // indices of sig1 <= sig2 <= sig3
+    if (pr[i1] > pr[i2]) std::swap(i1, i2);
+    if (pr[i2] > pr[i3]) std::swap(i2, i3);
+    if (pr[i1] > pr[i2]) std::swap(i1, i2);
+
+    const double two_c_sq = 2 * st.c * sq;
+    double fs = pr[i1] - pr[i3] * st.n_phi + two_c_sq;
+    double ft = sig_t - pr[i3];
+    if (fs >= 0 && ft >= 0) return res;
+
+    const double a1 = k.a1, a2 = k.a2, np = st.n_phi, ns = st.n_psi;
+    // d_sig = -lambda_s ds - lambda_t dt, with ds = D (1, 0, -N_psi), dt = D (0, 0, -1).
+    const double ds1 = a1 - a2 * ns, ds2 = a2 * (1 - ns), ds3 = a2 - a1 * ns;
+    const double dt1 = -a2, dt2 = -a2, dt3 = -a1;
+    const double Mss = ds1 - np * ds3, Mst = dt1 - np * dt3;   // grad f_s . ds, . dt
+    const double Mts = -ds3, Mtt = -dt3;                       // grad f_t = (0, 0, -1)
+    const double trial[3] = {pr[0], pr[1], pr[2]}, fs0 = fs, ft0 = ft;
+    double ls = 0, lt = 0;
+    auto apply = [&](double lss, double ltt) {  // from the trial stress
+        ls = lss; lt = ltt;
+        pr[i1] = trial[i1] - (lss * ds1 + ltt * dt1);
+        pr[i2] = trial[i2] - (lss * ds2 + ltt * dt2);
+        pr[i3] = trial[i3] - (lss * ds3 + ltt * dt3);
+        fs = pr[i1] - pr[i3] * np + two_c_sq;
+        ft = sig_t - pr[i3];
+    };
+    const double alpha_p = std::sqrt(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
+    const double h = pr[i3] - sig_t + alpha_p * (pr[i1] - sig_p);
+    const bool shear_first = fs < 0 && (ft >= 0 || !(h > 0));
+    if (shear_first) { apply(fs / Mss, 0); res.mode = MohrResult::Shear; }
+    else { apply(0, ft / Mtt); res.mode = MohrResult::Tension; }
+    const double tol = 1e-12 * (std::fabs(pr[i1]) + std::fabs(pr[i3]) + two_c_sq);
+    if ((shear_first && ft < -tol) || (!shear_first && fs < -tol)) {
+        // Corner: both surfaces active at once.
+        const double det = Mss * Mtt - Mst * Mts;
+        apply((fs0 * Mtt - Mst * ft0) / det, (Mss * ft0 - Mts * fs0) / det);
+        res.mode = MohrResult::Corner;
+    }
+    // Plastic strains d_eps^p = lambda_s (1, 0, -N_psi) + lambda_t (0, 0, -1).
+    const double e1 = ls, e3 = -ls * ns - lt;
+    res.d_gamma_p = std::fabs(e1 - e3);
+    res.d_vol_p = e1 + e3;
+
+    // Back to x, y: same principal direction, new in-plane principal values.
+    const double lo = (i1 == 0 ? pr[i1] : i2 == 0 ? pr[i2] : pr[i3]);
+    const double hi = (i1 == 1 ? pr[i1] : i2 == 1 ? pr[i2] : pr[i3]);
+    const double zz = (i1 == 2 ? pr[i1] : i2 == 2 ? pr[i2] : pr[i3]);
+    const double pn = 0.5 * (hi + lo), rn = 0.5 * (hi - lo);
+    const double c2 = r > 0 ? a / r : 1.0, s2 = r > 0 ? s.xy / r : 0.0;
+    s.xx = pn + rn * c2; s.yy = pn - rn * c2; s.xy = rn * s2; s.zz = zz;
+    return res;
+}
+
+// Per-point state a constitutive model may read and change (eq. 6's s_1, s_2, ...).
+struct PointState {
+    double plastic_shear = 0;  // accumulated plastic shear strain
+    bool yielded = false;      // has yielded at least once
+};
+
+// A user constitutive model with eq. 6's signature.
+using UserModel = std::function<void(const StrainIncrement&, Stress&, PointState&)>;
+
+// ------------------------------------------------------ lattice, points ---
+
+// Points as a structure of arrays, sized once per scene.
+struct Points {
+    std::vector<double> x, y, sxx, syy, sxy, szz, vol;
+    std::vector<std::int32_t> cell, id;
+    std::vector<std::uint16_t> group;       // index into Simulation::groups(): material and mass
+    // Only when some material is Mohr-Coulomb:
+    std::vector<double> plastic_shear;
+    std::vector<std::uint8_t> yielded;
+    // Only when some material scatters: intact cohesion and N_phi of each point.
+    std::vector<double> c0, n_phi;
+    std::size_t size() const { return x.size(); }
+};
+
+// Points of one material and one initial spacing share a mass and constants.
+struct Group {
+    int mat_index = 0;
+    double mass = 0;  // kg per metre of thickness, a multiple of the mass quantum
+};
+
+struct WallState {
+    std::vector<int> base_i, base_j;  // nodes of the box at the start
+    int shift_i = 0, shift_j = 0;     // whole cells travelled
+    double fx = 0, fy = 0;            // force the wall exerts on the material [N/m]
+    double dx = 0, dy = 0;            // travel [m]
+};
+
+struct Range {  // half-open index box
+    int i0 = 0, i1 = 0, j0 = 0, j1 = 0;
+    bool empty() const { return i0 >= i1 || j0 >= j1; }
+    Range unite(const Range& o) const {
+        if (empty()) return o;
+        if (o.empty()) return *this;
+        return {std::min(i0, o.i0), std::max(i1, o.i1), std::min(j0, o.j0), std::max(j1, o.j1)};
+    }
+    Range grow(int n, int imax, int jmax) const {
+        if (empty()) return *this;
+        return {std::max(0, i0 - n), std::min(imax, i1 + n), std::max(0, j0 - n), std::min(jmax, j1 + n)};
+    }
+};
+
+// Stable time step of the lattice: L / c_p of the stiffest material.
+inline double stable_dt(const Scene& s) {
+    double cmax = 0;
+    for (const auto& m : s.materials) cmax = std::max(cmax, m.p_wave_speed());
+    return cmax > 0 ? s.cell_m / cmax : std::numeric_limits<double>::infinity();
+}
+
+// Bytes the arrays of a scene will take (for the memory check before anything is allocated).
+inline double estimate_bytes(const Scene& s, double points) {
+    const double cells = double(s.mx) * s.my, nodes = (s.mx + 1.0) * (s.my + 1.0);
+    bool plastic = false, scatter = false;
+    for (const auto& m : s.materials) {
+        plastic |= m.model == Model::MohrCoulomb;
+        scatter |= m.scatter > 0;
+    }
+    const double per_point = 7 * 8 + 3 * 4 + (plastic ? 9 : 0) + (scatter ? 16 : 0);
+    return cells * (4 * 8 + 6 * 8) + nodes * (5 * 8 + 1) + points * per_point;
+}
+
+// Number of points the clusters create (cells claimed by a later cluster count once).
+inline double count_points(const Scene& s);
+
+// The same scene on a lattice k times finer: same geometry in metres, dt / k, and k
+// times the steps and output intervals, so that the same model time is covered.
+inline void refine(Scene& s, int k) {
+    s.mx *= k; s.my *= k; s.cell_m /= k; s.dt_s /= k; s.steps *= k;
+    for (auto& o : s.outputs) o.every *= k;
+}
+
+// -------------------------------------------------------------- checks ---
+
+// Everything that would make a scene unrunnable, with the card each problem came from.
+inline Diagnostics validate(const Scene& s) {
+    Diagnostics d;
+    auto err = [&](const Pos& p, std::string m) { d.push_back({p, std::move(m)}); };
+    if (s.mx <= 0 || s.my <= 0 || !(s.cell_m > 0)) {
+        err(s.grid_pos, "the lattice needs mx > 0, my > 0 cells and a cell size L > 0");
+        return d;
+    }
+    const double X = s.mx * s.cell_m, Y = s.my * s.cell_m, tol = 1e-3 * s.cell_m;
+    for (std::size_t a = 0; a < s.materials.size(); ++a) {
+        const Material& m = s.materials[a];
+        for (std::size_t b = 0; b < a; ++b)
+            if (s.materials[b].id == m.id) err(m.pos, "material " + std::to_string(m.id) + " is defined twice");
+        if (!(m.E > 0)) err(m.pos, "E must be > 0");
+        if (!(m.nu > -1 && m.nu < 0.5)) err(m.pos, "NU must lie in (-1, 0.5)");
+        if (!(m.rho > 0)) err(m.pos, "RHO must be > 0");
+        if (m.model != Model::MohrCoulomb) continue;
+        if (!(m.phi_deg >= 0 && m.phi_deg < 90)) err(m.pos, "PHI must lie in [0, 90) degrees");
+        if (!(m.c >= 0)) err(m.pos, "C must be >= 0");
+        if (!(m.psi_deg >= 0 && m.psi_deg <= m.phi_deg)) err(m.pos, "PSI must lie in [0, PHI]");
+        if (!(m.soften >= 0 && m.soften <= 1)) err(m.pos, "SOFTEN must lie in [0, 1]");
+        if (m.tension < 0 && m.tension != -1) err(m.pos, "TENSION must be >= 0");
+        if (m.phi_deg == 0 && m.c == 0) err(m.pos, "PHI = 0 and C = 0: the material has no strength");
+        if (!(m.scatter >= 0)) err(m.pos, "SCATTER must be >= 0");
+        // Beyond 0.5 more than 2.3 % of draws fall below zero and the truncated sample's
+        // mean drifts by more than 3 %: truncation, not the Gaussian, would decide.
+        if (m.scatter > 0.5) err(m.pos, "SCATTER above 0.5 makes the truncation at c >= 0 and phi > 0 dominate the distribution");
+        if (m.scatter > 0 && m.phi_deg > 0 && (90 - m.phi_deg) < 2 * m.scatter * m.phi_deg)
+            err(m.pos, "SCATTER too large for this PHI: more than 2.3 % of draws would pass 90 degrees");
+    }
+    if (s.clusters.empty()) err(s.grid_pos, "the scene has no CLUSTER: nothing to compute");
+    for (const auto& c : s.clusters) {
+        const Material* m = s.material(c.mat);
+        if (!m) err(c.pos, "material " + std::to_string(c.mat) + " is not defined");
+        if (c.ppc < 1 || c.ppc > 32) err(c.pos, "PPC must lie in [1, 32]");
+        if (c.box.x0 > c.box.x1 || c.box.y0 > c.box.y1) { err(c.pos, "the box needs x0 <= x1 and y0 <= y1"); continue; }
+        if (c.box.x0 < -tol || c.box.y0 < -tol || c.box.x1 > X + tol || c.box.y1 > Y + tol) {
+            err(c.pos, "the cluster box reaches outside the lattice [0, " + std::to_string(X) + "] x [0, " + std::to_string(Y) + "] m");
+            continue;
+        }
+        const int ci0 = int(std::ceil((c.box.x0 - tol) / s.cell_m - 0.5)), ci1 = int(std::floor((c.box.x1 + tol) / s.cell_m - 0.5));
+        const int cj0 = int(std::ceil((c.box.y0 - tol) / s.cell_m - 0.5)), cj1 = int(std::floor((c.box.y1 + tol) / s.cell_m - 0.5));
+        if (ci1 < ci0 || cj1 < cj0) err(c.pos, "the cluster box holds no cell centre");
+    }
+    auto node_count = [&](const Box& b) {
+        if (b.x0 > b.x1 || b.y0 > b.y1) return -1L;
+        const long i0 = std::max(0L, long(std::ceil((b.x0 - tol) / s.cell_m))), i1 = std::min(long(s.mx), long(std::floor((b.x1 + tol) / s.cell_m)));
+        const long j0 = std::max(0L, long(std::ceil((b.y0 - tol) / s.cell_m))), j1 = std::min(long(s.my), long(std::floor((b.y1 + tol) / s.cell_m)));
+        return (i1 < i0 || j1 < j0) ? 0L : (i1 - i0 + 1) * (j1 - j0 + 1);
+    };
+    for (const auto& f : s.fixes) {
+        const long n = node_count(f.box);
+        if (n < 0) err(f.pos, "the box needs x0 <= x1 and y0 <= y1");
+        else if (n == 0) err(f.pos, "the FIX box holds no node");
+        if (f.dirs < 1 || f.dirs > 3) err(f.pos, "unknown direction");
+    }
+    if (!(s.dt_s > 0)) err(s.step_pos, "the time step must be > 0");
+    if (s.steps < 1) err(s.step_pos, "the number of steps must be >= 1");
+    for (std::size_t a = 0; a < s.walls.size(); ++a) {
+        const Wall& w = s.walls[a];
+        for (std::size_t b = 0; b < a; ++b)
+            if (s.walls[b].id == w.id) err(w.pos, "wall " + std::to_string(w.id) + " is defined twice");
+        const long n = node_count(w.box);
+        if (n < 0) err(w.pos, "the box needs x0 <= x1 and y0 <= y1");
+        else if (n == 0) err(w.pos, "the WALL box holds no node");
+        if (!std::isfinite(w.vx) || !std::isfinite(w.vy)) err(w.pos, "the wall velocity must be finite");
+        else if (s.dt_s > 0 && std::hypot(w.vx, w.vy) * s.dt_s > 0.1 * s.cell_m)
+            err(w.pos, "the wall moves " + std::to_string(std::hypot(w.vx, w.vy) * s.dt_s / s.cell_m) +
+                           " cells per step; at most 0.1 is allowed (lower the speed or the time step)");
+        for (const auto& f : s.fixes) {
+            const Box i{std::max(w.box.x0, f.box.x0), std::max(w.box.y0, f.box.y0), std::min(w.box.x1, f.box.x1), std::min(w.box.y1, f.box.y1)};
+            if (node_count(i) > 0) { err(w.pos, "the wall's nodes include fixed nodes (FIX at line " + std::to_string(f.pos.line) + ")"); break; }
+        }
+    }
+    if (s.damping < 0 || s.damping >= 1) err(s.damping_pos, "DAMPING must lie in [0, 1)");
+    for (const auto& o : s.outputs) {
+        if (o.every < 0) err(o.pos, "EVERY must be >= 1");
+        if (o.kind == Output::History && s.steps >= 1 && o.every > s.steps)
+            err(o.pos, "EVERY " + std::to_string(o.every) + " is more than the " + std::to_string(s.steps) + " steps: the history would have no rows");
+    }
+    if (!s.materials.empty() && s.dt_s > 0) {
+        const double lim = stable_dt(s);
+        if (s.dt_s > lim) {
+            char buf[160];
+            std::snprintf(buf, sizeof buf, "time step %.6g s is above the stable limit %.6g s (L / c_p of the stiffest material)", s.dt_s, lim);
+            err(s.step_pos, buf);
+        }
+    }
+    return d;
+}
+
+// ----------------------------------------------------------- the cycle ---
+
+class Simulation {
+public:
+    explicit Simulation(const Scene& scene) : sc_(scene) { setup(); }
+
+    // One LPFDM cycle (paper section 2), one function per phase.
+    void step() {
+        cell_strains();    // eq. 5a-5f
+        update_points();   // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b
+        map_to_lattice();  // eq. 7, 8 (the lattice is back at its original position)
+        nodal_forces();    // virtual work transpose of eq. 5, gravity eq. 10
+        compensate();      // eq. 12
+        integrate();       // eq. 13-14, fixed nodes, moving walls
+        ++step_;
+    }
+
+    // Read access for writers, tests and embedding programs.
+    const Scene& scene() const { return sc_; }
+    const Points& points() const { return p_; }
+    Points& points() { return p_; }  // e.g. to set an initial stress field before the first step
+    const std::vector<Group>& groups() const { return groups_; }
+    const std::vector<WallState>& walls() const { return walls_; }
+    long step_count() const { return step_; }
+    double time() const { return step_ * sc_.dt_s; }
+    double kinetic_energy() const { return ke_; }
+    double mass_inside() const { return mass_in_; }
+    double mass_outflow() const { return mass_out_; }
+    double mass_initial() const { return mass0_; }
+    double unbalanced_ratio() const { return unbal_; }
+    double reaction_x() const { return rx_; }
+    double reaction_y() const { return ry_; }
+    int mx() const { return mx_; }
+    int my() const { return my_; }
+    double cell_size() const { return L_; }
+    int node(int i, int j) const { return j * (mx_ + 1) + i; }
+    int cell(int i, int j) const { return j * mx_ + i; }
+    double point_mass(std::size_t k) const { return groups_[p_.group[k]].mass; }
+    int material_id(std::size_t k) const { return sc_.materials[groups_[p_.group[k]].mat_index].id; }
+
+    // Nodal and cell fields (whole lattice, row-major).
+    std::vector<double>& du_x() { return dux_; }
+    std::vector<double>& du_y() { return duy_; }
+    const std::vector<double>& force_x() const { return fx_; }
+    const std::vector<double>& force_y() const { return fy_; }
+    const std::vector<double>& node_mass() const { return nmass_; }
+    const std::vector<double>& cell_mass() const { return cmass_; }
+
+    // Replace the constitutive model of a material by a callable of eq. 6's signature.
+    void set_user_model(int mat_id, UserModel f) {
+        for (std::size_t m = 0; m < sc_.materials.size(); ++m) {
+            if (sc_.materials[m].id != mat_id) continue;
+            consts_[m].model = Model::User;
+            consts_[m].user = int(user_models_.size());
+            user_models_.push_back(std::move(f));
+        }
+        if (p_.plastic_shear.empty()) {
+            p_.plastic_shear.assign(p_.size(), 0.0);
+            p_.yielded.assign(p_.size(), 0);
+        }
+    }
+
+    // Strain increments of cell (i, j) from the nodal increments, eq. 5a-5d.
+    StrainIncrement strain_of_cell(int i, int j) const {
+        const int n1 = node(i, j), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
+        const double h = 0.5 * invL_;
+        StrainIncrement e;
+        e.xx = (dux_[n2] + dux_[n4] - dux_[n1] - dux_[n3]) * h;  // eq. 5a
+        e.yy = (duy_[n3] + duy_[n4] - duy_[n1] - duy_[n2]) * h;  // eq. 5b
+        e.xy = (dux_[n3] + dux_[n4] - dux_[n1] - dux_[n2]) * h;  // eq. 5c
+        e.yx = (duy_[n2] + duy_[n4] - duy_[n1] - duy_[n3]) * h;  // eq. 5d
+        return e;
+    }
+
+    // Nodal forces of one cell from its smeared stress (design: virtual work, the
+    // transpose of eq. 5): F[a] = -L^2 (sig . b[a]), b_x = (-1,+1,-1,+1)/2L,
+    // b_y = (-1,-1,+1,+1)/2L for nodes [1]..[4]. sv = sum V sigma = L^2 <sigma>_J.
+    static void cell_forces(double svxx, double svyy, double svxy, double inv2L, double fx[4], double fy[4]) {
+        static constexpr double bx[4] = {-1, 1, -1, 1}, by[4] = {-1, -1, 1, 1};
+        for (int a = 0; a < 4; ++a) {
+            fx[a] = -(svxx * bx[a] + svxy * by[a]) * inv2L;
+            fy[a] = -(svxy * bx[a] + svyy * by[a]) * inv2L;
+        }
+    }
+
+    // The point a non-finite value was first seen at, or -1.
+    long first_nonfinite_point() const {
+        for (std::size_t k = 0; k < p_.size(); ++k)
+            if (!std::isfinite(p_.x[k] + p_.y[k] + p_.sxx[k] + p_.syy[k] + p_.sxy[k] + p_.szz[k] + p_.vol[k])) return long(k);
+        return -1;
+    }
+    bool healthy() const { return std::isfinite(ke_) && max_du_ <= 0.5 * L_; }
+    double max_du() const { return max_du_; }
+
+    // The phases of step(), in order; public so that tests and lessons can step
+    // through one cycle. Normal use calls step().
+    void cell_strains();
+    void update_points();
+    void map_to_lattice();
+    void nodal_forces();
+    void compensate();
+    void integrate();
+
+private:
+    void setup();
+    void create_points();
+    void remove_departed();
+
+    Scene sc_;
+    int mx_ = 0, my_ = 0;
+    double L_ = 0, invL_ = 0;
+    std::vector<MaterialConstants> consts_;
+    std::vector<Group> groups_;
+    std::vector<UserModel> user_models_;
+    Points p_;
+    // nodes
+    std::vector<double> dux_, duy_, fx_, fy_, nmass_, nmass_prev_;
+    std::vector<std::uint8_t> fixed_;
+    std::vector<std::int32_t> fixed_nodes_;
+    // cells
+    std::vector<double> cmass_, cvol_, svxx_, svyy_, svxy_;
+    std::vector<double> exx_, eyy_, exy_, eyx_, rc_, rs_;  // strain and rotation per cell
+    Range occupied_;   // cells holding points after the last mapping
+    Range strained_;   // cells whose strains are current
+    Range live_nodes_; // nodes that may hold a non-zero du
+    std::vector<WallState> walls_;
+    long step_ = 0;
+    std::size_t departed_ = 0;
+    double ke_ = 0, mass_in_ = 0, mass_out_ = 0, mass0_ = 0, unbal_ = 0, rx_ = 0, ry_ = 0, max_du_ = 0;
+};
+
+inline double count_points(const Scene& s) {
+    if (s.mx <= 0 || s.my <= 0 || !(s.cell_m > 0)) return 0;
+    const double tol = 1e-3 * s.cell_m;
+    double n = 0;
+    // Per cell the last cluster wins; count by scanning the clusters' cell ranges.
+    const long cells = long(s.mx) * s.my;
+    if (cells > 50'000'000L) {  // too large to scan; an upper bound is enough for the memory check
+        for (const auto& c : s.clusters) n += (c.box.x1 - c.box.x0) * (c.box.y1 - c.box.y0) / (s.cell_m * s.cell_m) * c.ppc * c.ppc;
+        return n;
+    }
+    std::vector<int> owner(std::size_t(cells), -1);
+    for (std::size_t ci = 0; ci < s.clusters.size(); ++ci) {
+        const auto& c = s.clusters[ci];
+        const int i0 = std::max(0, int(std::ceil((c.box.x0 - tol) / s.cell_m - 0.5)));
+        const int i1 = std::min(s.mx - 1, int(std::floor((c.box.x1 + tol) / s.cell_m - 0.5)));
+        const int j0 = std::max(0, int(std::ceil((c.box.y0 - tol) / s.cell_m - 0.5)));
+        const int j1 = std::min(s.my - 1, int(std::floor((c.box.y1 + tol) / s.cell_m - 0.5)));
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * s.mx + i] = int(ci);
+    }
+    for (int o : owner) if (o >= 0) n += double(s.clusters[o].ppc) * s.clusters[o].ppc;
+    return n;
+}
+
+inline void Simulation::setup() {
+    mx_ = sc_.mx; my_ = sc_.my; L_ = sc_.cell_m; invL_ = 1 / L_;
+    const std::size_t nodes = std::size_t(mx_ + 1) * (my_ + 1), cells = std::size_t(mx_) * my_;
+    for (auto* v : {&dux_, &duy_, &fx_, &fy_, &nmass_, &nmass_prev_}) v->assign(nodes, 0.0);
+    fixed_.assign(nodes, 0);
+    for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &exx_, &eyy_, &exy_, &eyx_, &rs_}) v->assign(cells, 0.0);
+    rc_.assign(cells, 1.0);
+    for (const auto& m : sc_.materials) consts_.push_back(constants_of(m));
+
+    const double tol = 1e-3 * L_;
+    auto node_range = [&](const Box& b, int& i0, int& i1, int& j0, int& j1) {
+        i0 = std::max(0, int(std::ceil((b.x0 - tol) * invL_))); i1 = std::min(mx_, int(std::floor((b.x1 + tol) * invL_)));
+        j0 = std::max(0, int(std::ceil((b.y0 - tol) * invL_))); j1 = std::min(my_, int(std::floor((b.y1 + tol) * invL_)));
+    };
+    for (const auto& f : sc_.fixes) {
+        int i0, i1, j0, j1;
+        node_range(f.box, i0, i1, j0, j1);
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) fixed_[node(i, j)] |= std::uint8_t(f.dirs);
+    }
+    for (std::size_t n = 0; n < nodes; ++n) if (fixed_[n]) fixed_nodes_.push_back(std::int32_t(n));
+    for (const auto& w : sc_.walls) {
+        WallState ws;
+        int i0, i1, j0, j1;
+        node_range(w.box, i0, i1, j0, j1);
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) { ws.base_i.push_back(i); ws.base_j.push_back(j); }
+        walls_.push_back(std::move(ws));
+    }
+    create_points();
+    map_to_lattice();
+    strained_ = occupied_.grow(2, mx_, my_);
+    live_nodes_ = {};
+}
+
+inline void Simulation::create_points() {
+    const double tol = 1e-3 * L_;
+    std::vector<int> owner(std::size_t(mx_) * my_, -1);
+    for (std::size_t ci = 0; ci < sc_.clusters.size(); ++ci) {
+        const auto& c = sc_.clusters[ci];
+        const int i0 = std::max(0, int(std::ceil((c.box.x0 - tol) * invL_ - 0.5)));
+        const int i1 = std::min(mx_ - 1, int(std::floor((c.box.x1 + tol) * invL_ - 0.5)));
+        const int j0 = std::max(0, int(std::ceil((c.box.y0 - tol) * invL_ - 0.5)));
+        const int j1 = std::min(my_ - 1, int(std::floor((c.box.y1 + tol) * invL_ - 0.5)));
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) owner[std::size_t(cell(i, j))] = int(ci);
+    }
+    // Groups: one per (material, ppc); masses quantised so that sums are exact.
+    std::vector<std::pair<int, int>> keys;  // (material index, ppc)
+    std::vector<double> count;
+    std::size_t npoints = 0;
+    for (int o : owner) {
+        if (o < 0) continue;
+        const auto& c = sc_.clusters[std::size_t(o)];
+        int mi = 0;
+        while (sc_.materials[std::size_t(mi)].id != c.mat) ++mi;
+        const std::pair<int, int> key{mi, c.ppc};
+        auto it = std::find(keys.begin(), keys.end(), key);
+        if (it == keys.end()) { keys.push_back(key); count.push_back(0); it = keys.end() - 1; }
+        count[std::size_t(it - keys.begin())] += double(c.ppc) * c.ppc;
+        npoints += std::size_t(c.ppc) * std::size_t(c.ppc);
+    }
+    double total = 0;
+    for (std::size_t g = 0; g < keys.size(); ++g) {
+        const double h = L_ / keys[g].second;
+        total += count[g] * sc_.materials[std::size_t(keys[g].first)].rho * h * h;
+    }
+    int e = 0;
+    std::frexp(total > 0 ? total : 1.0, &e);
+    const int qexp = e - 52;  // quantum 2^(e-52): total < 2^53 quanta, so every sum is exact
+    for (std::size_t g = 0; g < keys.size(); ++g) {
+        const double h = L_ / keys[g].second;
+        const double m = sc_.materials[std::size_t(keys[g].first)].rho * h * h;
+        const double q = std::max(1.0, std::nearbyint(std::ldexp(m, -qexp)));
+        groups_.push_back({keys[g].first, std::ldexp(q, qexp)});
+    }
+
+    bool plastic = false, scatter = false;
+    for (const auto& k : consts_) { plastic |= k.model == Model::MohrCoulomb; scatter |= k.scatter; }
+    for (auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol}) v->reserve(npoints);
+    p_.cell.reserve(npoints); p_.id.reserve(npoints); p_.group.reserve(npoints);
+    if (plastic) { p_.plastic_shear.reserve(npoints); p_.yielded.reserve(npoints); }
+    if (scatter) { p_.c0.reserve(npoints); p_.n_phi.reserve(npoints); }
+
+    Random rng(sc_.seed);
+    for (int j = 0; j < my_; ++j)
+        for (int i = 0; i < mx_; ++i) {
+            const int o = owner[std::size_t(cell(i, j))];
+            if (o < 0) continue;
+            const auto& c = sc_.clusters[std::size_t(o)];
+            int mi = 0;
+            while (sc_.materials[std::size_t(mi)].id != c.mat) ++mi;
+            const std::uint16_t g = std::uint16_t(std::find(keys.begin(), keys.end(), std::pair<int, int>{mi, c.ppc}) - keys.begin());
+            const Material& mat = sc_.materials[std::size_t(mi)];
+            for (int sj = 0; sj < c.ppc; ++sj)
+                for (int si = 0; si < c.ppc; ++si) {
+                    p_.x.push_back((i + (si + 0.5) / c.ppc) * L_);
+                    p_.y.push_back((j + (sj + 0.5) / c.ppc) * L_);
+                    for (auto* v : {&p_.sxx, &p_.syy, &p_.sxy, &p_.szz}) v->push_back(0.0);
+                    p_.vol.push_back(groups_[g].mass / mat.rho);
+                    p_.cell.push_back(cell(i, j));
+                    p_.id.push_back(std::int32_t(p_.id.size()));
+                    p_.group.push_back(g);
+                    if (plastic) { p_.plastic_shear.push_back(0.0); p_.yielded.push_back(0); }
+                    if (!scatter) continue;
+                    if (mat.scatter > 0) {
+                        const double cc = rng.truncated_normal(mat.c, mat.scatter * mat.c, 0, std::numeric_limits<double>::infinity(), false);
+                        const double ph = mat.phi_deg > 0 ? rng.truncated_normal(mat.phi_deg, mat.scatter * mat.phi_deg, 0, 90, true) : 0.0;
+                        p_.c0.push_back(cc);
+                        p_.n_phi.push_back(detail::flow_number(ph));
+                    } else {
+                        p_.c0.push_back(consts_[std::size_t(mi)].c);
+                        p_.n_phi.push_back(consts_[std::size_t(mi)].n_phi);
+                    }
+                }
+        }
+    mass0_ = 0;
+    for (std::size_t k = 0; k < p_.size(); ++k) mass0_ += groups_[p_.group[k]].mass;
+}
+
+// eq. 5a-5f for every cell that a point or a compensated node may read, plus the
+// rotation of eq. 5f as an exact orthogonal matrix (Cayley form: no trigonometry).
+inline void Simulation::cell_strains() {
+    strained_ = occupied_.grow(2, mx_, my_);
+    for (int j = strained_.j0; j < strained_.j1; ++j)
+        for (int i = strained_.i0; i < strained_.i1; ++i) {
+            const int c = cell(i, j);
+            // An empty cell holds no material to strain; its "increments" between moving
+            // and resting nodes would make eq. 12 brake every node on a free surface.
+            const StrainIncrement e = cmass_[c] > 0 ? strain_of_cell(i, j) : StrainIncrement{};
+            exx_[c] = e.xx; eyy_[c] = e.yy; exy_[c] = e.xy; eyx_[c] = e.yx;
+            // Rotation by phi with tan(phi/2) = theta/2; stress turns by 2 phi.
+            const double t = 0.5 * e.theta(), d = 1 / (1 + t * t);
+            const double co = (1 - t * t) * d, si = 2 * t * d;
+            rc_[c] = co * co - si * si;
+            rs_[c] = 2 * si * co;
+        }
+}
+
+// eq. 6 (one consult of the constitutive model per point), the Jaumann rotation by
+// eq. 5f, the volume change, and the motion of eq. 7a/7b about node [1] of the cell.
+inline void Simulation::update_points() {
+    const std::size_t n = p_.size();
+    const double X = mx_ * L_, Y = my_ * L_;
+    const bool plastic = !p_.plastic_shear.empty(), scatter = !p_.c0.empty();
+    for (std::size_t k = 0; k < n; ++k) {
+        const int c = p_.cell[k];
+        const StrainIncrement e{exx_[c], eyy_[c], exy_[c], eyx_[c]};
+        const MaterialConstants& mc = consts_[std::size_t(groups_[p_.group[k]].mat_index)];
+        // Jaumann: rotate the old stress with the material.
+        const double pm = 0.5 * (p_.sxx[k] + p_.syy[k]), a = 0.5 * (p_.sxx[k] - p_.syy[k]), b = p_.sxy[k];
+        const double ar = a * rc_[c] - b * rs_[c], br = a * rs_[c] + b * rc_[c];
+        Stress s{pm + ar, pm - ar, br, p_.szz[k]};
+        switch (mc.model) {
+        case Model::Elastic:
+            elastic_increment(mc, e, s);
+            break;
+        case Model::MohrCoulomb: {
+            elastic_increment(mc, e, s);
+            MohrStrength st;
+            const double c0 = scatter ? p_.c0[k] : mc.c;
+            st.c = p_.yielded[k] ? c0 * (1 - mc.soften) : c0;
+            st.n_phi = scatter ? p_.n_phi[k] : mc.n_phi;
+            st.n_psi = std::min(mc.n_psi, st.n_phi);
+            st.tension = mc.tension;
+            const MohrResult r = mohr_coulomb_return(mc, st, s);
+            if (r.mode != MohrResult::Elastic) {
+                p_.plastic_shear[k] += r.d_gamma_p;
+                p_.yielded[k] = 1;  // softening takes effect from the next consult
+            }
+            break;
+        }
+        case Model::User: {
+            PointState ps{plastic ? p_.plastic_shear[k] : 0.0, plastic && p_.yielded[k]};
+            user_models_[std::size_t(mc.user)](e, s, ps);
+            if (plastic) { p_.plastic_shear[k] = ps.plastic_shear; p_.yielded[k] = ps.yielded; }
+            break;
+        }
+        }
+        p_.sxx[k] = s.xx; p_.syy[k] = s.yy; p_.sxy[k] = s.xy; p_.szz[k] = s.zz;
+        p_.vol[k] *= 1 + e.xx + e.yy;
+        // eq. 7a/7b
+        const int i = c % mx_, j = c / mx_, n1 = node(i, j);
+        const double dx = p_.x[k] - i * L_, dy = p_.y[k] - j * L_;
+        const double x = p_.x[k] + e.xx * dx + e.xy * dy + dux_[n1];
+        const double y = p_.y[k] + e.yy * dy + e.yx * dx + duy_[n1];
+        p_.x[k] = x; p_.y[k] = y;
+        if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
+            p_.cell[k] = -1;
+            ++departed_;
+            continue;
+        }
+        const int ni = std::min(mx_ - 1, int(x * invL_)), nj = std::min(my_ - 1, int(y * invL_));
+        p_.cell[k] = cell(ni, nj);
+    }
+    if (departed_) remove_departed();
+}
+
+// Points that left the lattice leave the cycle; their mass becomes outflow. The order
+// of the remaining points is kept.
+inline void Simulation::remove_departed() {
+    std::size_t w = 0;
+    const std::size_t n = p_.size();
+    const bool plastic = !p_.plastic_shear.empty(), scatter = !p_.c0.empty();
+    for (std::size_t k = 0; k < n; ++k) {
+        if (p_.cell[k] < 0) {
+            // A non-finite point also lands here; keep it so the guard can name it.
+            if (std::isfinite(p_.x[k]) && std::isfinite(p_.y[k])) { mass_out_ += groups_[p_.group[k]].mass; continue; }
+            p_.cell[k] = 0;
+        }
+        if (w != k) {
+            for (auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol}) (*v)[w] = (*v)[k];
+            p_.cell[w] = p_.cell[k]; p_.id[w] = p_.id[k]; p_.group[w] = p_.group[k];
+            if (plastic) { p_.plastic_shear[w] = p_.plastic_shear[k]; p_.yielded[w] = p_.yielded[k]; }
+            if (scatter) { p_.c0[w] = p_.c0[k]; p_.n_phi[w] = p_.n_phi[k]; }
+        }
+        ++w;
+    }
+    // Shrinking keeps capacity: no allocation.
+    for (auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol}) v->resize(w);
+    p_.cell.resize(w); p_.id.resize(w); p_.group.resize(w);
+    if (plastic) { p_.plastic_shear.resize(w); p_.yielded.resize(w); }
+    if (scatter) { p_.c0.resize(w); p_.n_phi.resize(w); }
+    departed_ = 0;
+}
+
+// eq. 7 (cell mass) and eq. 8 (stress smeared over the cell, sum V sigma / L^2; kept
+// here as sum V sigma and sum V; nodal_forces divides by max(L^2, sum V)).
+inline void Simulation::map_to_lattice() {
+    for (int j = occupied_.j0; j < occupied_.j1; ++j)
+        for (int i = occupied_.i0; i < occupied_.i1; ++i) {
+            const int c = cell(i, j);
+            cmass_[c] = cvol_[c] = svxx_[c] = svyy_[c] = svxy_[c] = 0;
+        }
+    Range r{mx_, 0, my_, 0};
+    mass_in_ = 0;
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const int c = p_.cell[k];
+        const double m = groups_[p_.group[k]].mass, v = p_.vol[k];
+        cmass_[c] += m;                 // eq. 7
+        cvol_[c] += v;
+        svxx_[c] += v * p_.sxx[k];      // eq. 8
+        svyy_[c] += v * p_.syy[k];
+        svxy_[c] += v * p_.sxy[k];
+        mass_in_ += m;
+        const int i = c % mx_, j = c / mx_;
+        r.i0 = std::min(r.i0, i); r.i1 = std::max(r.i1, i + 1);
+        r.j0 = std::min(r.j0, j); r.j1 = std::max(r.j1, j + 1);
+    }
+    occupied_ = r.empty() ? Range{} : r;
+}
+
+// Net nodal force: each node gathers from its (up to) four cells, eq. 9 replaced by
+// the virtual-work transpose of eq. 5, then gravity on the lumped mass, eq. 10. A
+// node gathers rather than cells scattering, so the sum has one fixed order.
+inline void Simulation::nodal_forces() {
+    const Range nr{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
+    const double inv2L = 0.5 * invL_, L2 = L_ * L_;
+    const Range keep = nr.grow(1, mx_ + 1, my_ + 1);  // compensate() asks which nodes are new
+    for (int j = keep.j0; j < keep.j1; ++j)
+        for (int i = keep.i0; i < keep.i1; ++i) nmass_prev_[node(i, j)] = nmass_[node(i, j)];
+    for (int j = nr.j0; j < nr.j1; ++j)
+        for (int i = nr.i0; i < nr.i1; ++i) {
+            double fx = 0, fy = 0, m = 0;
+            // cell (i-1+di, j-1+dj) sees this node as its node [a]
+            for (int dj = 0; dj < 2; ++dj)
+                for (int di = 0; di < 2; ++di) {
+                    const int ci = i - 1 + di, cj = j - 1 + dj;
+                    if (ci < 0 || cj < 0 || ci >= mx_ || cj >= my_) continue;
+                    const int c = cell(ci, cj);
+                    if (cmass_[c] == 0) continue;  // eq. 10: empty cells contribute nothing
+                    const int a = (1 - di) + 2 * (1 - dj);  // 0..3 for nodes [1]..[4]
+                    const double sx = (a & 1) ? 1.0 : -1.0, sy = (a & 2) ? 1.0 : -1.0;
+                    const double w = inv2L * (cvol_[c] > L2 ? L2 / cvol_[c] : 1.0);  // eq. 8, fill <= 1
+                    fx -= (svxx_[c] * sx + svxy_[c] * sy) * w;
+                    fy -= (svxy_[c] * sx + svyy_[c] * sy) * w;
+                    m += cmass_[c];
+                }
+            const int n = node(i, j);
+            nmass_[n] = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
+            fx_[n] = fx + sc_.gravity_x * nmass_[n];
+            fy_[n] = fy + sc_.gravity_y * nmass_[n];
+        }
+}
+
+// eq. 12: the increment carried by node k belonged to the material now at x_k - du_k;
+// correct it with the strain increments of the cell found there.
+inline void Simulation::compensate() {
+    const Range nr{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
+    // Nodes that gained mass this step take the mean increment of their neighbours that
+    // had mass (read before those are compensated, so the order does not matter).
+    for (int j = nr.j0; j < nr.j1; ++j)
+        for (int i = nr.i0; i < nr.i1; ++i) {
+            const int n = node(i, j);
+            if (nmass_prev_[n] > 0 || nmass_[n] == 0) continue;
+            double mx = 0, my = 0, msum = 0;
+            for (int qj = std::max(0, j - 1); qj <= std::min(my_, j + 1); ++qj)
+                for (int qi = std::max(0, i - 1); qi <= std::min(mx_, i + 1); ++qi) {
+                    const int q = node(qi, qj);
+                    const double mq = nmass_prev_[q];
+                    if (mq > 0) { mx += mq * dux_[q]; my += mq * duy_[q]; msum += mq; }
+                }
+            if (msum > 0) { dux_[n] = mx / msum; duy_[n] = my / msum; }
+        }
+    for (int j = nr.j0; j < nr.j1; ++j)
+        for (int i = nr.i0; i < nr.i1; ++i) {
+            const int n = node(i, j);
+            const double ux = dux_[n], uy = duy_[n];
+            if ((ux == 0 && uy == 0) || nmass_prev_[n] == 0) continue;
+            const double xs = i * L_ - ux, ys = j * L_ - uy;
+            const int ci = int(std::floor(xs * invL_)), cj = int(std::floor(ys * invL_));
+            if (ci < strained_.i0 || cj < strained_.j0 || ci >= strained_.i1 || cj >= strained_.j1) continue;
+            const int c = cell(ci, cj);
+            dux_[n] = ux * (1 - exx_[c]) - uy * exy_[c];  // eq. 12a
+            duy_[n] = uy * (1 - eyy_[c]) - ux * eyx_[c];  // eq. 12b
+        }
+}
+
+// eq. 13-14: du(t + dt/2) = du(t - dt/2) + dt^2/m (F - D), D = alpha |F| sgn(du).
+// Then fixed directions, then moving walls (their reaction is what they exert).
+inline void Simulation::integrate() {
+    const Range nodes_now{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
+    const Range nr = nodes_now.unite(live_nodes_);
+    const double dt2 = sc_.dt_s * sc_.dt_s, alpha = sc_.damping;
+    const double g = std::hypot(sc_.gravity_x, sc_.gravity_y);
+    auto sgn = [](double v) { return double((v > 0) - (v < 0)); };
+    double ke = 0, fmax = 0, fgross = 0, maxdu = 0;
+    long counted = 0;
+    for (int j = nr.j0; j < nr.j1; ++j)
+        for (int i = nr.i0; i < nr.i1; ++i) {
+            const int n = node(i, j);
+            const bool inside = i >= nodes_now.i0 && i < nodes_now.i1 && j >= nodes_now.j0 && j < nodes_now.j1;
+            const double m = inside ? nmass_[n] : 0.0;
+            if (!inside) { nmass_[n] = 0; fx_[n] = fy_[n] = 0; }
+            if (m == 0) { dux_[n] = duy_[n] = 0; continue; }  // no mass, no motion
+            const double fx = fx_[n], fy = fy_[n];
+            const double ux = dux_[n] + dt2 / m * (fx - alpha * std::fabs(fx) * sgn(dux_[n]));  // eq. 13, 14
+            const double uy = duy_[n] + dt2 / m * (fy - alpha * std::fabs(fy) * sgn(duy_[n]));
+            dux_[n] = ux; duy_[n] = uy;
+            if (fixed_[n] != (kFixX | kFixY)) {
+                const double fxf = (fixed_[n] & kFixX) ? 0.0 : fx, fyf = (fixed_[n] & kFixY) ? 0.0 : fy;
+                fmax = std::max(fmax, std::hypot(fxf, fyf));
+                fgross += std::hypot(fx - sc_.gravity_x * m, fy - sc_.gravity_y * m) + m * g;
+                ++counted;
+            }
+        }
+    rx_ = ry_ = 0;
+    for (const std::int32_t n : fixed_nodes_) {
+        if (fixed_[n] & kFixX) { dux_[n] = 0; rx_ -= fx_[n]; }
+        if (fixed_[n] & kFixY) { duy_[n] = 0; ry_ -= fy_[n]; }
+    }
+    Range wall_nodes{};
+    const double t_next = (step_ + 1) * sc_.dt_s;
+    for (std::size_t w = 0; w < walls_.size(); ++w) {
+        WallState& ws = walls_[w];
+        const Wall& spec = sc_.walls[w];
+        ws.fx = ws.fy = 0;
+        for (std::size_t q = 0; q < ws.base_i.size(); ++q) {
+            const int i = ws.base_i[q] + ws.shift_i, j = ws.base_j[q] + ws.shift_j;
+            if (i < 0 || j < 0 || i > mx_ || j > my_) continue;
+            const int n = node(i, j);
+            if (!(fixed_[n] & kFixX)) { dux_[n] = spec.vx * sc_.dt_s; ws.fx -= fx_[n]; }
+            if (!(fixed_[n] & kFixY)) { duy_[n] = spec.vy * sc_.dt_s; ws.fy -= fy_[n]; }
+            wall_nodes = wall_nodes.unite({i, i + 1, j, j + 1});
+        }
+        // Travel after this increment; whole cells travelled move the wall to the next line.
+        ws.dx = spec.vx * t_next; ws.dy = spec.vy * t_next;
+        ws.shift_i = int(std::trunc(ws.dx * invL_ * (1 + 1e-12)));
+        ws.shift_j = int(std::trunc(ws.dy * invL_ * (1 + 1e-12)));
+    }
+    for (int j = nr.j0; j < nr.j1; ++j)
+        for (int i = nr.i0; i < nr.i1; ++i) {
+            const int n = node(i, j);
+            if (nmass_[n] == 0) continue;
+            ke += 0.5 * nmass_[n] * (dux_[n] * dux_[n] + duy_[n] * duy_[n]);
+            maxdu = std::max(maxdu, std::max(std::fabs(dux_[n]), std::fabs(duy_[n])));
+        }
+    ke_ = ke / dt2;
+    max_du_ = maxdu;
+    unbal_ = counted && fgross > 0 ? fmax / (fgross / counted) : 0.0;
+    live_nodes_ = nodes_now.unite(wall_nodes);
+}
+
+#ifndef LPFDM_NO_IO
+// ---------------------------------------------------------- deck reader ---
+
+namespace detail {
+
+struct Token {
+    std::string text;
+    Pos pos;
+};
+
+// Fortran real: [sign] digits [. digits] [E|D [sign] digits], or . digits; no nan/inf.
+inline bool parse_real(const std::string& t, double& out) {
+    std::string s;
+    std::size_t i = 0;
+    if (i < t.size() && (t[i] == '+' || t[i] == '-')) s += t[i++];
+    std::size_t digits = 0;
+    while (i < t.size() && std::isdigit(static_cast<unsigned char>(t[i]))) { s += t[i++]; ++digits; }
+    if (i < t.size() && t[i] == '.') {
+        s += t[i++];
+        while (i < t.size() && std::isdigit(static_cast<unsigned char>(t[i]))) { s += t[i++]; ++digits; }
+    }
+    if (digits == 0) return false;
+    if (i < t.size() && (t[i] == 'e' || t[i] == 'E' || t[i] == 'd' || t[i] == 'D')) {
+        s += 'e'; ++i;
+        if (i < t.size() && (t[i] == '+' || t[i] == '-')) s += t[i++];
+        std::size_t ed = 0;
+        while (i < t.size() && std::isdigit(static_cast<unsigned char>(t[i]))) { s += t[i++]; ++ed; }
+        if (ed == 0) return false;
+    }
+    if (i != t.size()) return false;
+    if (s[0] == '+') s.erase(0, 1);
+    const char* b = s.data();
+    const auto r = std::from_chars(b, b + s.size(), out);
+    if (r.ec == std::errc::result_out_of_range) return false;
+    return r.ec == std::errc() && r.ptr == b + s.size() && std::isfinite(out);
+}
+
+inline std::string upper(std::string s) {
+    for (auto& ch : s) ch = char(std::toupper(static_cast<unsigned char>(ch)));
+    return s;
+}
+
+// Splits the deck into cards: comments removed, continuations joined, each field
+// with its own line and column. Fields are separated by blanks or commas; '=' stands
+// alone so that NAME=VALUE, NAME = VALUE and NAME= VALUE read alike.
+struct Lexed {
+    std::vector<std::vector<Token>> cards;
+    std::vector<std::string> raw;  // the card's text after the keyword (for TITLE)
+};
+
+inline Lexed lex(const std::string& text, const std::string& file, Diagnostics& diags) {
+    Lexed out;
+    std::vector<Token> pending;
+    std::string pending_raw;
+    bool continuing = false;
+    Pos last_amp;
+    int line_no = 0;
+    std::size_t at = 0;
+    while (at < text.size()) {
+        std::size_t eol = text.find('\n', at);
+        if (eol == std::string::npos) eol = text.size();
+        std::string line = text.substr(at, eol - at);
+        at = eol + 1;
+        ++line_no;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        bool binary = false;
+        for (std::size_t c = 0; c < line.size(); ++c) {
+            const unsigned char ch = static_cast<unsigned char>(line[c]);
+            if ((ch < 0x20 && ch != '\t' && ch != '\f' && ch != '\v') || ch == 0x7f) {
+                char buf[96];
+                std::snprintf(buf, sizeof buf, "the deck holds binary data (byte 0x%02x); a deck is plain text", ch);
+                diags.push_back({{file, line_no, int(c) + 1}, buf});
+                binary = true;
+                break;
+            }
+        }
+        if (binary) return {};  // one message is enough for a binary file
+        if (!line.empty() && line[0] == '*') continue;  // comment card
+        const std::size_t bang = line.find('!');
+        if (bang != std::string::npos) line.resize(bang);
+        std::vector<Token> toks;
+        std::size_t c = 0;
+        while (c < line.size()) {
+            const char ch = line[c];
+            if (ch == ' ' || ch == '\t' || ch == ',' || ch == '\f' || ch == '\v') { ++c; continue; }
+            if (ch == '=') { toks.push_back({"=", {file, line_no, int(c) + 1}}); ++c; continue; }
+            const std::size_t b = c;
+            while (c < line.size() && !std::strchr(" \t,=\f\v", line[c])) ++c;
+            toks.push_back({line.substr(b, c - b), {file, line_no, int(b) + 1}});
+        }
+        const bool amp = !toks.empty() && toks.back().text == "&";
+        if (amp) { last_amp = toks.back().pos; toks.pop_back(); }
+        if (!continuing && toks.empty() && !amp) continue;
+        if (!continuing) {
+            pending.clear();
+            pending_raw.clear();
+            if (!toks.empty()) {
+                const std::size_t kw_end = toks[0].pos.col - 1 + toks[0].text.size();
+                pending_raw = kw_end < line.size() ? line.substr(kw_end) : "";
+            }
+        } else {
+            pending_raw += " " + line;
+        }
+        pending.insert(pending.end(), toks.begin(), toks.end());
+        continuing = amp;
+        if (!continuing && !pending.empty()) {
+            out.cards.push_back(pending);
+            out.raw.push_back(pending_raw);
+        }
+    }
+    if (continuing) diags.push_back({last_amp, "'&' continues the card, but no line follows"});
+    return out;
+}
+
+// Reads one card's fields in order, reporting the first problem with its column.
+class CardReader {
+public:
+    CardReader(const std::vector<Token>& t, Diagnostics& d) : t_(t), d_(d) {}
+    bool ok() const { return ok_; }
+    const Token& keyword() const { return t_[0]; }
+    bool more_positional() const { return next_ < t_.size() && !(next_ + 1 < t_.size() && t_[next_ + 1].text == "="); }
+    bool at_end() const { return next_ >= t_.size(); }
+    const Token* peek() const { return next_ < t_.size() ? &t_[next_] : nullptr; }
+
+    void fail(const Pos& p, std::string m) {
+        if (ok_) d_.push_back({p, std::move(m)});
+        ok_ = false;
+    }
+    Pos end_pos() const {
+        const Token& l = t_.back();
+        return {l.pos.file, l.pos.line, l.pos.col + int(l.text.size())};
+    }
+    const Token* field(const char* what) {
+        if (!ok_) return nullptr;
+        if (next_ >= t_.size() || t_[next_].text == "=" || (next_ + 1 < t_.size() && t_[next_ + 1].text == "=")) {
+            fail(next_ < t_.size() ? t_[next_].pos : end_pos(), std::string("missing field: ") + what);
+            return nullptr;
+        }
+        return &t_[next_++];
+    }
+    double real(const char* what) {
+        const Token* t = field(what);
+        double v = 0;
+        if (t && !number(*t, what, v)) return 0;
+        return v;
+    }
+    long integer(const char* what, long lo, long hi) {
+        const Token* t = field(what);
+        double v = 0;
+        if (!t || !number(*t, what, v)) return 0;
+        if (v != std::floor(v)) { fail(t->pos, std::string(what) + " must be a whole number, found '" + t->text + "'"); return 0; }
+        if (v < double(lo) || v > double(hi)) {
+            fail(t->pos, std::string(what) + " must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], found '" + t->text + "'");
+            return 0;
+        }
+        return long(v);
+    }
+    bool number(const Token& t, const char* what, double& v) {
+        if (parse_real(t.text, v)) return true;
+        const std::string u = upper(t.text);
+        if (u.find("NAN") != std::string::npos || u.find("INF") != std::string::npos)
+            fail(t.pos, std::string(what) + ": '" + t.text + "' is not a finite number");
+        else
+            fail(t.pos, std::string(what) + ": expected a number, found '" + t.text + "'");
+        return false;
+    }
+    // NAME=VALUE parameters; each name at most once, from the allowed list.
+    struct Param {
+        std::string name;
+        double value = 0;
+        Pos pos;
+    };
+    std::vector<Param> params(std::initializer_list<const char*> allowed, std::initializer_list<const char*> required) {
+        std::vector<Param> out;
+        while (ok_ && next_ < t_.size()) {
+            const Token& name = t_[next_];
+            if (name.text == "=") { fail(name.pos, "'=' without a parameter name"); break; }
+            if (next_ + 1 >= t_.size() || t_[next_ + 1].text != "=") { fail(name.pos, "extra field '" + name.text + "'"); break; }
+            const std::string u = upper(name.text);
+            bool known = false;
+            for (const char* a : allowed) known |= u == a;
+            if (!known) {
+                std::string list;
+                for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+                fail(name.pos, "unknown parameter '" + name.text + "' (this card takes " + list + ")");
+                break;
+            }
+            for (const auto& p : out)
+                if (p.name == u) { fail(name.pos, "parameter " + u + " given twice"); break; }
+            if (!ok_) break;
+            if (next_ + 2 >= t_.size() || t_[next_ + 2].text == "=") { fail(t_[next_ + 1].pos, "missing value after " + u + "="); break; }
+            const Token& val = t_[next_ + 2];
+            double v = 0;
+            if (!number(val, u.c_str(), v)) break;
+            out.push_back({u, v, val.pos});
+            next_ += 3;
+        }
+        for (const char* r : required) {
+            if (!ok_) break;
+            bool have = false;
+            for (const auto& p : out) have |= p.name == r;
+            if (!have) fail(end_pos(), std::string("missing parameter ") + r + "=");
+        }
+        return out;
+    }
+    void finish() {
+        if (ok_ && next_ < t_.size()) fail(t_[next_].pos, "extra field '" + t_[next_].text + "'");
+    }
+
+private:
+    const std::vector<Token>& t_;
+    Diagnostics& d_;
+    std::size_t next_ = 1;
+    bool ok_ = true;
+};
+
+inline double param_or(const std::vector<CardReader::Param>& ps, const char* name, double def) {
+    for (const auto& p : ps) if (p.name == name) return p.value;
+    return def;
+}
+
+}  // namespace detail
+
+// Parses a deck (design §3) into scene: every card, field and parameter checked, each
+// problem reported with file:line:column. The scene as a whole is checked by validate().
+inline Diagnostics parse_deck_text(const std::string& text, const std::string& file, Scene& sc) {
+    using namespace detail;
+    Diagnostics d;
+    if (text.find_first_not_of(" \t\r\n\f\v") == std::string::npos) {
+        d.push_back({{file, 1, 1}, "the deck is empty"});
+        return d;
+    }
+    Lexed lx = lex(text, file, d);
+    if (!d.empty()) return d;
+    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false;
+    Pos last{file, 1, 1};
+    for (std::size_t ci = 0; ci < lx.cards.size() && !have_end; ++ci) {
+        const auto& toks = lx.cards[ci];
+        CardReader r(toks, d);
+        const std::string kw = upper(toks[0].text);
+        const Pos kp = toks[0].pos;
+        last = kp;
+        auto once = [&](bool& seen) {
+            if (seen) r.fail(kp, kw + " is given twice");
+            seen = true;
+        };
+        if (kw == "TITLE") {
+            once(have_title);
+            std::string t = lx.raw[ci];
+            const std::size_t b = t.find_first_not_of(" \t,");
+            t = b == std::string::npos ? "" : t.substr(b);
+            while (!t.empty() && std::strchr(" \t,", t.back())) t.pop_back();
+            sc.title = t;
+            continue;
+        } else if (kw == "GRID") {
+            once(have_grid);
+            sc.grid_pos = kp;
+            sc.mx = int(r.integer("mx (cells in x)", 1, 1'000'000));
+            sc.my = int(r.integer("my (cells in y)", 1, 1'000'000));
+            const Token* t = r.peek();
+            sc.cell_m = r.real("L (cell size, m)");
+            if (r.ok() && !(sc.cell_m > 0)) r.fail(t->pos, "the cell size L must be > 0");
+        } else if (kw == "MATERIAL") {
+            Material m;
+            m.pos = kp;
+            m.id = int(r.integer("material id", 1, 65535));
+            const Token* model = r.field("model (ELASTIC or MOHR)");
+            if (model) {
+                const std::string mm = upper(model->text);
+                std::vector<CardReader::Param> ps;
+                if (mm == "ELASTIC") {
+                    ps = r.params({"E", "NU", "RHO"}, {"E", "NU", "RHO"});
+                } else if (mm == "MOHR") {
+                    m.model = Model::MohrCoulomb;
+                    ps = r.params({"E", "NU", "RHO", "PHI", "C", "PSI", "TENSION", "SOFTEN", "SCATTER"}, {"E", "NU", "RHO", "PHI", "C"});
+                } else {
+                    r.fail(model->pos, "unknown material model '" + model->text + "' (ELASTIC or MOHR)");
+                }
+                m.E = param_or(ps, "E", 0); m.nu = param_or(ps, "NU", 0); m.rho = param_or(ps, "RHO", 0);
+                m.phi_deg = param_or(ps, "PHI", 0); m.c = param_or(ps, "C", 0); m.psi_deg = param_or(ps, "PSI", 0);
+                m.tension = param_or(ps, "TENSION", -1); m.soften = param_or(ps, "SOFTEN", 0); m.scatter = param_or(ps, "SCATTER", 0);
+                for (const auto& p : ps) {  // range errors point at the value
+                    const double v = p.value;
+                    const char* bad = nullptr;
+                    if (p.name == "E" && !(v > 0)) bad = "E must be > 0";
+                    if (p.name == "NU" && !(v > -1 && v < 0.5)) bad = "NU must lie in (-1, 0.5)";
+                    if (p.name == "RHO" && !(v > 0)) bad = "RHO must be > 0";
+                    if (p.name == "PHI" && !(v >= 0 && v < 90)) bad = "PHI must lie in [0, 90) degrees";
+                    if (p.name == "C" && !(v >= 0)) bad = "C must be >= 0";
+                    if (p.name == "PSI" && !(v >= 0 && v <= m.phi_deg)) bad = "PSI must lie in [0, PHI]";
+                    if (p.name == "TENSION" && !(v >= 0)) bad = "TENSION must be >= 0";
+                    if (p.name == "SOFTEN" && !(v >= 0 && v <= 1)) bad = "SOFTEN must lie in [0, 1]";
+                    if (p.name == "SCATTER" && !(v >= 0)) bad = "SCATTER must be >= 0";
+                    if (bad) { r.fail(p.pos, bad); break; }
+                }
+            }
+            if (r.ok()) sc.materials.push_back(m);
+        } else if (kw == "CLUSTER") {
+            Cluster c;
+            c.pos = kp;
+            c.mat = int(r.integer("material id", 1, 65535));
+            c.box.x0 = r.real("x0"); c.box.y0 = r.real("y0"); c.box.x1 = r.real("x1"); c.box.y1 = r.real("y1");
+            const auto ps = r.params({"PPC"}, {});
+            const double ppc = param_or(ps, "PPC", 2);
+            if (r.ok() && (ppc != std::floor(ppc) || ppc < 1 || ppc > 32)) {
+                for (const auto& p : ps) if (p.name == "PPC") r.fail(p.pos, "PPC must be a whole number in [1, 32]");
+            }
+            c.ppc = int(ppc);
+            if (r.ok()) sc.clusters.push_back(c);
+        } else if (kw == "FIX") {
+            Fix f;
+            f.pos = kp;
+            const Token* dir = r.field("direction (X, Y or XY)");
+            if (dir) {
+                const std::string u = upper(dir->text);
+                if (u == "X") f.dirs = kFixX;
+                else if (u == "Y") f.dirs = kFixY;
+                else if (u == "XY" || u == "YX") f.dirs = kFixX | kFixY;
+                else r.fail(dir->pos, "unknown direction '" + dir->text + "' (X, Y or XY)");
+            }
+            f.box.x0 = r.real("x0"); f.box.y0 = r.real("y0"); f.box.x1 = r.real("x1"); f.box.y1 = r.real("y1");
+            if (r.ok()) sc.fixes.push_back(f);
+        } else if (kw == "WALL") {
+            Wall w;
+            w.pos = kp;
+            w.id = int(r.integer("wall id", 1, 65535));
+            w.box.x0 = r.real("x0"); w.box.y0 = r.real("y0"); w.box.x1 = r.real("x1"); w.box.y1 = r.real("y1");
+            w.vx = r.real("VX (m/s)"); w.vy = r.real("VY (m/s)");
+            if (r.ok()) sc.walls.push_back(w);
+        } else if (kw == "GRAVITY") {
+            once(have_gravity);
+            sc.gravity_x = r.real("gx (m/s^2)");
+            sc.gravity_y = r.real("gy (m/s^2)");
+        } else if (kw == "DAMPING") {
+            once(have_damping);
+            sc.damping_pos = kp;
+            const Token* t = r.peek();
+            sc.damping = r.real("alpha");
+            if (r.ok() && !(sc.damping >= 0 && sc.damping < 1)) r.fail(t->pos, "DAMPING alpha must lie in [0, 1)");
+        } else if (kw == "SEED") {
+            once(have_seed);
+            sc.seed = std::uint64_t(r.integer("seed", 0, 9'007'199'254'740'992L));
+        } else if (kw == "STEP") {
+            once(have_step);
+            sc.step_pos = kp;
+            const Token* t = r.peek();
+            sc.dt_s = r.real("dt (s)");
+            if (r.ok() && !(sc.dt_s > 0)) r.fail(t->pos, "the time step dt must be > 0");
+            sc.steps = r.integer("number of steps", 1, 1'000'000'000L);
+        } else if (kw == "OUTPUT") {
+            Output o;
+            o.pos = kp;
+            const Token* kind = r.field("kind (POINTS or HISTORY)");
+            if (kind) {
+                const std::string u = upper(kind->text);
+                if (u == "POINTS") o.kind = Output::Points;
+                else if (u == "HISTORY") o.kind = Output::History;
+                else r.fail(kind->pos, "unknown output '" + kind->text + "' (POINTS or HISTORY)");
+            }
+            const Token* f = r.field("file name");
+            if (f) o.file = f->text;
+            if (f && (o.file.find('/') != std::string::npos || o.file == "." || o.file == ".."))
+                r.fail(f->pos, "the file name must not contain a directory (use -o DIR)");
+            if (r.ok() && !r.at_end()) {
+                const Token* e = r.field("EVERY");
+                if (e && upper(e->text) != "EVERY") r.fail(e->pos, "extra field '" + e->text + "'");
+                o.every = r.integer("EVERY n", 1, 1'000'000'000L);
+            }
+            for (const auto& prev : sc.outputs)
+                if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
+            if (r.ok()) sc.outputs.push_back(o);
+        } else if (kw == "END") {
+            have_end = true;
+            sc.end_pos = kp;
+        } else {
+            r.fail(kp, "unknown card '" + toks[0].text + "'");
+            continue;
+        }
+        r.finish();
+    }
+    if (!have_grid) d.push_back({last, "no GRID card: the lattice is not defined"});
+    if (!have_step) d.push_back({last, "no STEP card: the time step and the number of steps are not defined"});
+    if (have_grid && sc.clusters.empty()) d.push_back({sc.grid_pos, "no CLUSTER card: the scene holds no material"});
+    return d;
+}
+
+// parse_deck_text, then validate(): an empty result means the scene can run.
+inline Diagnostics read_deck_text(const std::string& text, const std::string& file, Scene& sc) {
+    Diagnostics d = parse_deck_text(text, file, sc);
+    return d.empty() ? validate(sc) : d;
+}
+
+// The whole text of a file, or a diagnostic.
+inline Diagnostics load_file(const std::string& path, std::string& text) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return {{{path, 0, 0}, std::string("cannot open the deck: ") + std::strerror(errno)}};
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    if (in.bad()) return {{{path, 0, 0}, "cannot read the deck"}};
+    text = ss.str();
+    return {};
+}
+
+inline Diagnostics read_deck(const std::string& path, Scene& sc) {
+    std::string text;
+    Diagnostics d = load_file(path, text);
+    return d.empty() ? read_deck_text(text, path, sc) : d;
+}
+
+// -------------------------------------------------------------- writers ---
+
+// Point table (design §4): one frame; frames are separated by two blank lines.
+inline void write_points_header(std::FILE* f, const Simulation& sim, const std::string& deck) {
+    fmt::print(f, "# lpfdm {} point table\n# deck: {}\n# title: {}\n", kVersion, deck, sim.scene().title);
+    fmt::print(f, "# units: m, Pa (tension positive); lattice {} x {} cells of {} m\n", sim.mx(), sim.my(), sim.cell_size());
+    fmt::print(f, "# columns: x y sxx syy sxy szz ep yielded mat id\n");
+    fmt::print(f, "#   ep = accumulated plastic shear strain |d_eps1^p - d_eps3^p|; yielded = 1 once the point has yielded (softened)\n");
+}
+
+inline void write_points_frame(std::FILE* f, const Simulation& sim, bool first) {
+    const Points& p = sim.points();
+    fmt::memory_buffer b;
+    if (!first) fmt::format_to(std::back_inserter(b), "\n\n");
+    fmt::format_to(std::back_inserter(b), "# step {} time {:.9g}\n", sim.step_count(), sim.time());
+    const bool plastic = !p.plastic_shear.empty();
+    for (std::size_t k = 0; k < p.size(); ++k) {
+        fmt::format_to(std::back_inserter(b), "{:.9g} {:.9g} {:.7g} {:.7g} {:.7g} {:.7g} {:.6g} {} {} {}\n", p.x[k], p.y[k], p.sxx[k], p.syy[k],
+                       p.sxy[k], p.szz[k], plastic ? p.plastic_shear[k] : 0.0, plastic ? int(p.yielded[k]) : 0, sim.material_id(k), p.id[k]);
+        if (b.size() > (1 << 20)) { std::fwrite(b.data(), 1, b.size(), f); b.clear(); }
+    }
+    std::fwrite(b.data(), 1, b.size(), f);
+}
+
+// History (design §4): step time ke mass_in mass_out, per wall fx fy dx dy, then more.
+inline void write_history_header(std::FILE* f, const Simulation& sim, const std::string& deck) {
+    fmt::print(f, "# lpfdm {} history\n# deck: {}\n# title: {}\n", kVersion, deck, sim.scene().title);
+    fmt::print(f, "# units: s, J/m, kg/m, N/m, m; wall force = force the wall exerts on the material\n");
+    fmt::print(f, "# unbal = max unbalanced nodal force / mean gross nodal force; rx ry = reactions of the fixed nodes\n");
+    std::string h = "# step time ke mass_in mass_out";
+    for (const auto& w : sim.scene().walls) h += fmt::format(" w{0}_fx w{0}_fy w{0}_dx w{0}_dy", w.id);
+    fmt::print(f, "{} unbal rx ry\n", h);
+}
+
+inline void write_history_row(std::FILE* f, const Simulation& sim) {
+    fmt::memory_buffer b;
+    fmt::format_to(std::back_inserter(b), "{} {:.9g} {:.9g} {:.17g} {:.17g}", sim.step_count(), sim.time(), sim.kinetic_energy(), sim.mass_inside(),
+                   sim.mass_outflow());
+    for (const auto& w : sim.walls()) fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g}", w.fx, w.fy, w.dx, w.dy);
+    fmt::format_to(std::back_inserter(b), " {:.6g} {:.9g} {:.9g}\n", sim.unbalanced_ratio(), sim.reaction_x(), sim.reaction_y());
+    std::fwrite(b.data(), 1, b.size(), f);
+}
+#endif  // LPFDM_NO_IO
+
+}  // namespace lpfdm
+
+#endif  // LPFDM_HPP
