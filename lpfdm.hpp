@@ -325,6 +325,23 @@ inline void elastic_increment(const MaterialConstants& k, const StrainIncrement&
     s.zz += k.a2 * (d.xx + d.yy);
 }
 
+// The rotation of eq. 5f as an exact orthogonal matrix (Cayley form, no trigonometry):
+// the material turns by phi with tan(phi/2) = theta/2 (phi = theta to third order), so
+// the stress components turn by 2 phi. Returns (cos 2phi, sin 2phi).
+inline void jaumann_rotation(double d_theta, double& c2, double& s2) {
+    const double t = 0.5 * d_theta, d = 1 / (1 + t * t);
+    const double co = (1 - t * t) * d, si = 2 * t * d;
+    c2 = co * co - si * si;
+    s2 = 2 * si * co;
+}
+
+// Rotates the in-plane stress with the material (Jaumann); invariants are kept exactly.
+inline void rotate_stress(Stress& s, double c2, double s2) {
+    const double pm = 0.5 * (s.xx + s.yy), a = 0.5 * (s.xx - s.yy), b = s.xy;
+    const double ar = a * c2 - b * s2, br = a * s2 + b * c2;
+    s.xx = pm + ar; s.yy = pm - ar; s.xy = br;
+}
+
 // Strength of one Mohr-Coulomb point at this moment.
 struct MohrStrength {
     double c = 0, n_phi = 1, n_psi = 1;
@@ -333,78 +350,149 @@ struct MohrStrength {
 
 // What a plastic correction did (principal plastic strains, tension positive).
 struct MohrResult {
-    enum Mode : std::uint8_t { Elastic = 0, Shear = 1, Tension = 2, Corner = 3 } mode = Elastic;
+    enum Mode : std::uint8_t { Elastic = 0, Shear = 1, Tension = 2, Edge = 3 } mode = Elastic;  // Edge: 2-3 planes at once
     double d_gamma_p = 0;  // |d_eps1^p - d_eps3^p|: plastic shear strain increment
     double d_vol_p = 0;    // d_eps1^p + d_eps2^p + d_eps3^p
 };
 
-// FLAC's Mohr-Coulomb correction of a trial stress (already elastic-updated): sort the
-// principal stresses sig1 <= sig2 <= sig3 with sig_zz among them, test shear
-// f_s = sig1 - sig3 N_phi + 2c sqrt(N_phi) and tension f_t = sig_t - sig3 (failure
-// where negative), and return in closed form along the non-associated flow
-// g_s = sig1 - sig3 N_psi, g_t = -sig3. Where the corrected stress still violates the
-// other surface, both are active (the corner) and a 2x2 system gives the multipliers.
+// FLAC's Mohr-Coulomb correction of a trial stress (already elastic-updated). In
+// principal space (sig_zz among the three) the elastic domain is bounded by six shear
+// planes f_ij = sig_i - N_phi sig_j + 2c sqrt(N_phi) >= 0 (i the compressive side) and
+// three tension planes sig_t - sig_i >= 0. A violated plane a is corrected along its
+// non-associated flow m_a (shear: e_i - N_psi e_j, tension: -e_i):
+//     sig = sig_trial + sum_a mu_a D m_a,   mu_a >= 0,   f_a(sig) = 0 on the active set.
+// First FLAC's choice: the plane of sig1, sig3 (shear) or of sig3 (tension), decided by
+// FLAC's h function, in closed form. Where that leaves another plane violated (the
+// principal order changed: an edge, the shear-tension corner, the apex), the two or
+// three planes meeting there are made active together and a 2x2 or 3x3 system gives
+// the multipliers: still closed form, never an iteration.
 inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStrength& st, Stress& s) {
     MohrResult res;
-    const double sq = std::sqrt(st.n_phi);
+    const double np = st.n_phi, sq = std::sqrt(np), two_c_sq = 2 * st.c * sq;
+    double ns = st.n_psi;
     double sig_t = std::numeric_limits<double>::infinity();
-    if (st.n_phi > 1) sig_t = 2 * st.c * sq / (st.n_phi - 1);  // apex: c / tan(phi)
+    if (np > 1) sig_t = two_c_sq / (np - 1);  // apex: c / tan(phi)
     if (st.tension >= 0) sig_t = std::min(sig_t, st.tension);
 
-    // In-plane principal stresses about the current principal direction.
+    // In-plane principal stresses about the current principal direction; index 2 is zz.
     const double p = 0.5 * (s.xx + s.yy), a = 0.5 * (s.xx - s.yy);
     const double r = std::sqrt(a * a + s.xy * s.xy);
-    double pr[3] = {p - r, p + r, s.zz};
-    int i1 = 0, i2 = 1, i3 = 2;  // indices of sig1 <= sig2 <= sig3
-    if (pr[i1] > pr[i2]) std::swap(i1, i2);
-    if (pr[i2] > pr[i3]) std::swap(i2, i3);
-    if (pr[i1] > pr[i2]) std::swap(i1, i2);
-
-    const double two_c_sq = 2 * st.c * sq;
-    double fs = pr[i1] - pr[i3] * st.n_phi + two_c_sq;
-    double ft = sig_t - pr[i3];
+    const double trial[3] = {p - r, p + r, s.zz};
+    int i1 = 0, i2 = 1, i3 = 2;  // sig1 <= sig2 <= sig3
+    if (trial[i1] > trial[i2]) std::swap(i1, i2);
+    if (trial[i2] > trial[i3]) std::swap(i2, i3);
+    if (trial[i1] > trial[i2]) std::swap(i1, i2);
+    const double fs = trial[i1] - trial[i3] * np + two_c_sq, ft = sig_t - trial[i3];
     if (fs >= 0 && ft >= 0) return res;
 
-    const double a1 = k.a1, a2 = k.a2, np = st.n_phi, ns = st.n_psi;
-    // d_sig = -lambda_s ds - lambda_t dt, with ds = D (1, 0, -N_psi), dt = D (0, 0, -1).
-    const double ds1 = a1 - a2 * ns, ds2 = a2 * (1 - ns), ds3 = a2 - a1 * ns;
-    const double dt1 = -a2, dt2 = -a2, dt3 = -a1;
-    const double Mss = ds1 - np * ds3, Mst = dt1 - np * dt3;   // grad f_s . ds, . dt
-    const double Mts = -ds3, Mtt = -dt3;                       // grad f_t = (0, 0, -1)
-    const double trial[3] = {pr[0], pr[1], pr[2]}, fs0 = fs, ft0 = ft;
-    double ls = 0, lt = 0;
-    auto apply = [&](double lss, double ltt) {  // from the trial stress
-        ls = lss; lt = ltt;
-        pr[i1] = trial[i1] - (lss * ds1 + ltt * dt1);
-        pr[i2] = trial[i2] - (lss * ds2 + ltt * dt2);
-        pr[i3] = trial[i3] - (lss * ds3 + ltt * dt3);
-        fs = pr[i1] - pr[i3] * np + two_c_sq;
-        ft = sig_t - pr[i3];
+    // The nine planes: f = n . sig + kk >= 0, flow m.
+    struct Plane { double n[3], kk, m[3]; };
+    Plane pl[9];
+    int npl = 0;
+    auto build = [&]() {
+        npl = 0;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+                if (i == j) continue;
+                Plane& q = pl[npl++];
+                for (int t = 0; t < 3; ++t) { q.n[t] = (t == i) - np * (t == j); q.m[t] = (t == i) - ns * (t == j); }
+                q.kk = two_c_sq;
+            }
+        if (std::isfinite(sig_t))
+            for (int i = 0; i < 3; ++i) {
+                Plane& q = pl[npl++];
+                for (int t = 0; t < 3; ++t) q.n[t] = q.m[t] = -double(t == i);
+                q.kk = sig_t;
+            }
     };
-    const double alpha_p = std::sqrt(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
-    const double h = pr[i3] - sig_t + alpha_p * (pr[i1] - sig_p);
-    const bool shear_first = fs < 0 && (ft >= 0 || !(h > 0));
-    if (shear_first) { apply(fs / Mss, 0); res.mode = MohrResult::Shear; }
-    else { apply(0, ft / Mtt); res.mode = MohrResult::Tension; }
-    const double tol = 1e-12 * (std::fabs(pr[i1]) + std::fabs(pr[i3]) + two_c_sq);
-    if ((shear_first && ft < -tol) || (!shear_first && fs < -tol)) {
-        // Corner: both surfaces active at once.
-        const double det = Mss * Mtt - Mst * Mts;
-        apply((fs0 * Mtt - Mst * ft0) / det, (Mss * ft0 - Mts * fs0) / det);
-        res.mode = MohrResult::Corner;
-    }
-    // Plastic strains d_eps^p = lambda_s (1, 0, -N_psi) + lambda_t (0, 0, -1).
-    const double e1 = ls, e3 = -ls * ns - lt;
-    res.d_gamma_p = std::fabs(e1 - e3);
-    res.d_vol_p = e1 + e3;
+    build();
+    auto plane_index = [&](int i, int j) { return i * 2 + (j > i ? j - 1 : j); };  // shear plane (i, j)
+    const double a1 = k.a1, a2 = k.a2;
+    auto Dm = [&](const Plane& q, double out[3]) {  // D m in principal space
+        const double tr = q.m[0] + q.m[1] + q.m[2];
+        for (int t = 0; t < 3; ++t) out[t] = a2 * tr + (a1 - a2) * q.m[t];
+    };
+    auto f_at = [&](const Plane& q, const double sg[3]) { return q.n[0] * sg[0] + q.n[1] * sg[1] + q.n[2] * sg[2] + q.kk; };
+    const double tol = 1e-11 * (std::fabs(trial[0]) + std::fabs(trial[1]) + std::fabs(trial[2]) + two_c_sq + (std::isfinite(sig_t) ? sig_t : 0));
 
-    // Back to x, y: same principal direction, new in-plane principal values.
-    const double lo = (i1 == 0 ? pr[i1] : i2 == 0 ? pr[i2] : pr[i3]);
-    const double hi = (i1 == 1 ? pr[i1] : i2 == 1 ? pr[i2] : pr[i3]);
-    const double zz = (i1 == 2 ? pr[i1] : i2 == 2 ? pr[i2] : pr[i3]);
-    const double pn = 0.5 * (hi + lo), rn = 0.5 * (hi - lo);
+    // Solves the active set act[0..na) and checks the result; true if admissible.
+    double best[3] = {0, 0, 0}, best_mu[3] = {0, 0, 0};
+    int best_act[3] = {-1, -1, -1}, best_na = 0;
+    auto try_set = [&](const int* act, int na) {
+        double A[3][3], b[3], dm[3][3], mu[3] = {0, 0, 0};
+        for (int u = 0; u < na; ++u) Dm(pl[act[u]], dm[u]);
+        for (int u = 0; u < na; ++u) {
+            b[u] = -f_at(pl[act[u]], trial);
+            for (int v = 0; v < na; ++v) A[u][v] = pl[act[u]].n[0] * dm[v][0] + pl[act[u]].n[1] * dm[v][1] + pl[act[u]].n[2] * dm[v][2];
+        }
+        // Gaussian elimination with partial pivoting on at most 3 x 3.
+        int perm[3] = {0, 1, 2};
+        for (int col = 0; col < na; ++col) {
+            int piv = col;
+            for (int row = col + 1; row < na; ++row) if (std::fabs(A[row][col]) > std::fabs(A[piv][col])) piv = row;
+            if (std::fabs(A[piv][col]) < 1e-300) return false;
+            std::swap(A[piv], A[col]); std::swap(b[piv], b[col]); std::swap(perm[piv], perm[col]);
+            for (int row = col + 1; row < na; ++row) {
+                const double f = A[row][col] / A[col][col];
+                for (int v = col; v < na; ++v) A[row][v] -= f * A[col][v];
+                b[row] -= f * b[col];
+            }
+        }
+        for (int u = na - 1; u >= 0; --u) {
+            double acc = b[u];
+            for (int v = u + 1; v < na; ++v) acc -= A[u][v] * mu[v];
+            mu[u] = acc / A[u][u];
+        }
+        double sg[3] = {trial[0], trial[1], trial[2]};
+        for (int u = 0; u < na; ++u) {
+            if (mu[u] < -tol / (a1 + 1)) return false;
+            for (int t = 0; t < 3; ++t) sg[t] += mu[u] * dm[u][t];
+        }
+        for (int q = 0; q < npl; ++q) if (f_at(pl[q], sg) < -tol) return false;
+        for (int t = 0; t < 3; ++t) best[t] = sg[t];
+        for (int u = 0; u < na; ++u) { best_mu[u] = mu[u]; best_act[u] = act[u]; }
+        best_na = na;
+        return true;
+    };
+
+    // FLAC's closed form: shear on (sig1, sig3) or tension on sig3, chosen by h.
+    const double alpha_p = std::sqrt(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
+    const double h = trial[i3] - sig_t + alpha_p * (trial[i1] - sig_p);
+    const bool shear_first = fs < 0 && (ft >= 0 || !(h > 0));
+    const int first = shear_first ? plane_index(i1, i3) : 6 + i3;
+    bool found = try_set(&first, 1);
+    res.mode = shear_first ? MohrResult::Shear : MohrResult::Tension;
+    // Another single plane (the h function chose the other one), then edges, corner,
+    // apex. With psi < phi the flow vectors can leave gaps between the
+    // regions they span near an edge, where no non-associated return exists; there the
+    // associated one (a projection on a convex set, which always exists) is used.
+    for (int pass = 0; pass < 2 && !found; ++pass) {
+        if (pass == 1) { ns = np; build(); }
+        int act[3];
+        for (act[0] = 0; act[0] < npl && !found; ++act[0]) {
+            if (found = try_set(act, 1), found) { res.mode = act[0] < 6 ? MohrResult::Shear : MohrResult::Tension; break; }
+        }
+        for (int na = 2; na <= 3 && !found; ++na) {
+            for (act[0] = 0; act[0] < npl && !found; ++act[0])
+                for (act[1] = act[0] + 1; act[1] < npl && !found; ++act[1]) {
+                    if (na == 2) { found = try_set(act, 2); continue; }
+                    for (act[2] = act[1] + 1; act[2] < npl && !found; ++act[2]) found = try_set(act, 3);
+                }
+            if (found) res.mode = MohrResult::Edge;
+        }
+    }
+    if (!found) return res;  // unreachable: the associated projection always exists
+    // Plastic strains d_eps^p = -sum mu_a m_a (sig = sig_trial - D d_eps^p).
+    double ep[3] = {0, 0, 0};
+    for (int u = 0; u < best_na; ++u)
+        for (int t = 0; t < 3; ++t) ep[t] -= best_mu[u] * pl[best_act[u]].m[t];
+    res.d_gamma_p = std::max({ep[0], ep[1], ep[2]}) - std::min({ep[0], ep[1], ep[2]});
+    res.d_vol_p = ep[0] + ep[1] + ep[2];
+
+    // Back to x, y: same principal direction, new principal values.
+    const double pn = 0.5 * (best[1] + best[0]), rn = 0.5 * (best[1] - best[0]);
     const double c2 = r > 0 ? a / r : 1.0, s2 = r > 0 ? s.xy / r : 0.0;
-    s.xx = pn + rn * c2; s.yy = pn - rn * c2; s.xy = rn * s2; s.zz = zz;
+    s.xx = pn + rn * c2; s.yy = pn - rn * c2; s.xy = rn * s2; s.zz = best[2];
     return res;
 }
 
@@ -867,11 +955,7 @@ inline void Simulation::cell_strains() {
             // and resting nodes would make eq. 12 brake every node on a free surface.
             const StrainIncrement e = cmass_[c] > 0 ? strain_of_cell(i, j) : StrainIncrement{};
             exx_[c] = e.xx; eyy_[c] = e.yy; exy_[c] = e.xy; eyx_[c] = e.yx;
-            // Rotation by phi with tan(phi/2) = theta/2; stress turns by 2 phi.
-            const double t = 0.5 * e.theta(), d = 1 / (1 + t * t);
-            const double co = (1 - t * t) * d, si = 2 * t * d;
-            rc_[c] = co * co - si * si;
-            rs_[c] = 2 * si * co;
+            jaumann_rotation(e.theta(), rc_[c], rs_[c]);  // eq. 5f
         }
 }
 
@@ -885,10 +969,8 @@ inline void Simulation::update_points() {
         const int c = p_.cell[k];
         const StrainIncrement e{exx_[c], eyy_[c], exy_[c], eyx_[c]};
         const MaterialConstants& mc = consts_[std::size_t(groups_[p_.group[k]].mat_index)];
-        // Jaumann: rotate the old stress with the material.
-        const double pm = 0.5 * (p_.sxx[k] + p_.syy[k]), a = 0.5 * (p_.sxx[k] - p_.syy[k]), b = p_.sxy[k];
-        const double ar = a * rc_[c] - b * rs_[c], br = a * rs_[c] + b * rc_[c];
-        Stress s{pm + ar, pm - ar, br, p_.szz[k]};
+        Stress s{p_.sxx[k], p_.syy[k], p_.sxy[k], p_.szz[k]};
+        rotate_stress(s, rc_[c], rs_[c]);  // Jaumann: the old stress turns with the material
         switch (mc.model) {
         case Model::Elastic:
             elastic_increment(mc, e, s);

@@ -1,0 +1,296 @@
+// Mohr-Coulomb soil (FLAC's closed-form return), softening, scatter and the Jaumann
+// rotation, driven one point at a time along strain paths with known answers.
+#include <doctest/doctest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <vector>
+
+#include "../lpfdm.hpp"
+
+using namespace lpfdm;
+
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180;
+
+// Principal stresses sig1 <= sig2 <= sig3 from an independent eigen-solver.
+Eigen::Vector3d principal(const Stress& s) {
+    Eigen::Matrix3d m;
+    m << s.xx, s.xy, 0, s.xy, s.yy, 0, 0, 0, s.zz;
+    return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m).eigenvalues();  // ascending
+}
+
+struct Yield {
+    double fs, ft;
+};
+
+Yield yield_functions(const Stress& s, double c, double phi_deg, double tension) {
+    const Eigen::Vector3d p = principal(s);
+    const double N = (1 + std::sin(phi_deg * kDeg)) / (1 - std::sin(phi_deg * kDeg));
+    double st = phi_deg > 0 ? c / std::tan(phi_deg * kDeg) : 1e300;
+    if (tension >= 0) st = std::min(st, tension);
+    return {p(0) - p(2) * N + 2 * c * std::sqrt(N), st - p(2)};
+}
+
+MohrStrength strength(const MaterialConstants& k) { return {k.c, k.n_phi, k.n_psi, k.tension}; }
+
+// Plastic strain increment d_eps - C d_sig (3D isotropic compliance, d_eps_zz = 0):
+// returns {volumetric, max - min principal} of the plastic part.
+std::pair<double, double> plastic_part(const Material& m, const StrainIncrement& d, const Stress& s0, const Stress& s1) {
+    const double E = m.E, nu = m.nu;
+    const double dxx = s1.xx - s0.xx, dyy = s1.yy - s0.yy, dxy = s1.xy - s0.xy, dzz = s1.zz - s0.zz, tr = dxx + dyy + dzz;
+    Eigen::Matrix3d ep;
+    const double exx = d.xx - ((1 + nu) * dxx - nu * tr) / E, eyy = d.yy - ((1 + nu) * dyy - nu * tr) / E;
+    const double exy = 0.5 * d.gamma() - (1 + nu) * dxy / E, ezz = 0 - ((1 + nu) * dzz - nu * tr) / E;
+    ep << exx, exy, 0, exy, eyy, 0, 0, 0, ezz;
+    const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(ep).eigenvalues();
+    return {ev.sum(), ev(2) - ev(0)};
+}
+
+// One point in one cell of side 1 m, driven by prescribing the nodal increments.
+struct OnePoint {
+    Scene scene;
+    Simulation sim;
+    explicit OnePoint(const Material& m) : scene(make(m)), sim(scene) {}
+    static Scene make(const Material& m) {
+        Scene s;
+        s.mx = 1; s.my = 1; s.cell_m = 1;
+        s.materials.push_back(m);
+        s.clusters.push_back({m.id, {0, 0, 1, 1}, 1, {}});
+        s.dt_s = 1e-5; s.steps = 1;
+        return s;
+    }
+    // Linear increment field du = G (x - x_p): the point stays where it is.
+    void strain(double gxx, double gxy, double gyx, double gyy) {
+        const double xp = sim.points().x[0], yp = sim.points().y[0];
+        for (int j = 0; j <= 1; ++j)
+            for (int i = 0; i <= 1; ++i) {
+                const std::size_t n = std::size_t(sim.node(i, j));
+                sim.du_x()[n] = gxx * (i - xp) + gxy * (j - yp);
+                sim.du_y()[n] = gyx * (i - xp) + gyy * (j - yp);
+            }
+        sim.cell_strains();
+        sim.update_points();
+    }
+    Stress stress() const {
+        const Points& p = sim.points();
+        return {p.sxx[0], p.syy[0], p.sxy[0], p.szz[0]};
+    }
+};
+
+}  // namespace
+
+TEST_CASE("unconfined plane-strain compression peaks at exactly 2c tan(45 + phi/2)") {
+    for (double psi : {0.0, 10.0}) {
+        const Material m = Material::mohr(1, 5e7, 0.3, 1700, 30, 9800, psi);
+        const MaterialConstants k = constants_of(m);
+        Stress s;
+        double peak = 0;
+        for (int step = 0; step < 400; ++step) {
+            const double dyy = -2e-5;
+            // sigma_xx = 0: find d_eps_xx by secant (the return is piecewise linear).
+            auto trial = [&](double dxx, Stress& out) {
+                out = s;
+                const StrainIncrement d{dxx, dyy, 0, 0};
+                elastic_increment(k, d, out);
+                mohr_coulomb_return(k, strength(k), out);
+                return out.xx;
+            };
+            Stress out;
+            double x0 = -k.a2 / k.a1 * dyy, x1 = x0 * 1.01 + 1e-9, g0 = trial(x0, out), g1 = trial(x1, out);
+            for (int it = 0; it < 30 && std::fabs(g1) > 1e-9; ++it) {
+                const double x2 = x1 - g1 * (x1 - x0) / (g1 - g0);
+                x0 = x1; g0 = g1; x1 = x2; g1 = trial(x1, out);
+            }
+            REQUIRE(std::fabs(g1) < 1e-6);
+            s = out;
+            peak = std::max(peak, -s.yy);
+        }
+        const double expect = 2 * 9800 * std::tan((45 + 15) * kDeg);
+        CHECK(peak == doctest::Approx(expect).epsilon(1e-12));
+        CHECK(-s.yy == doctest::Approx(expect).epsilon(1e-12));  // perfectly plastic: stays at the peak
+    }
+}
+
+TEST_CASE("after every plastic correction the stress lies on the yield surface") {
+    Random rnd(7);
+    int plastic = 0, corners = 0, tension = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        const double phi = 45 * rnd.uniform(), psi = phi * rnd.uniform(), c = 1e3 + 2e4 * rnd.uniform();
+        const double tens = rnd.uniform() < 0.5 ? -1 : c * rnd.uniform();
+        const Material m = Material::mohr(1, 5e7, 0.45 * rnd.uniform(), 1700, phi, c, psi, tens);
+        const MaterialConstants k = constants_of(m);
+        const double scale = 5 * c;
+        Stress s{scale * (2 * rnd.uniform() - 1.5), scale * (2 * rnd.uniform() - 1.5), scale * (rnd.uniform() - 0.5),
+                 scale * (2 * rnd.uniform() - 1.5)};
+        const MohrResult r = mohr_coulomb_return(k, strength(k), s);
+        const Yield f = yield_functions(s, c, phi, tens);
+        const double tol = 1e-9 * (scale + c);
+        CHECK(f.fs >= -tol);
+        CHECK(f.ft >= -tol);
+        if (r.mode != MohrResult::Elastic) {
+            ++plastic;
+            corners += r.mode == MohrResult::Edge;
+            tension += r.mode == MohrResult::Tension;
+            CHECK(std::min(std::fabs(f.fs), std::fabs(f.ft)) <= tol);
+        }
+    }
+    MESSAGE(plastic << " plastic corrections, " << tension << " in tension, " << corners << " on an edge, corner or apex");
+    CHECK(plastic > 5000);
+    CHECK(corners > 100);
+    CHECK(tension > 100);
+}
+
+TEST_CASE("flow rule: plastic volume / plastic shear = sin(psi); none with psi = 0") {
+    Random rnd(11);
+    for (double psi_frac : {0.0, 0.5, 1.0}) {
+        int n = 0;
+        for (int trial = 0; trial < 2000; ++trial) {
+            const double phi = 20 + 20 * rnd.uniform(), psi = psi_frac * phi;
+            const Material m = Material::mohr(1, 5e7, 0.3, 1700, phi, 1e4, psi);
+            const MaterialConstants k = constants_of(m);
+            const Stress s0{-1e4 * rnd.uniform(), -1e4 * rnd.uniform(), 0, -5e3};
+            const StrainIncrement d{2e-3 * (rnd.uniform() - 0.5), 2e-3 * (rnd.uniform() - 0.5), 2e-3 * (rnd.uniform() - 0.5), 0};
+            Stress s1 = s0;
+            elastic_increment(k, d, s1);
+            const MohrResult r = mohr_coulomb_return(k, strength(k), s1);
+            if (r.mode != MohrResult::Shear) continue;
+            ++n;
+            const auto vp = plastic_part(m, d, s0, s1);  // independent of the return's own bookkeeping
+            // d_eps - C d_sig cancels to ~1e-13 of the increment; the plastic part is >= 1e-3 of it.
+            CHECK(std::fabs(vp.first / vp.second - std::sin(psi * kDeg)) < 1e-8);
+            CHECK(std::fabs(r.d_vol_p / r.d_gamma_p - std::sin(psi * kDeg)) < 1e-12);
+            CHECK(r.d_gamma_p == doctest::Approx(vp.second).epsilon(1e-6));
+        }
+        CHECK(n > 200);
+    }
+}
+
+TEST_CASE("tension cut-off: sigma3 never exceeds the limit, the apex c/tan(phi) by default") {
+    for (double tens : {-1.0, 2000.0}) {
+        const Material m = Material::mohr(1, 5e7, 0.3, 1700, 30, 9800, 0, tens);
+        const MaterialConstants k = constants_of(m);
+        const double limit = tens >= 0 ? tens : 9800 / std::tan(30 * kDeg);
+        Stress s{-5e3, -5e3, 0, -5e3};
+        double top = -1e300;
+        for (int step = 0; step < 300; ++step) {
+            elastic_increment(k, {1e-5, 0, 0, 0}, s);  // stretch in x, y held
+            mohr_coulomb_return(k, strength(k), s);
+            const double s3 = principal(s)(2);
+            CHECK(s3 <= limit * (1 + 1e-12));
+            top = std::max(top, s3);
+        }
+        CHECK(top == doctest::Approx(limit).epsilon(1e-12));
+    }
+}
+
+TEST_CASE("Jaumann, eq. 5f: a stressed point turned 360 degrees in small rigid steps keeps its invariants") {
+    OnePoint op(Material::mohr(1, 5e7, 0.3, 1700, 30, 9800));
+    Points& p = op.sim.points();
+    p.sxx[0] = -3e4; p.syy[0] = -1e4; p.sxy[0] = 4e3; p.szz[0] = -1.2e4;  // inside the yield surface
+    const Stress s0 = op.stress();
+    const Eigen::Vector3d inv0 = principal(s0);
+    const int n = 3600;
+    const double th = 2 * 3.14159265358979323846 / n;
+    for (int k = 0; k < n; ++k) {
+        op.strain(0, -th, th, 0);  // du = theta x (x - x_p): no strain, rotation theta
+        const Eigen::Vector3d inv = principal(op.stress());
+        for (int a = 0; a < 3; ++a) REQUIRE(inv(a) == doctest::Approx(inv0(a)).epsilon(1e-12));
+    }
+    // The Cayley rotation turns the material by 2 atan(theta/2) per step, not theta: after
+    // n steps it lacks delta = n (theta - 2 atan(theta/2)) (1.6e-6 rad here), and the
+    // stress, which turns twice as fast, is off by at most 2 delta times its radius r.
+    const Stress s = op.stress();
+    const double delta = n * (th - 2 * std::atan(th / 2)), r0 = std::hypot(0.5 * (s0.xx - s0.yy), s0.xy);
+    const double tol = 1.01 * 2 * delta * r0;
+    CHECK(std::fabs(s.xy - s0.xy) > 0.5 * tol);  // the defect is there, as predicted
+    CHECK(std::fabs(s.xx - s0.xx) < tol);
+    CHECK(std::fabs(s.yy - s0.yy) < tol);
+    CHECK(std::fabs(s.xy - s0.xy) < tol);
+    CHECK(s.zz == s0.zz);
+    CHECK(p.x[0] == doctest::Approx(0.5).epsilon(1e-9));
+    CHECK(op.sim.points().plastic_shear[0] == 0.0);
+}
+
+TEST_CASE("softening: the first yield costs SOFTEN of the cohesion, once") {
+    const double c = 9800, phi = 30;
+    OnePoint op(Material::mohr(1, 5e7, 0.3, 1700, phi, c, 0, -1, 0.5));
+    std::vector<double> tau;
+    for (int k = 0; k < 300; ++k) {
+        op.strain(1e-5, 0, 0, -1e-5);  // pure shear: p and sigma_zz stay 0, tau grows
+        const Stress s = op.stress();
+        tau.push_back(std::hypot(0.5 * (s.xx - s.yy), s.xy));
+    }
+    const double peak = *std::max_element(tau.begin(), tau.end());
+    CHECK(peak == doctest::Approx(c * std::cos(phi * kDeg)).epsilon(1e-12));  // Mohr circle about 0 touching the envelope
+    CHECK(tau.back() == doctest::Approx(0.5 * c * std::cos(phi * kDeg)).epsilon(1e-12));
+    CHECK(op.sim.points().yielded[0] == 1);
+    CHECK(op.sim.points().plastic_shear[0] > 0);
+}
+
+namespace {
+double normal_pdf(double z) { return std::exp(-0.5 * z * z) / std::sqrt(2 * 3.14159265358979323846); }
+double normal_cdf(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
+// Mean and standard deviation of N(mu, sd) truncated to [lo, hi].
+std::pair<double, double> truncated_moments(double mu, double sd, double lo, double hi) {
+    const double a = (lo - mu) / sd, b = (hi - mu) / sd, Z = normal_cdf(b) - normal_cdf(a);
+    const double pa = normal_pdf(a), pb = std::isinf(b) ? 0.0 : normal_pdf(b), bpb = std::isinf(b) ? 0.0 : b * pb;
+    const double mean = mu + sd * (pa - pb) / Z;
+    const double var = sd * sd * (1 + (a * pa - bpb) / Z - std::pow((pa - pb) / Z, 2));
+    return {mean, std::sqrt(var)};
+}
+}  // namespace
+
+TEST_CASE("scatter: c and phi per point are truncated Gaussians with the asked mean and spread, by seed") {
+    Scene s;
+    s.mx = 160; s.my = 160; s.cell_m = 1;
+    s.materials.push_back(Material::mohr(1, 5e7, 0.47, 1700, 28.648, 9800, 0, -1, 0.5, 0.33));
+    s.clusters.push_back({1, {0, 0, 160, 160}, 2, {}});
+    s.dt_s = 1e-4; s.steps = 1; s.seed = 42;
+    Simulation a(s);
+    const Points& p = a.points();
+    const double n = double(p.size());
+    REQUIRE(n > 1e5);
+    double sc = 0, sc2 = 0, sp = 0, sp2 = 0;
+    for (std::size_t k = 0; k < p.size(); ++k) {
+        const double phi = std::asin((p.n_phi[k] - 1) / (p.n_phi[k] + 1)) / kDeg;
+        REQUIRE(p.c0[k] >= 0);
+        REQUIRE(phi > 0);
+        REQUIRE(phi < 90);
+        sc += p.c0[k]; sc2 += p.c0[k] * p.c0[k]; sp += phi; sp2 += phi * phi;
+    }
+    const auto mc = truncated_moments(9800, 0.33 * 9800, 0, INFINITY), mp = truncated_moments(28.648, 0.33 * 28.648, 0, 90);
+    const double mean_c = sc / n, sd_c = std::sqrt(sc2 / n - mean_c * mean_c);
+    const double mean_p = sp / n, sd_p = std::sqrt(sp2 / n - mean_p * mean_p);
+    // Sampling error: 4 standard errors of the mean and of the standard deviation.
+    CHECK(std::fabs(mean_c - mc.first) < 4 * mc.second / std::sqrt(n));
+    CHECK(std::fabs(sd_c - mc.second) < 4 * mc.second / std::sqrt(2 * n));
+    CHECK(std::fabs(mean_p - mp.first) < 4 * mp.second / std::sqrt(n));
+    CHECK(std::fabs(sd_p - mp.second) < 4 * mp.second / std::sqrt(2 * n));
+    // The same seed gives the same sample; another seed another one.
+    Simulation b(s);
+    CHECK(b.points().c0 == p.c0);
+    CHECK(b.points().n_phi == p.n_phi);
+    s.seed = 43;
+    Simulation c(s);
+    CHECK(c.points().c0 != p.c0);
+}
+
+TEST_CASE("the deterministic log and sine agree with the C library to within a few ulp") {
+    Random r(3);
+    for (int k = 0; k < 100000; ++k) {
+        const double x = std::ldexp(r.uniform() + 1e-300, int(r.uniform() * 80) - 60);
+        CHECK(detail::log_det(x) == doctest::Approx(std::log(x)).epsilon(1e-15).scale(1e-300));
+        const double a = (r.uniform() - 0.5) * 3.14159265358979323846;
+        CHECK(detail::sin_det(a) == doctest::Approx(std::sin(a)).epsilon(1e-15).scale(1e-300));
+    }
+    // Known values of the stream (xoshiro256** after splitmix64, seed 1): a change of the
+    // generator would silently change every scattered run.
+    Random g(1);
+    const std::uint64_t first = g.next(), second = g.next();
+    Random h(1);
+    CHECK(h.next() == first);
+    CHECK(h.next() == second);
+    CHECK(first != second);
+}
