@@ -1,0 +1,65 @@
+# history.gp -- one column of an lpfdm history file against another, as PNG.
+#
+# Usage:
+#   gnuplot -e "in='history.dat'; out='ke.png'; xcol='time'; ycol='ke'" tools/history.gp
+#   gnuplot -e "in='history.dat'; xcol='w1_dy'; ycol='w1_fy'; xscale=-1000; yscale=-1; xlabel='top wall travel [mm]'; ylabel='top wall force [N/m]'" tools/history.gp
+#
+# Variables (all optional):
+#   in       history file                       default 'history.dat'
+#   out      PNG file to write                  default 'history.png'
+#   xcol     column name for x                  default 'time'
+#   ycol     column name for y                  default 'ke'
+#   xscale   factor applied to x                default 1
+#   yscale   factor applied to y                default 1
+#   xlabel   x axis label                       default: xcol (scaled by ...)
+#   ylabel   y axis label                       default: ycol (scaled by ...)
+#   title    plot title                         default: in
+#   logy     1 = logarithmic y axis (e.g. for ke, unbal)   default 0
+#
+# Column positions depend on the number of walls, so columns are looked
+# up by name in the header line "# step time ke ...".
+
+if (!exists("in"))     in = 'history.dat'
+if (!exists("out"))    out = 'history.png'
+if (!exists("xcol"))   xcol = 'time'
+if (!exists("ycol"))   ycol = 'ke'
+if (!exists("xscale")) xscale = 1
+if (!exists("yscale")) yscale = 1
+if (!exists("xlabel")) xlabel = (xscale == 1) ? xcol : sprintf("%s × %g", xcol, xscale)
+if (!exists("ylabel")) ylabel = (yscale == 1) ? ycol : sprintf("%s × %g", ycol, yscale)
+if (!exists("title"))  title = in
+if (!exists("logy"))   logy = 0
+
+# gnuplot only warns about an unreadable file and then draws an empty
+# picture, so stop here with an error instead.
+if (system(sprintf("test -r '%s' && echo ok", in)) ne "ok") {
+    exit error sprintf("history.gp: cannot read history file '%s'", in)
+}
+
+# The names come from the last comment line whose first name is "step"
+# (read before the first data row; "# step N time T" lines of a point
+# table do not count); columnhead cannot be used because that line
+# starts with '#'.
+header = system(sprintf("awk '!/^#/ {exit} {sub(/^#[ \t]*/, \"\")} $1 == \"step\" && $2 !~ /^[0-9]/ {h = $0} END {print h}' '%s'", in))
+colidx(name) = sum [k = 1:words(header)] ((word(header, k) eq name) ? k : 0)
+if (words(header) == 0) {
+    exit error sprintf("history.gp: no '# step time ...' header line in '%s'", in)
+}
+ix = colidx(xcol)
+iy = colidx(ycol)
+if (ix == 0 || iy == 0) {
+    # exit error cuts long messages, so the column list goes first.
+    print sprintf("history.gp: columns in '%s': %s", in, header)
+    exit error sprintf("history.gp: no column '%s' in '%s'", (ix == 0) ? xcol : ycol, in)
+}
+
+set terminal pngcairo size 1000,650 enhanced font 'DejaVu Sans,11'
+set output out
+set xlabel xlabel noenhanced
+set ylabel ylabel noenhanced
+set title title noenhanced
+set grid
+set key off
+if (logy) set logscale y
+plot in using (column(ix) * xscale):(column(iy) * yscale) with lines lw 1.5 lc rgb '#21908d'
+set output
