@@ -81,6 +81,7 @@
 #ifndef LPFDM_NO_IO
 #include <cerrno>
 #include <charconv>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <fmt/format.h>
@@ -624,8 +625,9 @@ inline Diagnostics validate(const Scene& s) {
     }
     auto node_count = [&](const Box& b) {
         if (b.x0 > b.x1 || b.y0 > b.y1) return -1L;
-        const long i0 = std::max(0L, long(std::ceil((b.x0 - tol) / s.cell_m))), i1 = std::min(long(s.mx), long(std::floor((b.x1 + tol) / s.cell_m)));
-        const long j0 = std::max(0L, long(std::ceil((b.y0 - tol) / s.cell_m))), j1 = std::min(long(s.my), long(std::floor((b.y1 + tol) / s.cell_m)));
+        auto idx = [](double v, long hi) { return long(std::clamp(v, -1.0, double(hi) + 1.0)); };  // no overflow far outside
+        const long i0 = std::max(0L, idx(std::ceil((b.x0 - tol) / s.cell_m), s.mx)), i1 = std::min(long(s.mx), idx(std::floor((b.x1 + tol) / s.cell_m), s.mx));
+        const long j0 = std::max(0L, idx(std::ceil((b.y0 - tol) / s.cell_m), s.my)), j1 = std::min(long(s.my), idx(std::floor((b.y1 + tol) / s.cell_m), s.my));
         return (i1 < i0 || j1 < j0) ? 0L : (i1 - i0 + 1) * (j1 - j0 + 1);
     };
     for (const auto& f : s.fixes) {
@@ -716,6 +718,11 @@ public:
     const std::vector<double>& force_y() const { return fy_; }
     const std::vector<double>& node_mass() const { return nmass_; }
     const std::vector<double>& cell_mass() const { return cmass_; }
+
+    // Changes a wall's velocity from the next step on (staged loading; 0 holds it).
+    void set_wall_velocity(int wall_id, double vx, double vy) {
+        for (auto& w : sc_.walls) if (w.id == wall_id) { w.vx = vx; w.vy = vy; }
+    }
 
     // Replace the constitutive model of a material by a callable of eq. 6's signature.
     void set_user_model(int mat_id, UserModel f) {
@@ -835,8 +842,9 @@ inline void Simulation::setup() {
 
     const double tol = 1e-3 * L_;
     auto node_range = [&](const Box& b, int& i0, int& i1, int& j0, int& j1) {
-        i0 = std::max(0, int(std::ceil((b.x0 - tol) * invL_))); i1 = std::min(mx_, int(std::floor((b.x1 + tol) * invL_)));
-        j0 = std::max(0, int(std::ceil((b.y0 - tol) * invL_))); j1 = std::min(my_, int(std::floor((b.y1 + tol) * invL_)));
+        auto idx = [](double v, int hi) { return int(std::clamp(v, -1.0, double(hi) + 1.0)); };  // no overflow far outside
+        i0 = std::max(0, idx(std::ceil((b.x0 - tol) * invL_), mx_)); i1 = std::min(mx_, idx(std::floor((b.x1 + tol) * invL_), mx_));
+        j0 = std::max(0, idx(std::ceil((b.y0 - tol) * invL_), my_)); j1 = std::min(my_, idx(std::floor((b.y1 + tol) * invL_), my_));
     };
     for (const auto& f : sc_.fixes) {
         int i0, i1, j0, j1;
@@ -1170,7 +1178,6 @@ inline void Simulation::integrate() {
         if (fixed_[n] & kFixY) { duy_[n] = 0; ry_ -= fy_[n]; }
     }
     Range wall_nodes{};
-    const double t_next = (step_ + 1) * sc_.dt_s;
     for (std::size_t w = 0; w < walls_.size(); ++w) {
         WallState& ws = walls_[w];
         const Wall& spec = sc_.walls[w];
@@ -1184,7 +1191,7 @@ inline void Simulation::integrate() {
             wall_nodes = wall_nodes.unite({i, i + 1, j, j + 1});
         }
         // Travel after this increment; whole cells travelled move the wall to the next line.
-        ws.dx = spec.vx * t_next; ws.dy = spec.vy * t_next;
+        ws.dx += spec.vx * sc_.dt_s; ws.dy += spec.vy * sc_.dt_s;
         ws.shift_i = int(std::trunc(ws.dx * invL_ * (1 + 1e-12)));
         ws.shift_j = int(std::trunc(ws.dy * invL_ * (1 + 1e-12)));
     }
@@ -1212,7 +1219,9 @@ struct Token {
 };
 
 // Fortran real: [sign] digits [. digits] [E|D [sign] digits], or . digits; no nan/inf.
-inline bool parse_real(const std::string& t, double& out) {
+// *out_of_range is set when the form is right but the value does not fit a double.
+inline bool parse_real(const std::string& t, double& out, bool* out_of_range = nullptr) {
+    if (out_of_range) *out_of_range = false;
     std::string s;
     std::size_t i = 0;
     if (i < t.size() && (t[i] == '+' || t[i] == '-')) s += t[i++];
@@ -1234,7 +1243,10 @@ inline bool parse_real(const std::string& t, double& out) {
     if (s[0] == '+') s.erase(0, 1);
     const char* b = s.data();
     const auto r = std::from_chars(b, b + s.size(), out);
-    if (r.ec == std::errc::result_out_of_range) return false;
+    if (r.ec == std::errc::result_out_of_range) {
+        if (out_of_range) *out_of_range = true;
+        return false;
+    }
     return r.ec == std::errc() && r.ptr == b + s.size() && std::isfinite(out);
 }
 
@@ -1251,7 +1263,14 @@ struct Lexed {
     std::vector<std::string> raw;  // the card's text after the keyword (for TITLE)
 };
 
-inline Lexed lex(const std::string& text, const std::string& file, Diagnostics& diags) {
+inline Lexed lex(const std::string& text_in, const std::string& file, Diagnostics& diags) {
+    // A UTF-8 byte order mark is skipped; CR LF and a lone CR (old Mac files) end lines.
+    std::string text = text_in.compare(0, 3, "\xEF\xBB\xBF") == 0 ? text_in.substr(3) : text_in;
+    for (std::size_t i = 0; i < text.size(); ++i)
+        if (text[i] == '\r') {
+            if (i + 1 < text.size() && text[i + 1] == '\n') text.erase(i, 1);
+            else text[i] = '\n';
+        }
     Lexed out;
     std::vector<Token> pending;
     std::string pending_raw;
@@ -1265,7 +1284,6 @@ inline Lexed lex(const std::string& text, const std::string& file, Diagnostics& 
         std::string line = text.substr(at, eol - at);
         at = eol + 1;
         ++line_no;
-        if (!line.empty() && line.back() == '\r') line.pop_back();
         bool binary = false;
         for (std::size_t c = 0; c < line.size(); ++c) {
             const unsigned char ch = static_cast<unsigned char>(line[c]);
@@ -1281,19 +1299,26 @@ inline Lexed lex(const std::string& text, const std::string& file, Diagnostics& 
         if (!line.empty() && line[0] == '*') continue;  // comment card
         const std::size_t bang = line.find('!');
         if (bang != std::string::npos) line.resize(bang);
+        // Columns as GNU tools count them: a tab advances to the next multiple of 8.
+        std::vector<int> col(line.size() + 1, 1);
+        for (std::size_t c = 0; c < line.size(); ++c) col[c + 1] = line[c] == '\t' ? (col[c] - 1) / 8 * 8 + 9 : col[c] + 1;
         std::vector<Token> toks;
         std::size_t c = 0;
         while (c < line.size()) {
             const char ch = line[c];
             if (ch == ' ' || ch == '\t' || ch == ',' || ch == '\f' || ch == '\v') { ++c; continue; }
-            if (ch == '=') { toks.push_back({"=", {file, line_no, int(c) + 1}}); ++c; continue; }
+            if (ch == '=') { toks.push_back({"=", {file, line_no, col[c]}}); ++c; continue; }
             const std::size_t b = c;
             while (c < line.size() && !std::strchr(" \t,=\f\v", line[c])) ++c;
-            toks.push_back({line.substr(b, c - b), {file, line_no, int(b) + 1}});
+            toks.push_back({line.substr(b, c - b), {file, line_no, col[b]}});
         }
         const bool amp = !toks.empty() && toks.back().text == "&";
-        if (amp) { last_amp = toks.back().pos; toks.pop_back(); }
-        if (!continuing && toks.empty() && !amp) continue;
+        if (amp) {
+            last_amp = toks.back().pos;
+            toks.pop_back();
+            line.resize(line.rfind('&'));
+        }
+        if (toks.empty() && !amp) continue;  // blank or comment only: also inside a continuation
         if (!continuing) {
             pending.clear();
             pending_raw.clear();
@@ -1304,11 +1329,18 @@ inline Lexed lex(const std::string& text, const std::string& file, Diagnostics& 
         } else {
             pending_raw += " " + line;
         }
+        {  // one blank between the pieces of a continued TITLE
+            std::string& t = pending_raw;
+            std::string out;
+            for (char ch : t) if (!(ch == ' ' || ch == '\t') || out.empty() || out.back() != ' ') out += (ch == '\t' ? ' ' : ch);
+            t = out;
+        }
         pending.insert(pending.end(), toks.begin(), toks.end());
         continuing = amp;
         if (!continuing && !pending.empty()) {
             out.cards.push_back(pending);
             out.raw.push_back(pending_raw);
+            if (upper(pending[0].text) == "END") return out;  // whatever follows END is not read
         }
     }
     if (continuing) diags.push_back({last_amp, "'&' continues the card, but no line follows"});
@@ -1359,9 +1391,12 @@ public:
         return long(v);
     }
     bool number(const Token& t, const char* what, double& v) {
-        if (parse_real(t.text, v)) return true;
+        bool range = false;
+        if (parse_real(t.text, v, &range)) return true;
         const std::string u = upper(t.text);
-        if (u.find("NAN") != std::string::npos || u.find("INF") != std::string::npos)
+        if (range)
+            fail(t.pos, std::string(what) + ": '" + t.text + "' is out of range for a double");
+        else if (u.find("NAN") != std::string::npos || u.find("INF") != std::string::npos)
             fail(t.pos, std::string(what) + ": '" + t.text + "' is not a finite number");
         else
             fail(t.pos, std::string(what) + ": expected a number, found '" + t.text + "'");
@@ -1437,6 +1472,7 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
     if (!d.empty()) return d;
     bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false;
     Pos last{file, 1, 1};
+    int cluster_cards = 0;
     for (std::size_t ci = 0; ci < lx.cards.size() && !have_end; ++ci) {
         const auto& toks = lx.cards[ci];
         CardReader r(toks, d);
@@ -1494,11 +1530,13 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
                     if (p.name == "TENSION" && !(v >= 0)) bad = "TENSION must be >= 0";
                     if (p.name == "SOFTEN" && !(v >= 0 && v <= 1)) bad = "SOFTEN must lie in [0, 1]";
                     if (p.name == "SCATTER" && !(v >= 0)) bad = "SCATTER must be >= 0";
+                    if (p.name == "SCATTER" && v > 0.5) bad = "SCATTER above 0.5 makes the truncation at c >= 0 and phi > 0 dominate the distribution";
                     if (bad) { r.fail(p.pos, bad); break; }
                 }
             }
             if (r.ok()) sc.materials.push_back(m);
         } else if (kw == "CLUSTER") {
+            ++cluster_cards;
             Cluster c;
             c.pos = kp;
             c.mat = int(r.integer("material id", 1, 65535));
@@ -1508,8 +1546,10 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             if (r.ok() && (ppc != std::floor(ppc) || ppc < 1 || ppc > 32)) {
                 for (const auto& p : ps) if (p.name == "PPC") r.fail(p.pos, "PPC must be a whole number in [1, 32]");
             }
-            c.ppc = int(ppc);
-            if (r.ok()) sc.clusters.push_back(c);
+            if (r.ok()) {
+                c.ppc = int(ppc);
+                sc.clusters.push_back(c);
+            }
         } else if (kw == "FIX") {
             Fix f;
             f.pos = kp;
@@ -1565,9 +1605,18 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             if (f && (o.file.find('/') != std::string::npos || o.file == "." || o.file == ".."))
                 r.fail(f->pos, "the file name must not contain a directory (use -o DIR)");
             if (r.ok() && !r.at_end()) {
-                const Token* e = r.field("EVERY");
-                if (e && upper(e->text) != "EVERY") r.fail(e->pos, "extra field '" + e->text + "'");
-                o.every = r.integer("EVERY n", 1, 1'000'000'000L);
+                const Token* e = r.peek();
+                if (upper(e->text) == "EVERY" && !r.more_positional()) {  // EVERY=n, like other parameters
+                    const auto ps = r.params({"EVERY"}, {"EVERY"});
+                    for (const auto& q : ps) {
+                        if (q.value != std::floor(q.value) || q.value < 1 || q.value > 1e9) r.fail(q.pos, "EVERY n must be a whole number in [1, 1e9]");
+                        o.every = long(q.value);
+                    }
+                } else {
+                    e = r.field("EVERY");
+                    if (e && upper(e->text) != "EVERY") r.fail(e->pos, "extra field '" + e->text + "'");
+                    o.every = r.integer("EVERY n", 1, 1'000'000'000L);
+                }
             }
             for (const auto& prev : sc.outputs)
                 if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
@@ -1583,7 +1632,7 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
     }
     if (!have_grid) d.push_back({last, "no GRID card: the lattice is not defined"});
     if (!have_step) d.push_back({last, "no STEP card: the time step and the number of steps are not defined"});
-    if (have_grid && sc.clusters.empty()) d.push_back({sc.grid_pos, "no CLUSTER card: the scene holds no material"});
+    if (have_grid && cluster_cards == 0) d.push_back({sc.grid_pos, "no CLUSTER card: the scene holds no material"});
     return d;
 }
 
@@ -1595,7 +1644,27 @@ inline Diagnostics read_deck_text(const std::string& text, const std::string& fi
 
 // The whole text of a file, or a diagnostic.
 inline Diagnostics load_file(const std::string& path, std::string& text) {
+    // A deck is a regular file of reasonable size: /dev/zero or a pipe that never ends
+    // must not hang the program or exhaust memory.
+    constexpr std::uintmax_t kMaxDeckBytes = 64u << 20;
+    std::error_code ec;
+    const auto st = std::filesystem::status(path, ec);
+    if (!ec && std::filesystem::is_directory(st)) return {{{path, 0, 0}, "cannot read the deck: it is a directory"}};
+    if (!ec && !std::filesystem::is_regular_file(st)) return {{{path, 0, 0}, "cannot read the deck: it is not a regular file"}};
+    if (!ec && std::filesystem::file_size(path, ec) > kMaxDeckBytes && !ec)
+        return {{{path, 0, 0}, "the deck is larger than 64 MiB; a deck is a short text"}};
     std::ifstream in(path, std::ios::binary);
+    {  // a directory opens as a stream and reads as empty: ask for one byte to tell
+        std::FILE* f = std::fopen(path.c_str(), "rb");
+        if (f) {
+            char b;
+            const std::size_t got = std::fread(&b, 1, 1, f);
+            const bool err = got == 0 && std::ferror(f);
+            const int e = errno;
+            std::fclose(f);
+            if (err) return {{{path, 0, 0}, std::string("cannot read the deck: ") + (e == EISDIR ? "it is a directory" : std::strerror(e))}};
+        }
+    }
     if (!in) return {{{path, 0, 0}, std::string("cannot open the deck: ") + std::strerror(errno)}};
     std::ostringstream ss;
     ss << in.rdbuf();

@@ -1,0 +1,165 @@
+#!/usr/bin/env bash
+# Deck-level checks of the program (design §3: a bad deck stops before the first step
+# with "deckfile:line:column: error: message", a non-zero exit status and no output).
+#
+# usage: tests/check_decks.sh EXE
+#
+# Every tests/decks/*.deck is run as  EXE -q -o DIR tests/decks/NAME.deck  in a fresh,
+# empty DIR. The first line of a deck says what must happen:
+#   * expect: ok                   exit status 0
+#   * expect: LINE:COL: PHRASE     exit status 2; the first line of stderr is
+#                                  "tests/decks/NAME.deck:LINE:COL: error: ...PHRASE...",
+#                                  every line of stderr is such a message, and DIR is
+#                                  still empty (nothing half-run)
+# and an optional "* errors: N" line among the first comment cards gives the number of
+# messages. Then a missing deck, a directory, an empty file, a binary file and unreadable
+# files, made here at run time, must each give exit status 2 and a one-line error.
+# Nothing may crash (exit status >= 128, a sanitizer report, an abort) or take longer
+# than the time limit. One line per failure, and last "decks: N passed, M failed".
+set -u
+
+if [ $# -ne 1 ]; then
+    echo "usage: $0 EXE" >&2
+    exit 2
+fi
+exe=$1
+case $exe in
+    */*) exe="$(cd "$(dirname "$exe")" 2>/dev/null && pwd)/$(basename "$exe")" ;;
+    *) if [ -f "$exe" ]; then exe="$PWD/$exe"; else exe=$(command -v "$exe" || echo "$exe"); fi ;;
+esac
+cd "$(dirname "$0")/.." || exit 2
+if [ ! -x "$exe" ] || [ -d "$exe" ]; then
+    echo "FAIL $1: not an executable program"
+    echo "decks: 0 passed, 1 failed"
+    exit 1
+fi
+
+limit=20  # seconds per run
+tmp=$(mktemp -d) || exit 2
+trap 'chmod -R u+rwx "$tmp" 2>/dev/null; rm -rf "$tmp"' EXIT
+passed=0 failed=0
+fail() { echo "FAIL $1: $2"; failed=$((failed + 1)); }
+
+# run NAME DECK: runs the program on DECK into a new empty directory $out;
+# sets $rc; stderr is in $tmp/stderr. Returns 1 (and counts a failure) on a crash or a hang.
+run() {
+    out="$tmp/out.$1"
+    rm -rf "$out" && mkdir -p "$out"
+    # (the group's own stderr is silenced: bash would report a killed program there)
+    { timeout -k 5 "$limit" "$exe" -q -o "$out" "$2" >"$tmp/stdout" 2>"$tmp/stderr" </dev/null; rc=$?; } 2>/dev/null
+    if [ $rc -eq 124 ] || [ $rc -eq 137 ]; then
+        fail "$1" "no result within $limit s (a hang?)"
+        return 1
+    fi
+    if [ $rc -ge 128 ]; then
+        fail "$1" "crashed with exit status $rc: $(head -n 1 "$tmp/stderr")"
+        return 1
+    fi
+    local report
+    report=$(grep -m 1 -E 'runtime error:|AddressSanitizer|LeakSanitizer|ThreadSanitizer|terminate called|Assertion .* failed' "$tmp/stderr")
+    if [ -n "$report" ]; then
+        fail "$1" "sanitizer report or abort (exit status $rc): $report"
+        return 1
+    fi
+    return 0
+}
+
+# no_output NAME: the output directory must hold no file at all.
+no_output() {
+    local files
+    files=$(cd "$out" && find . -mindepth 1 2>/dev/null | sed 's|^\./||' | tr '\n' ' ')
+    if [ -n "$files" ]; then
+        fail "$1" "files were written although the deck is bad: $files"
+        return 1
+    fi
+    return 0
+}
+
+shopt -s nullglob
+decks=(tests/decks/*.deck)
+if [ ${#decks[@]} -eq 0 ]; then
+    fail "tests/decks" "no deck found"
+fi
+
+for deck in "${decks[@]}"; do
+    name=$(basename "$deck" .deck)
+    expect=$(head -n 1 "$deck" | tr -d '\r')
+    errors=$(head -n 5 "$deck" | tr -d '\r' | sed -n -E 's/^\* errors: ([0-9]+)$/\1/p' | head -n 1)
+    if [ "$expect" = "* expect: ok" ]; then
+        run "$name" "$deck" || continue
+        if [ $rc -ne 0 ]; then
+            fail "$name" "exit status $rc, expected 0: $(head -n 1 "$tmp/stderr")"
+            continue
+        fi
+        passed=$((passed + 1))
+        continue
+    fi
+    if ! [[ $expect =~ ^\*\ expect:\ ([0-9]+):([0-9]+):\ (.+)$ ]]; then
+        fail "$name" "the first line is not '* expect: ok' or '* expect: LINE:COL: PHRASE'"
+        continue
+    fi
+    line=${BASH_REMATCH[1]} col=${BASH_REMATCH[2]} phrase=${BASH_REMATCH[3]}
+    run "$name" "$deck" || continue
+    first=$(head -n 1 "$tmp/stderr")
+    prefix="$deck:$line:$col: error: "
+    gnu="^$(printf '%s' "$deck" | sed 's/[.[\*^$]/\\&/g'):[0-9]+:[0-9]+: error: ."
+    if [ $rc -ne 2 ]; then
+        fail "$name" "exit status $rc, expected 2 (stderr: $first)"
+    elif [ "${first#"$prefix"}" = "$first" ]; then
+        fail "$name" "first message '$first' is not at '$deck:$line:$col: error: '"
+    elif [[ $first != *"$phrase"* ]]; then
+        fail "$name" "first message '$first' does not say '$phrase'"
+    elif grep -v -q -E "$gnu" "$tmp/stderr"; then
+        fail "$name" "a line of stderr is not a '$deck:LINE:COL: error: message': $(grep -v -m 1 -E "$gnu" "$tmp/stderr")"
+    elif [ -n "$errors" ] && [ "$(grep -c . "$tmp/stderr")" -ne "$errors" ]; then
+        fail "$name" "$(grep -c . "$tmp/stderr") messages, expected $errors (one per problem)"
+    elif no_output "$name"; then
+        passed=$((passed + 1))
+    fi
+done
+
+# Files that are no deck at all: exit status 2, exactly one line "FILE[:LINE:COL]: error: ..."
+# that says PHRASE.
+# check_not_a_deck NAME PATH PHRASE
+check_not_a_deck() {
+    run "$1" "$2" || return
+    local lines first
+    lines=$(grep -c '' "$tmp/stderr")
+    first=$(head -n 1 "$tmp/stderr")
+    if [ $rc -ne 2 ]; then
+        fail "$1" "exit status $rc, expected 2 (stderr: $first)"
+    elif [ "$lines" -ne 1 ]; then
+        fail "$1" "$lines lines on stderr, expected one error line"
+    elif [ "${first#"$2"}" = "$first" ] || ! [[ ${first#"$2"} =~ ^(:[0-9]+:[0-9]+)?:\ error:\ .+ ]]; then
+        fail "$1" "'$first' is not '$2[:LINE:COL]: error: message'"
+    elif [[ $first != *"$3"* ]]; then
+        fail "$1" "'$first' does not say '$3'"
+    elif no_output "$1"; then
+        passed=$((passed + 1))
+    fi
+}
+
+check_not_a_deck "missing file" "$tmp/no-such-file.deck" "cannot open the deck"
+mkdir "$tmp/a-directory.deck"
+check_not_a_deck "directory as the deck" "$tmp/a-directory.deck" "directory"
+: >"$tmp/empty.deck"
+check_not_a_deck "empty file" "$tmp/empty.deck" "the deck is empty"
+head -c 4096 "$exe" >"$tmp/binary.deck"
+check_not_a_deck "binary file" "$tmp/binary.deck" "binary data"
+printf 'GRID 4 4 1\nMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\n\0\0\0\0CLUSTER 1 0 0 2 2\nSTEP 1E-4 10\n' >"$tmp/nul-bytes.deck"
+check_not_a_deck "deck with NUL bytes" "$tmp/nul-bytes.deck" "binary data (byte 0x00)"
+cp tests/decks/good_every_card.deck "$tmp/unreadable.deck"
+chmod 000 "$tmp/unreadable.deck"
+if [ ! -r "$tmp/unreadable.deck" ]; then  # (the superuser reads it anyway)
+    check_not_a_deck "unreadable file" "$tmp/unreadable.deck" "cannot open the deck"
+fi
+if [ -e /proc/self/mem ]; then  # opens, but reading it fails
+    check_not_a_deck "file whose reading fails" /proc/self/mem "cannot read the deck"
+fi
+check_not_a_deck "endless device" /dev/zero "not a regular file"
+head -c $((65 * 1024 * 1024)) /dev/zero | tr '\0' ' ' >"$tmp/huge.deck"
+check_not_a_deck "deck over 64 MiB" "$tmp/huge.deck" "larger than 64 MiB"
+rm -f "$tmp/huge.deck"
+
+echo "decks: $passed passed, $failed failed"
+[ "$failed" -eq 0 ]

@@ -1,0 +1,963 @@
+// The deck reader (design §3): every card into the Scene, every lexical rule, and
+// every error with the line and column it is reported at. Each test is a small deck
+// read as if from the file "t.deck".
+#include <doctest/doctest.h>
+
+#include "../lpfdm.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+namespace {
+
+using lpfdm::Diagnostics;
+using lpfdm::Scene;
+
+// The smallest runnable scene, one card per line (lines 1 to 4). Tests append a card
+// (it becomes line 5) or replace one of these lines.
+const std::string kGrid = "GRID 4 4 1\n";
+const std::string kMaterial = "MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\n";
+const std::string kCluster = "CLUSTER 1 0 0 2 2\n";
+const std::string kStep = "STEP 1E-4 10\n";
+const std::string kBase = kGrid + kMaterial + kCluster + kStep;
+
+// The base scene with one more card on line 5.
+std::string plus(const std::string& card) { return kBase + card + "\n"; }
+
+Diagnostics read_text(const std::string& deck, Scene& s) { return lpfdm::read_deck_text(deck, "t.deck", s); }
+
+std::string listing(const Diagnostics& d) {
+    std::string out = d.empty() ? "(no diagnostics)" : "";
+    for (const auto& e : d) out += e.str() + "\n";
+    return out;
+}
+
+bool has(const std::string& text, const std::string& phrase) { return text.find(phrase) != std::string::npos; }
+
+// A deck that must read without any diagnostic.
+Scene read_ok(const std::string& deck) {
+    Scene s;
+    const Diagnostics d = read_text(deck, s);
+    INFO(listing(d));
+    CHECK(d.empty());
+    return s;
+}
+
+}  // namespace
+
+// Exactly one error (one message per problem), at LINE:COL of t.deck, whose message
+// contains PHRASE.
+#define CHECK_ONE_ERROR(deck, LINE, COL, PHRASE)             \
+    do {                                                     \
+        lpfdm::Scene s_;                                     \
+        const lpfdm::Diagnostics d_ = read_text((deck), s_); \
+        INFO(listing(d_));                                   \
+        REQUIRE(d_.size() == 1);                             \
+        CHECK(d_[0].pos.file == "t.deck");                   \
+        CHECK(d_[0].pos.line == (LINE));                     \
+        CHECK(d_[0].pos.col == (COL));                       \
+        CHECK(has(d_[0].message, (PHRASE)));                 \
+    } while (0)
+
+// ================================================================ cards ===
+
+TEST_CASE("deck: the base scene of these tests reads without a message") {
+    const Scene s = read_ok(kBase);
+    CHECK(s.mx == 4);
+    CHECK(s.steps == 10);
+}
+
+TEST_CASE("deck: TITLE keeps the rest of its line, without the comment and outer blanks") {
+    const Scene s = read_ok("TITLE   Sand heap, dry = 2 layers  ! first try\n" + kBase);
+    CHECK(s.title == "Sand heap, dry = 2 layers");
+    CHECK(read_ok("TITLE\n" + kBase).title.empty());
+    CHECK(read_ok(kBase).title.empty());
+}
+
+TEST_CASE("deck: GRID gives the cells in x and y and the cell side") {
+    const Scene s = read_ok("GRID 40 24 0.5\n" + kMaterial + kCluster + kStep);
+    CHECK(s.mx == 40);
+    CHECK(s.my == 24);
+    CHECK(s.cell_m == 0.5);
+    CHECK(s.grid_pos.file == "t.deck");
+    CHECK(s.grid_pos.line == 1);
+    CHECK(s.grid_pos.col == 1);
+}
+
+TEST_CASE("deck: MATERIAL ELASTIC gives E, NU and RHO") {
+    const Scene s = read_ok(plus("MATERIAL 7 ELASTIC E=2E7 NU=0.25 RHO=1800"));
+    REQUIRE(s.materials.size() == 2);
+    const lpfdm::Material& m = s.materials[1];
+    CHECK(m.id == 7);
+    CHECK(m.model == lpfdm::Model::Elastic);
+    CHECK(m.E == 2e7);
+    CHECK(m.nu == 0.25);
+    CHECK(m.rho == 1800);
+    CHECK(m.pos.line == 5);
+    CHECK(m.pos.col == 1);
+    CHECK(s.material(7) == &m);
+}
+
+TEST_CASE("deck: MATERIAL MOHR with every parameter") {
+    const Scene s = read_ok(plus("MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=1900 PHI=35 C=1E3 PSI=5 TENSION=500 SOFTEN=0.5 SCATTER=0.2"));
+    REQUIRE(s.materials.size() == 2);
+    const lpfdm::Material& m = s.materials[1];
+    CHECK(m.id == 2);
+    CHECK(m.model == lpfdm::Model::MohrCoulomb);
+    CHECK(m.E == 5e7);
+    CHECK(m.nu == 0.3);
+    CHECK(m.rho == 1900);
+    CHECK(m.phi_deg == 35);
+    CHECK(m.c == 1e3);
+    CHECK(m.psi_deg == 5);
+    CHECK(m.tension == 500);
+    CHECK(m.soften == 0.5);
+    CHECK(m.scatter == 0.2);
+}
+
+TEST_CASE("deck: MATERIAL MOHR defaults: PSI=0, tension limited by the apex only, SOFTEN=0, SCATTER=0") {
+    const Scene s = read_ok(plus("MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=1900 PHI=30 C=0"));
+    REQUIRE(s.materials.size() == 2);
+    const lpfdm::Material& m = s.materials[1];
+    CHECK(m.phi_deg == 30);
+    CHECK(m.c == 0);
+    CHECK(m.psi_deg == 0);
+    CHECK(m.tension == -1);  // < 0: the apex c / tan(phi)
+    CHECK(m.soften == 0);
+    CHECK(m.scatter == 0);
+}
+
+TEST_CASE("deck: MATERIAL parameters may come in any order") {
+    const Scene s = read_ok(plus("MATERIAL 2 MOHR C=10 PSI=20 RHO=1900 PHI=30 NU=0.3 E=5E7"));
+    REQUIRE(s.materials.size() == 2);
+    CHECK(s.materials[1].psi_deg == 20);  // PSI <= PHI although PHI comes later
+    CHECK(s.materials[1].c == 10);
+}
+
+TEST_CASE("deck: CLUSTER takes a material, a box and PPC=2 unless given") {
+    const Scene s = read_ok(kGrid + kMaterial + "CLUSTER 1 0 0 2 2\nCLUSTER 1 2 0 4 1.5 PPC=3\n" + kStep);
+    REQUIRE(s.clusters.size() == 2);
+    const lpfdm::Cluster& a = s.clusters[0];
+    CHECK(a.mat == 1);
+    CHECK(a.box.x0 == 0);
+    CHECK(a.box.y0 == 0);
+    CHECK(a.box.x1 == 2);
+    CHECK(a.box.y1 == 2);
+    CHECK(a.ppc == 2);
+    CHECK(a.pos.line == 3);
+    const lpfdm::Cluster& b = s.clusters[1];
+    CHECK(b.box.x0 == 2);
+    CHECK(b.box.y1 == 1.5);
+    CHECK(b.ppc == 3);
+    CHECK(b.pos.line == 4);
+}
+
+TEST_CASE("deck: FIX X, Y and XY hold the nodes of a box in that direction") {
+    const Scene s = read_ok(kBase + "FIX X 0 0 0 4\nFIX Y 4 0 4 4\nFIX XY 0 0 4 0\nFIX YX 0 4 4 4\n");
+    REQUIRE(s.fixes.size() == 4);
+    CHECK(s.fixes[0].dirs == lpfdm::kFixX);
+    CHECK(s.fixes[1].dirs == lpfdm::kFixY);
+    CHECK(s.fixes[2].dirs == (lpfdm::kFixX | lpfdm::kFixY));
+    CHECK(s.fixes[3].dirs == (lpfdm::kFixX | lpfdm::kFixY));
+    CHECK(s.fixes[1].box.x0 == 4);
+    CHECK(s.fixes[1].box.y1 == 4);
+    CHECK(s.fixes[2].pos.line == 7);
+}
+
+TEST_CASE("deck: WALL takes an id, a box and a velocity") {
+    const Scene s = read_ok(plus("WALL 3 4 1 4 3 -0.5 0.25"));
+    REQUIRE(s.walls.size() == 1);
+    const lpfdm::Wall& w = s.walls[0];
+    CHECK(w.id == 3);
+    CHECK(w.box.x0 == 4);
+    CHECK(w.box.y0 == 1);
+    CHECK(w.box.x1 == 4);
+    CHECK(w.box.y1 == 3);
+    CHECK(w.vx == -0.5);
+    CHECK(w.vy == 0.25);
+    CHECK(w.pos.line == 5);
+}
+
+TEST_CASE("deck: GRAVITY, DAMPING, SEED and STEP") {
+    const Scene s = read_ok(kGrid + kMaterial + kCluster + "GRAVITY 0.5 -9.81\nDAMPING 0.8\nSEED 42\nSTEP 2.5E-4 600\n");
+    CHECK(s.gravity_x == 0.5);
+    CHECK(s.gravity_y == -9.81);
+    CHECK(s.damping == 0.8);
+    CHECK(s.seed == 42);
+    CHECK(s.dt_s == 2.5e-4);
+    CHECK(s.steps == 600);
+    CHECK(s.step_pos.line == 7);
+    CHECK(s.damping_pos.line == 5);
+}
+
+TEST_CASE("deck: without GRAVITY, DAMPING and SEED: no gravity, no damping, seed 1") {
+    const Scene s = read_ok(kBase);
+    CHECK(s.gravity_x == 0);
+    CHECK(s.gravity_y == 0);
+    CHECK(s.damping == 0);
+    CHECK(s.seed == 1);
+}
+
+TEST_CASE("deck: OUTPUT POINTS and HISTORY, with and without EVERY") {
+    const Scene s = read_ok(kBase +
+                            "OUTPUT POINTS  heap_points.txt\n"
+                            "OUTPUT POINTS  heap_frames.txt EVERY 5\n"
+                            "OUTPUT HISTORY heap_history.txt\n"
+                            "OUTPUT HISTORY heap_walls.txt EVERY 2\n");
+    REQUIRE(s.outputs.size() == 4);
+    CHECK(s.outputs[0].kind == lpfdm::Output::Points);
+    CHECK(s.outputs[0].file == "heap_points.txt");
+    CHECK(s.outputs[0].every == 0);  // first and last frame only
+    CHECK(s.outputs[1].kind == lpfdm::Output::Points);
+    CHECK(s.outputs[1].file == "heap_frames.txt");
+    CHECK(s.outputs[1].every == 5);
+    CHECK(s.outputs[2].kind == lpfdm::Output::History);
+    CHECK(s.outputs[2].file == "heap_history.txt");
+    CHECK(s.outputs[2].every == 0);  // every step
+    CHECK(s.outputs[3].kind == lpfdm::Output::History);
+    CHECK(s.outputs[3].every == 2);
+    CHECK(s.outputs[3].pos.line == 8);
+}
+
+TEST_CASE("deck: a points table may have EVERY above the steps (first and last frame only)") {
+    CHECK(read_ok(plus("OUTPUT POINTS p.txt EVERY 50")).outputs.at(0).every == 50);
+}
+
+TEST_CASE("deck: END ends the deck; the cards after it are not read") {
+    const Scene s = read_ok(kBase +
+                            "END\n"
+                            "GRID 0 0 0\n"
+                            "FOO bar\n"
+                            "MATERIAL 9 ELASTIC E=-1\n"
+                            "These are notes, not cards: 3 m of sand, E = 50 MPa.\n");
+    CHECK(s.end_pos.line == 5);
+    CHECK(s.end_pos.col == 1);
+    CHECK(s.mx == 4);
+    CHECK(s.materials.size() == 1);
+}
+
+TEST_CASE("deck: every card of design §3 in one scene") {
+    const Scene s = read_ok(
+        "TITLE  Sand heap pushed by a wall\n"
+        "GRID   40 24 0.5\n"
+        "MATERIAL 1 ELASTIC E=2E7 NU=0.25 RHO=2000\n"
+        "MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=1900 PHI=35 C=1E3 PSI=5 TENSION=500 SOFTEN=0.5 SCATTER=0.2\n"
+        "CLUSTER 1 0 0 20 2\n"
+        "CLUSTER 2 0 2 10 8 PPC=3\n"
+        "FIX X  0 0 0 12\n"
+        "FIX Y  20 0 20 12\n"
+        "FIX XY 0 0 20 0\n"
+        "WALL 1 15 1 15 11 -0.1 0\n"
+        "GRAVITY 0 -9.81\n"
+        "DAMPING 0.8\n"
+        "SEED 42\n"
+        "STEP 1E-4 500\n"
+        "OUTPUT POINTS  heap_points.txt EVERY 100\n"
+        "OUTPUT HISTORY heap_history.txt EVERY 10\n"
+        "END\n");
+    CHECK(s.title == "Sand heap pushed by a wall");
+    CHECK(s.materials.size() == 2);
+    CHECK(s.clusters.size() == 2);
+    CHECK(s.fixes.size() == 3);
+    CHECK(s.walls.size() == 1);
+    CHECK(s.outputs.size() == 2);
+    CHECK(s.end_pos.line == 17);
+}
+
+// ======================================================= lexical rules ===
+
+TEST_CASE("deck: keywords, parameter names and choices in any case") {
+    const Scene s = read_ok(
+        "title Mixed Case\n"
+        "grid 4 4 1\n"
+        "Material 1 elastic e=5E7 Nu=0.3 rHo=2000\n"
+        "material 2 Mohr e=5E7 nu=0.3 rho=2000 phi=30 c=1 psi=2 tension=3 soften=0.1 scatter=0.1\n"
+        "cluster 1 0 0 2 2 ppc=3\n"
+        "fix xy 0 0 4 0\n"
+        "Fix x 0 0 0 4\n"
+        "wall 1 4 1 4 3 -1 0\n"
+        "gravity 0 -9.81\n"
+        "damping 0.5\n"
+        "seed 3\n"
+        "step 1E-4 10\n"
+        "output points p.txt every 5\n"
+        "Output History h.txt Every 2\n"
+        "end\n"
+        "FOO\n");
+    CHECK(s.title == "Mixed Case");
+    REQUIRE(s.materials.size() == 2);
+    CHECK(s.materials[0].nu == 0.3);
+    CHECK(s.materials[1].model == lpfdm::Model::MohrCoulomb);
+    CHECK(s.materials[1].scatter == 0.1);
+    CHECK(s.clusters.at(0).ppc == 3);
+    CHECK(s.fixes.at(0).dirs == (lpfdm::kFixX | lpfdm::kFixY));
+    CHECK(s.fixes.at(1).dirs == lpfdm::kFixX);
+    CHECK(s.outputs.at(1).kind == lpfdm::Output::History);
+    CHECK(s.outputs.at(1).every == 2);
+    CHECK(s.end_pos.line == 15);
+}
+
+TEST_CASE("deck: file names keep their case") {
+    CHECK(read_ok(plus("output points Heap_Points.TXT")).outputs.at(0).file == "Heap_Points.TXT");
+}
+
+TEST_CASE("deck: fields are separated by blanks, tabs or commas") {
+    const Scene s = read_ok(
+        "GRID 4,4,1\n"
+        "MATERIAL,1,ELASTIC,E=5E7,NU=0.3,RHO=2000\n"
+        "CLUSTER\t1\t0 , 0 ,2,\t2\n"
+        "  STEP   1E-4    10   \n");
+    CHECK(s.mx == 4);
+    CHECK(s.cell_m == 1);
+    CHECK(s.materials.at(0).rho == 2000);
+    CHECK(s.clusters.at(0).box.x1 == 2);
+    CHECK(s.steps == 10);
+}
+
+TEST_CASE("deck: ! starts a comment anywhere on a line") {
+    const Scene s = read_ok(
+        "! a whole line of comment\n"
+        "GRID 4 4 1 ! 8 8 0.5 was too slow\n"
+        "   ! indented comment\n"
+        "MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000! RHO=1\n"
+        "CLUSTER 1 0 0 2 2!PPC=40\n"
+        "STEP 1E-4 10\n");
+    CHECK(s.mx == 4);
+    CHECK(s.materials.at(0).rho == 2000);
+    CHECK(s.clusters.at(0).ppc == 2);
+}
+
+TEST_CASE("deck: * in column 1 makes a comment card") {
+    const Scene s = read_ok(
+        "* Sand heap. The next line is a comment too:\n"
+        "*GRID 0 0 0\n"
+        "*\n" + kBase);
+    CHECK(s.mx == 4);
+}
+
+TEST_CASE("deck: * elsewhere than column 1 is an ordinary field") {
+    CHECK_ONE_ERROR(" * not a comment\n" + kBase, 1, 2, "unknown card '*'");
+    CHECK_ONE_ERROR(plus("GRAVITY 0 -9.81 *"), 5, 17, "extra field '*'");
+}
+
+TEST_CASE("deck: & as the last field continues the card on the next line") {
+    const Scene s = read_ok(
+        "GRID 4 &\n"
+        "     4 1\n"
+        "MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 &  ! elastic part\n"
+        "           PHI=30 &\n"
+        "           C=1E3\n"
+        "CLUSTER 2 0 0 2 2 &\n"
+        "  PPC=3\n"
+        "STEP 1E-4 10\n");
+    CHECK(s.mx == 4);
+    CHECK(s.my == 4);
+    CHECK(s.cell_m == 1);
+    REQUIRE(s.materials.size() == 1);
+    CHECK(s.materials[0].phi_deg == 30);
+    CHECK(s.materials[0].c == 1e3);
+    CHECK(s.clusters.at(0).ppc == 3);
+    CHECK(s.steps == 10);
+}
+
+TEST_CASE("deck: & continues a card across comment cards") {
+    const Scene s = read_ok(
+        "GRID 4 4 &\n"
+        "* the cell side in metres:\n"
+        "*\n"
+        "  1\n" + kMaterial + kCluster + kStep);
+    CHECK(s.cell_m == 1);
+}
+
+TEST_CASE("deck: & inside a comment continues nothing") {
+    CHECK(read_ok("GRID 4 4 1 ! see below &\n" + kMaterial + kCluster + kStep).mx == 4);
+}
+
+TEST_CASE("deck: a field on a continuation line is reported on that line") {
+    CHECK_ONE_ERROR("GRID 4 &\n"
+                    "     4 0\n" + kMaterial + kCluster + kStep,
+                    2, 8, "cell size L must be > 0");
+    // A missing field is reported just after the last field of the card.
+    CHECK_ONE_ERROR("GRID 4 &\n"
+                    "  4\n" + kMaterial + kCluster + kStep,
+                    2, 4, "missing field: L");
+}
+
+TEST_CASE("deck: Fortran real numbers") {
+    struct Case {
+        const char* text;
+        double value;
+    };
+    const Case cases[] = {
+        {"5E7", 5e7},    {"5.0D+07", 5e7}, {"5d7", 5e7},     {"5e+7", 5e7},   {"5.E7", 5e7},  {"50E-01", 5.0},
+        {"2.5D-3", 2.5e-3}, {".5", 0.5},   {"3.", 3.0},      {"-2", -2.0},    {"+3", 3.0},    {"-.5", -0.5},
+        {"+.25E1", 2.5}, {"0", 0.0},       {"-9.81", -9.81}, {"007", 7.0},    {"1E-310", 1e-310},
+    };
+    for (const Case& c : cases) {
+        CAPTURE(c.text);
+        const Scene s = read_ok(plus(std::string("GRAVITY 0 ") + c.text));
+        CHECK(s.gravity_y == c.value);
+    }
+}
+
+TEST_CASE("deck: tokens that are not Fortran reals") {
+    const char* bad[] = {"1.5.2", "e5", "E5", "5E", "5E+", "1d", ".", "-", "+-3", "0x10", "1_000", "5..", "five", "5m", "5E7.0", "--1"};
+    for (const char* t : bad) {
+        CAPTURE(t);
+        const std::string card = std::string("GRAVITY 0 ") + t;
+        Scene s;
+        const Diagnostics d = read_text(plus(card), s);
+        INFO(listing(d));
+        REQUIRE(d.size() == 1);
+        CHECK(d[0].pos.line == 5);
+        CHECK(d[0].pos.col == 11);
+        CHECK(has(d[0].message, std::string("gy (m/s^2): expected a number, found '") + t + "'"));
+    }
+}
+
+TEST_CASE("deck: NAME=VALUE, NAME = VALUE, NAME= VALUE and NAME =VALUE read alike") {
+    const Scene s = read_ok(plus("MATERIAL 2 MOHR E=5E7 NU = 0.3 RHO= 1900 PHI =30 C\t=\t1E3, PSI=5"));
+    REQUIRE(s.materials.size() == 2);
+    const lpfdm::Material& m = s.materials[1];
+    CHECK(m.E == 5e7);
+    CHECK(m.nu == 0.3);
+    CHECK(m.rho == 1900);
+    CHECK(m.phi_deg == 30);
+    CHECK(m.c == 1e3);
+    CHECK(m.psi_deg == 5);
+    CHECK(read_ok(kGrid + kMaterial + "CLUSTER 1 0 0 2 2 PPC = 4\n" + kStep).clusters.at(0).ppc == 4);
+}
+
+TEST_CASE("deck: CRLF line endings read like LF") {
+    const Scene s = read_ok(
+        "* a deck saved on Windows\r\n"
+        "TITLE Heap\r\n"
+        "GRID 4 4 1\r\n"
+        "MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\r\n"
+        "CLUSTER 1 0 0 2 2 &\r\n"
+        "  PPC=3\r\n"
+        "STEP 1E-4 10\r\n"
+        "OUTPUT POINTS p.txt\r\n"
+        "END\r\n");
+    CHECK(s.title == "Heap");
+    CHECK(s.clusters.at(0).ppc == 3);
+    CHECK(s.outputs.at(0).file == "p.txt");
+    // The carriage return is no part of the positions.
+    CHECK_ONE_ERROR("GRID 4 4\r\n" + kMaterial + kCluster + kStep, 1, 9, "missing field: L");
+    CHECK_ONE_ERROR("GRID 4 4 1 9\r\n" + kMaterial + kCluster + kStep, 1, 12, "extra field '9'");
+}
+
+TEST_CASE("deck: a deck without a final newline") {
+    CHECK(read_ok(kGrid + kMaterial + kCluster + "STEP 1E-4 10").steps == 10);
+}
+
+TEST_CASE("deck: whole-number fields may be written as reals") {
+    const Scene s = read_ok("GRID 4.0 4E0 1\n" + kMaterial + kCluster + "STEP 1E-4 1.0D1\n");
+    CHECK(s.mx == 4);
+    CHECK(s.my == 4);
+    CHECK(s.steps == 10);
+}
+
+// =============================================================== errors ===
+
+TEST_CASE("deck error: unknown card") {
+    CHECK_ONE_ERROR(plus("FOO 1 2"), 5, 1, "unknown card 'FOO'");
+    CHECK_ONE_ERROR(plus("   grav 0 -9.81"), 5, 4, "unknown card 'grav'");
+}
+
+TEST_CASE("deck error: unknown parameter, named with the ones the card takes") {
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=0.3 RHO=2000 PHI=30"), 5, 42, "unknown parameter 'PHI' (this card takes E, NU, RHO)");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 4 PCC=3"), 5, 19, "unknown parameter 'PCC'");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=30 C=0 DILATION=5"), 5, 50, "unknown parameter 'DILATION'");
+}
+
+TEST_CASE("deck error: missing field, reported where it should have been") {
+    CHECK_ONE_ERROR("GRID 4 4\n" + kMaterial + kCluster + kStep, 1, 9, "missing field: L (cell size, m)");
+    CHECK_ONE_ERROR("GRID\n" + kMaterial + kCluster + kStep, 1, 5, "missing field: mx");
+    CHECK_ONE_ERROR(plus("FIX X 0 0 4"), 5, 12, "missing field: y1");
+    CHECK_ONE_ERROR(plus("WALL 1 4 0 4 4 -0.1"), 5, 20, "missing field: VY");
+    CHECK_ONE_ERROR(plus("GRAVITY -9.81"), 5, 14, "missing field: gy");
+    CHECK_ONE_ERROR(plus("GRAVITY=0 -9.81"), 5, 8, "missing field: gx");
+    CHECK_ONE_ERROR(plus("MATERIAL 2"), 5, 11, "missing field: model");
+    CHECK_ONE_ERROR(plus("OUTPUT POINTS"), 5, 14, "missing field: file name");
+    CHECK_ONE_ERROR(plus("OUTPUT"), 5, 7, "missing field: kind");
+    CHECK_ONE_ERROR(plus("OUTPUT HISTORY h.txt EVERY"), 5, 27, "missing field: EVERY n");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 1E-4\n", 4, 10, "missing field: number of steps");
+    // A parameter where a positional field belongs.
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 PPC=2"), 5, 17, "missing field: y1");
+    // "ELASTIC =5E7" reads as the parameter ELASTIC=5E7: the model is missing.
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC =5E7 NU=0.3 RHO=2000"), 5, 12, "missing field: model");
+}
+
+TEST_CASE("deck error: missing parameter or parameter value") {
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=0.3"), 5, 32, "missing parameter RHO=");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC"), 5, 19, "missing parameter E=");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=30"), 5, 45, "missing parameter C=");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC NU=0.3 RHO=2000 E="), 5, 37, "missing value after E=");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 = NU=0.3 RHO=2000"), 5, 26, "'=' without a parameter name");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E= NU=0.3 RHO=2000"), 5, 23, "E: expected a number, found 'NU'");
+}
+
+TEST_CASE("deck error: extra field") {
+    CHECK_ONE_ERROR("GRID 4 4 1 9\n" + kMaterial + kCluster + kStep, 1, 12, "extra field '9'");
+    CHECK_ONE_ERROR(plus("GRAVITY 0 -9.81 0"), 5, 17, "extra field '0'");
+    CHECK_ONE_ERROR(plus("SEED 1 2"), 5, 8, "extra field '2'");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=0.3 RHO=2000 7"), 5, 42, "extra field '7'");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E 5E7 NU=0.3 RHO=2000"), 5, 20, "extra field 'E'");
+    CHECK_ONE_ERROR(plus("OUTPUT POINTS p.txt EVERY 5 6"), 5, 29, "extra field '6'");
+    CHECK_ONE_ERROR(plus("OUTPUT POINTS p.txt 5"), 5, 21, "extra field '5'");
+    CHECK_ONE_ERROR(kBase + "END now\n", 5, 5, "extra field 'now'");
+    CHECK_ONE_ERROR("TITLE Heap\n" + kGrid + kMaterial + kCluster + kStep + "DAMPING 0.5 0.5\n", 6, 13, "extra field '0.5'");
+}
+
+TEST_CASE("deck error: a field that is not a number") {
+    CHECK_ONE_ERROR("GRID 4 four 1\n" + kMaterial + kCluster + kStep, 1, 8, "expected a number, found 'four'");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7x NU=0.3 RHO=2000"), 5, 22, "E: expected a number, found '5E7x'");
+    CHECK_ONE_ERROR(plus("GRAVITY 0 g"), 5, 11, "expected a number, found 'g'");
+    CHECK_ONE_ERROR(plus("WALL 1 4 0 4 4 slow 0"), 5, 16, "expected a number, found 'slow'");
+    CHECK_ONE_ERROR(plus("CLUSTER one 2 2 4 4"), 5, 9, "expected a number, found 'one'");
+}
+
+TEST_CASE("deck error: nan and inf are not numbers of a deck") {
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=nan RHO=2000"), 5, 29, "'nan' is not a finite number");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=NaN NU=0.3 RHO=2000"), 5, 22, "'NaN' is not a finite number");
+    CHECK_ONE_ERROR(plus("GRAVITY 0 -inf"), 5, 11, "'-inf' is not a finite number");
+    CHECK_ONE_ERROR(plus("DAMPING Infinity"), 5, 9, "'Infinity' is not a finite number");
+    CHECK_ONE_ERROR("GRID INF 4 1\n" + kMaterial + kCluster + kStep, 1, 6, "'INF' is not a finite number");
+    CHECK_ONE_ERROR(plus("WALL 1 4 0 4 4 +inf 0"), 5, 16, "'+inf' is not a finite number");
+}
+
+TEST_CASE("deck error: cells and cell size must be > 0") {
+    CHECK_ONE_ERROR("GRID 0 4 1\n" + kMaterial + kCluster + kStep, 1, 6, "mx (cells in x) must lie in [1, 1000000], found '0'");
+    CHECK_ONE_ERROR("GRID 4 -2 1\n" + kMaterial + kCluster + kStep, 1, 8, "my (cells in y) must lie in [1, 1000000], found '-2'");
+    CHECK_ONE_ERROR("GRID 4 4 0\n" + kMaterial + kCluster + kStep, 1, 10, "the cell size L must be > 0");
+    CHECK_ONE_ERROR("GRID 4 4 -0.5\n" + kMaterial + kCluster + kStep, 1, 10, "the cell size L must be > 0");
+    CHECK_ONE_ERROR("GRID 4.5 4 1\n" + kMaterial + kCluster + kStep, 1, 6, "mx (cells in x) must be a whole number, found '4.5'");
+    CHECK_ONE_ERROR("GRID 2000000 4 1\n" + kMaterial + kCluster + kStep, 1, 6, "must lie in [1, 1000000]");
+}
+
+TEST_CASE("deck error: E <= 0, RHO <= 0, NU outside (-1, 0.5): at the value") {
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=0 NU=0.3 RHO=2000"), 5, 22, "E must be > 0");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=-5E7 NU=0.3 RHO=2000"), 5, 22, "E must be > 0");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=0.3 RHO=0"), 5, 37, "RHO must be > 0");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=0.3 RHO=-2000"), 5, 37, "RHO must be > 0");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=0.5 RHO=2000"), 5, 29, "NU must lie in (-1, 0.5)");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=-1 RHO=2000"), 5, 29, "NU must lie in (-1, 0.5)");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 MOHR E=5E7 NU=0.7 RHO=2000 PHI=30 C=0"), 5, 26, "NU must lie in (-1, 0.5)");
+    // Just inside the bounds is fine.
+    read_ok(plus("MATERIAL 2 ELASTIC E=1E-3 NU=-0.99 RHO=1E-3"));
+    read_ok(plus("MATERIAL 2 ELASTIC E=5E7 NU=0.49 RHO=2000"));
+}
+
+TEST_CASE("deck error: material id outside [1, 65535]") {
+    CHECK_ONE_ERROR(plus("MATERIAL 0 ELASTIC E=5E7 NU=0.3 RHO=2000"), 5, 10, "material id must lie in [1, 65535], found '0'");
+    CHECK_ONE_ERROR(plus("MATERIAL 1.5 ELASTIC E=5E7 NU=0.3 RHO=2000"), 5, 10, "material id must be a whole number");
+}
+
+TEST_CASE("deck error: MOHR parameters out of range: at the value") {
+    const std::string mohr = "MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 ";  // 38 columns
+    CHECK_ONE_ERROR(plus(mohr + "PHI=90 C=1E3"), 5, 43, "PHI must lie in [0, 90) degrees");
+    CHECK_ONE_ERROR(plus(mohr + "PHI=-1 C=1E3"), 5, 43, "PHI must lie in [0, 90) degrees");
+    CHECK_ONE_ERROR(plus(mohr + "PHI=30 C=1E3 PSI=31"), 5, 56, "PSI must lie in [0, PHI]");
+    CHECK_ONE_ERROR(plus(mohr + "PHI=30 C=1E3 PSI=-1"), 5, 56, "PSI must lie in [0, PHI]");
+    CHECK_ONE_ERROR(plus(mohr + "PHI=30 C=-1"), 5, 48, "C must be >= 0");
+    CHECK_ONE_ERROR(plus(mohr + "PHI=30 C=1E3 TENSION=-1"), 5, 60, "TENSION must be >= 0");
+    CHECK_ONE_ERROR(plus(mohr + "PHI=30 C=1E3 SOFTEN=1.5"), 5, 59, "SOFTEN must lie in [0, 1]");
+    CHECK_ONE_ERROR(plus(mohr + "PHI=30 C=1E3 SOFTEN=-0.1"), 5, 59, "SOFTEN must lie in [0, 1]");
+    CHECK_ONE_ERROR(plus(mohr + "PHI=30 C=1E3 SCATTER=-0.1"), 5, 60, "SCATTER must be >= 0");
+    // The bounds themselves.
+    read_ok(plus(mohr + "PHI=0 C=1E3 PSI=0 TENSION=0 SOFTEN=1 SCATTER=0.5"));
+    read_ok(plus(mohr + "PHI=89.9 C=0 PSI=89.9 SOFTEN=0"));
+}
+
+TEST_CASE("deck error: MOHR checks of the material as a whole, on its card") {
+    const std::string mohr = "MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 ";
+    CHECK_ONE_ERROR(plus(mohr + "PHI=30 C=1E3 SCATTER=0.6"), 5, 60, "SCATTER above 0.5");
+    CHECK_ONE_ERROR(plus(mohr + "PHI=80 C=1E3 SCATTER=0.1"), 5, 1, "SCATTER too large for this PHI");
+    CHECK_ONE_ERROR(plus(mohr + "PHI=0 C=0"), 5, 1, "no strength");
+}
+
+TEST_CASE("deck error: PPC below 1, not whole, or absurdly large") {
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 4 PPC=0"), 5, 23, "PPC must be a whole number in [1, 32]");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 4 PPC=-3"), 5, 23, "PPC must be a whole number in [1, 32]");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 4 PPC=2.5"), 5, 23, "PPC must be a whole number in [1, 32]");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 4 PPC=33"), 5, 23, "PPC must be a whole number in [1, 32]");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 4 PPC=1E6"), 5, 23, "PPC must be a whole number in [1, 32]");
+    CHECK(read_ok(plus("CLUSTER 1 2 2 4 4 PPC=32")).clusters.at(1).ppc == 32);
+    CHECK(read_ok(plus("CLUSTER 1 2 2 4 4 PPC=1")).clusters.at(1).ppc == 1);
+}
+
+TEST_CASE("deck error: PPC far beyond any integer") {
+    // The value must be rejected before it is converted to an integer.
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 4 PPC=1E300"), 5, 23, "PPC must be a whole number in [1, 32]");
+}
+
+TEST_CASE("deck error: a cluster outside the lattice, or holding no cell centre") {
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4.5 4"), 5, 1, "the cluster box reaches outside the lattice");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 -1 0 2 2"), 5, 1, "the cluster box reaches outside the lattice");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 0 0 0.4 4"), 5, 1, "the cluster box holds no cell centre");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 1 1 1 3"), 5, 1, "the cluster box holds no cell centre");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 3 3 1 1"), 5, 1, "the box needs x0 <= x1 and y0 <= y1");
+    // A box edge a thousandth of a cell past the lattice is still inside.
+    read_ok(plus("CLUSTER 1 0 0 4.0009 4"));
+}
+
+TEST_CASE("deck error: undefined or duplicated material id") {
+    CHECK_ONE_ERROR(plus("CLUSTER 3 2 2 4 4"), 5, 1, "material 3 is not defined");
+    CHECK_ONE_ERROR(plus("MATERIAL 1 ELASTIC E=1E7 NU=0.2 RHO=1800"), 5, 1, "material 1 is defined twice");
+    // A material may be defined after the cluster that uses it.
+    read_ok(kGrid + "CLUSTER 2 0 0 2 2\nMATERIAL 2 ELASTIC E=5E7 NU=0.3 RHO=2000\n" + kStep);
+}
+
+TEST_CASE("deck error: unknown direction, material model or output kind") {
+    CHECK_ONE_ERROR(plus("FIX Z 0 0 4 0"), 5, 5, "unknown direction 'Z' (X, Y or XY)");
+    CHECK_ONE_ERROR(plus("FIX XZ 0 0 4 0"), 5, 5, "unknown direction 'XZ'");
+    CHECK_ONE_ERROR(plus("FIX 0 0 4 0"), 5, 5, "unknown direction '0'");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 PLASTIC E=5E7 NU=0.3 RHO=2000"), 5, 12, "unknown material model 'PLASTIC' (ELASTIC or MOHR)");
+    CHECK_ONE_ERROR(plus("OUTPUT FRAMES f.txt"), 5, 8, "unknown output 'FRAMES' (POINTS or HISTORY)");
+}
+
+TEST_CASE("deck error: a FIX box that holds no node") {
+    CHECK_ONE_ERROR(plus("FIX X 0.2 0.2 0.8 0.8"), 5, 1, "the FIX box holds no node");
+    CHECK_ONE_ERROR(plus("FIX X 5 0 6 4"), 5, 1, "the FIX box holds no node");
+    CHECK_ONE_ERROR(plus("FIX X 4 0 0 4"), 5, 1, "the box needs x0 <= x1 and y0 <= y1");
+    // A degenerate box selects a line of nodes; a box may reach past the lattice.
+    read_ok(plus("FIX X 3 0 3 4"));
+    read_ok(plus("FIX XY -1 -1 5 0"));
+}
+
+TEST_CASE("deck error: dt <= 0 and steps < 1") {
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 0 10\n", 4, 6, "the time step dt must be > 0");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP -1E-4 10\n", 4, 6, "the time step dt must be > 0");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 1E-4 0\n", 4, 11, "number of steps must lie in [1, 1000000000], found '0'");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 1E-4 -5\n", 4, 11, "number of steps must lie in");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 1E-4 2.5\n", 4, 11, "number of steps must be a whole number");
+}
+
+TEST_CASE("deck error: dt above the stable limit; the message gives the limit") {
+    // E = 5e7 Pa, nu = 0.3, rho = 2000 kg/m^3: c_p = 183.45 m/s, L / c_p = 5.45108e-3 s.
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 6E-3 10\n", 4, 1, "above the stable limit 0.00545108 s");
+    read_ok(kGrid + kMaterial + kCluster + "STEP 5.45E-3 10\n");
+    // The stiffest material decides, used by a cluster or not.
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 1E-3 10\nMATERIAL 2 ELASTIC E=5E9 NU=0.3 RHO=2000\n", 4, 1,
+                    "above the stable limit 0.000545108 s");
+}
+
+TEST_CASE("deck error: walls that select no node, hold fixed nodes or move too fast") {
+    CHECK_ONE_ERROR(plus("WALL 1 0.2 0.2 0.8 0.8 0 0"), 5, 1, "the WALL box holds no node");
+    CHECK_ONE_ERROR(plus("WALL 1 4 3 4 1 -1 0"), 5, 1, "the box needs x0 <= x1 and y0 <= y1");
+    CHECK_ONE_ERROR(kBase + "FIX XY 0 0 4 0\nWALL 1 4 0 4 4 -1 0\n", 6, 1, "the wall's nodes include fixed nodes (FIX at line 5)");
+    // 0.1 cell per step is allowed, more is not: L = 1 m, dt = 1e-4 s.
+    read_ok(plus("WALL 1 4 1 4 4 -1000 0"));
+    CHECK_ONE_ERROR(plus("WALL 1 4 1 4 4 -1001 0"), 5, 1, "at most 0.1 is allowed");
+    CHECK_ONE_ERROR(plus("WALL 1 4 1 4 4 800 800"), 5, 1, "the wall moves 0.113137 cells per step");
+    CHECK_ONE_ERROR(kBase + "WALL 1 4 1 4 4 -1 0\nWALL 1 0 1 0 4 1 0\n", 6, 1, "wall 1 is defined twice");
+    CHECK_ONE_ERROR(plus("WALL 0 4 1 4 4 -1 0"), 5, 6, "wall id must lie in [1, 65535]");
+}
+
+TEST_CASE("deck error: a history whose EVERY exceeds the steps would have no rows") {
+    CHECK_ONE_ERROR(plus("OUTPUT HISTORY h.txt EVERY 11"), 5, 1, "EVERY 11 is more than the 10 steps: the history would have no rows");
+    read_ok(plus("OUTPUT HISTORY h.txt EVERY 10"));
+    CHECK_ONE_ERROR(plus("OUTPUT HISTORY h.txt EVERY 0"), 5, 28, "EVERY n must lie in [1, 1000000000], found '0'");
+    CHECK_ONE_ERROR(plus("OUTPUT POINTS p.txt EVERY 2.5"), 5, 27, "EVERY n must be a whole number");
+}
+
+TEST_CASE("deck error: DAMPING outside [0, 1)") {
+    CHECK_ONE_ERROR(plus("DAMPING 1"), 5, 9, "DAMPING alpha must lie in [0, 1)");
+    CHECK_ONE_ERROR(plus("DAMPING -0.1"), 5, 9, "DAMPING alpha must lie in [0, 1)");
+    CHECK(read_ok(plus("DAMPING 0.999")).damping == 0.999);
+}
+
+TEST_CASE("deck error: SEED outside [0, 2^53]") {
+    CHECK_ONE_ERROR(plus("SEED -1"), 5, 6, "seed must lie in [0, 9007199254740992]");
+    CHECK_ONE_ERROR(plus("SEED 1.5"), 5, 6, "seed must be a whole number");
+    CHECK(read_ok(plus("SEED 0")).seed == 0);
+    CHECK(read_ok(plus("SEED 9007199254740992")).seed == 9007199254740992ull);
+}
+
+TEST_CASE("deck error: a card that may appear once, given twice") {
+    CHECK_ONE_ERROR(plus("GRID 8 8 0.5"), 5, 1, "GRID is given twice");
+    CHECK_ONE_ERROR(plus("STEP 1E-4 20"), 5, 1, "STEP is given twice");
+    CHECK_ONE_ERROR("TITLE a\n" + kBase + "TITLE b\n", 6, 1, "TITLE is given twice");
+    CHECK_ONE_ERROR(kBase + "GRAVITY 0 -9.81\ngravity 0 -10\n", 6, 1, "GRAVITY is given twice");
+    CHECK_ONE_ERROR(kBase + "DAMPING 0.8\nDAMPING 0.7\n", 6, 1, "DAMPING is given twice");
+    CHECK_ONE_ERROR(kBase + "SEED 1\nSEED 2\n", 6, 1, "SEED is given twice");
+}
+
+TEST_CASE("deck error: a parameter given twice") {
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=0.3 e=6E7 RHO=2000"), 5, 33, "parameter E given twice");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 4 PPC=2 PPC=3"), 5, 25, "parameter PPC given twice");
+}
+
+TEST_CASE("deck error: output files: one name per card, no directory") {
+    CHECK_ONE_ERROR(kBase + "OUTPUT POINTS a.txt\nOUTPUT HISTORY a.txt\n", 6, 16, "file 'a.txt' is written by another OUTPUT card");
+    CHECK_ONE_ERROR(plus("OUTPUT POINTS out/a.txt"), 5, 15, "the file name must not contain a directory");
+    CHECK_ONE_ERROR(plus("OUTPUT POINTS ../a.txt"), 5, 15, "the file name must not contain a directory");
+    CHECK_ONE_ERROR(plus("OUTPUT HISTORY .."), 5, 16, "the file name must not contain a directory");
+}
+
+TEST_CASE("deck error: no GRID, no STEP or no CLUSTER card") {
+    CHECK_ONE_ERROR(kMaterial + kCluster + kStep + "END\n", 4, 1, "no GRID card");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "END\n", 4, 1, "no STEP card");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kStep, 1, 1, "no CLUSTER card");
+    // Only comments: both missing cards are named.
+    Scene s;
+    const Diagnostics d = read_text("* nothing but comments\n! and more\n", s);
+    INFO(listing(d));
+    REQUIRE(d.size() == 2);
+    CHECK(has(d[0].message, "no GRID card"));
+    CHECK(has(d[1].message, "no STEP card"));
+}
+
+TEST_CASE("deck error: & with no line after it, at the &") {
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 1E-4 &", 4, 11, "'&' continues the card, but no line follows");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 1E-4 &   ! steps below\n", 4, 11, "'&' continues the card, but no line follows");
+    CHECK_ONE_ERROR(kBase + "GRAVITY 0 &\n* the last line is a comment card\n", 5, 11, "'&' continues the card, but no line follows");
+    CHECK_ONE_ERROR(kBase + "TITLE &\r\n", 5, 7, "'&' continues the card, but no line follows");
+}
+
+TEST_CASE("deck error: an empty deck") {
+    CHECK_ONE_ERROR("", 1, 1, "the deck is empty");
+    CHECK_ONE_ERROR("\n\n  \t\r\n", 1, 1, "the deck is empty");
+}
+
+TEST_CASE("deck error: binary data, one message at the first bad byte") {
+    CHECK_ONE_ERROR(kGrid + std::string("MAT\0ERIAL\x01\x02\x03\n", 13) + kBase, 2, 4, "the deck holds binary data (byte 0x00)");
+    CHECK_ONE_ERROR(std::string("\x7f" "ELF\x02\x01\x01", 7), 1, 1, "binary data (byte 0x7f)");
+    CHECK_ONE_ERROR(plus("GRAVITY 0 -9.81 \x1b[0m"), 5, 17, "binary data (byte 0x1b)");
+}
+
+TEST_CASE("deck: UTF-8 text in titles and comments is text, not binary") {
+    const Scene s = read_ok("TITLE Böschung, φ = 30°\n" + kBase + "! σ_yy in kPa\n");
+    CHECK(s.title == "Böschung, φ = 30°");
+}
+
+TEST_CASE("deck error: a deck file that cannot be opened") {
+    Scene s;
+    const Diagnostics d = lpfdm::read_deck("no-such-directory/no-such.deck", s);
+    INFO(listing(d));
+    REQUIRE(d.size() == 1);
+    CHECK(d[0].pos.file == "no-such-directory/no-such.deck");
+    CHECK(has(d[0].message, "cannot open the deck"));
+    CHECK(has(d[0].str(), "no-such-directory/no-such.deck: error: cannot open the deck"));
+}
+
+TEST_CASE("deck: read_deck reads a file and names it in its messages") {
+    const std::string path = "test_deck_read_deck.tmp.deck";
+    {
+        std::ofstream f(path, std::ios::binary);
+        f << kBase << "FIX Q 0 0 4 0\n";
+    }
+    Scene s;
+    const Diagnostics d = lpfdm::read_deck(path, s);
+    std::remove(path.c_str());
+    INFO(listing(d));
+    REQUIRE(d.size() == 1);
+    CHECK(d[0].str() == path + ":5:5: error: unknown direction 'Q' (X, Y or XY)");
+}
+
+TEST_CASE("deck: GNU-style message text: file:line:column: error: message") {
+    Scene s;
+    const Diagnostics d = read_text(plus("FOO"), s);
+    REQUIRE(d.size() == 1);
+    CHECK(d[0].str() == "t.deck:5:1: error: unknown card 'FOO'");
+}
+
+TEST_CASE("deck: several independent errors in the cards are all reported, one each, in order") {
+    Scene s;
+    const Diagnostics d = read_text(
+        "GRID 4 4 1\n"
+        "FOO 1\n"                                        // 2:1 unknown card
+        "MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\n"
+        "GRAVITY 0 g\n"                                  // 4:11 not a number
+        "CLUSTER 1 0 0 2 2 PPC=0\n"                      // 5:23 PPC (first problem of the card only)
+        "FIX Q 0 0 4 0 7\n"                              // 6:5 direction
+        "CLUSTER 1 2 2 4 4\n"
+        "STEP 1E-4 10\n"
+        "OUTPUT POINTS p.txt EVERY 0\n",                 // 9:27 EVERY
+        s);
+    INFO(listing(d));
+    REQUIRE(d.size() == 5);
+    CHECK(d[0].pos.line == 2);
+    CHECK(d[0].pos.col == 1);
+    CHECK(has(d[0].message, "unknown card 'FOO'"));
+    CHECK(d[1].pos.line == 4);
+    CHECK(d[1].pos.col == 11);
+    CHECK(has(d[1].message, "expected a number"));
+    CHECK(d[2].pos.line == 5);
+    CHECK(d[2].pos.col == 23);
+    CHECK(has(d[2].message, "PPC"));
+    CHECK(d[3].pos.line == 6);
+    CHECK(d[3].pos.col == 5);
+    CHECK(has(d[3].message, "unknown direction"));
+    CHECK(d[4].pos.line == 9);
+    CHECK(d[4].pos.col == 27);
+    CHECK(has(d[4].message, "EVERY n"));
+}
+
+TEST_CASE("deck: several independent errors of the scene are all reported, one each") {
+    Scene s;
+    const Diagnostics d = read_text(
+        "GRID 4 4 1\n"
+        "MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\n"
+        "MATERIAL 1 ELASTIC E=6E7 NU=0.3 RHO=2000\n"  // 3: defined twice
+        "CLUSTER 2 0 0 2 2\n"                         // 4: material 2 not defined
+        "CLUSTER 1 0 0 9 2\n"                         // 5: outside the lattice
+        "FIX X 9 9 9 9\n"                             // 6: no node
+        "WALL 1 4 1 4 4 -2000 0\n"                    // 7: too fast
+        "STEP 1E-4 10\n"
+        "OUTPUT HISTORY h.txt EVERY 20\n",            // 9: no rows
+        s);
+    INFO(listing(d));
+    REQUIRE(d.size() == 6);
+    const int lines[] = {3, 4, 5, 6, 7, 9};
+    const char* phrases[] = {"defined twice", "material 2 is not defined", "outside the lattice", "holds no node", "cells per step",
+                             "no rows"};
+    int k = 0;
+    for (int line : lines) {
+        bool found = false;
+        for (const auto& e : d) found |= e.pos.line == line && has(e.message, phrases[k]);
+        CAPTURE(line);
+        CAPTURE(phrases[k]);
+        CHECK(found);
+        ++k;
+    }
+}
+
+// ============================================= corner cases of the reader ===
+
+// Once wrong: the '&' of a continued TITLE stays in the title ("Sand heap &  pushed by a wall").
+TEST_CASE("deck: a continued TITLE joins its lines without the &") {
+    const Scene s = read_ok("TITLE Sand heap &\n  pushed by a wall\n" + kBase);
+    CHECK(s.title == "Sand heap pushed by a wall");
+}
+
+// Once wrong: after END the text is still lexed, so a trailing '&' or a control byte in
+// notes after END stops the deck, although the cards there are ignored.
+TEST_CASE("deck: text after END is ignored, whatever it holds") {
+    read_ok(kBase + "END\nNotes: first run & second run &\n");
+    read_ok(kBase + "END\nNotes\x01\x02\n");
+}
+
+// Once wrong: "EVERY=5" (the form of every other parameter) gives "missing field: EVERY",
+// which does not tell what is wrong. It should be read as EVERY 5, or say how to write it.
+TEST_CASE("deck: OUTPUT ... EVERY=5 is read as EVERY 5, or the message shows the form") {
+    Scene s;
+    const Diagnostics d = read_text(plus("OUTPUT POINTS p.txt EVERY=5"), s);
+    INFO(listing(d));
+    if (d.empty()) {
+        CHECK(s.outputs.at(0).every == 5);
+    } else {
+        REQUIRE(d.size() == 1);
+        CHECK(d[0].pos.line == 5);
+        CHECK(d[0].pos.col == 21);
+        CHECK(has(d[0].message, "EVERY n"));
+        CHECK(!has(d[0].message, "missing field"));
+    }
+}
+
+// Once wrong: a number beyond the range of a double (1E400, 1E-400) is reported as
+// "expected a number, found '1E400'", which it is; the message should say it is out of range.
+TEST_CASE("deck error: a number out of the range of double says so") {
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=1E400 NU=0.3 RHO=2000"), 5, 22, "out of range");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=1E-400 RHO=2000"), 5, 29, "out of range");
+}
+
+// Once wrong: a FIX or WALL box reaching far past the lattice (edges beyond about 9e18
+// cells) converts an out-of-range double to an integer and reports "holds no node"; the
+// box selects the nodes of the lattice inside it.
+TEST_CASE("deck: a FIX or WALL box may reach any distance past the lattice") {
+    const Scene s = read_ok(plus("FIX XY -1E30 -1 1E30 0"));
+    CHECK(s.fixes.size() == 1);
+    read_ok(plus("WALL 1 4 1 1E30 4 -1 0"));
+}
+
+// Once wrong: columns count a tab as one column; GNU style (the design's message format)
+// counts tab stops every 8 columns, as editors and compilers show them.
+TEST_CASE("deck error: columns after a tab follow tab stops every 8 columns") {
+    CHECK_ONE_ERROR("GRID\t0\t4\t1\n" + kMaterial + kCluster + kStep, 1, 9, "mx (cells in x) must lie in");
+    CHECK_ONE_ERROR(plus("FIX\tQ 0 0 4 0"), 5, 9, "unknown direction 'Q'");
+}
+
+// Once wrong: SCATTER < 0 is reported at the value (column 60 here), SCATTER > 0.5 at
+// column 1 of the card; both are range errors of the same parameter and belong at its value.
+TEST_CASE("deck error: SCATTER above 0.5 is reported at its value") {
+    CHECK_ONE_ERROR(plus("MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=30 C=1E3 SCATTER=0.6"), 5, 60, "SCATTER above 0.5");
+}
+
+// Once wrong: when the only CLUSTER card is bad, a second message "no CLUSTER card: the
+// scene holds no material" follows the real one: two messages for one problem.
+TEST_CASE("deck error: a bad CLUSTER card gives one message, not also 'no CLUSTER card'") {
+    CHECK_ONE_ERROR(kGrid + kMaterial + "CLUSTER 1 0 0 2 2 PPC=0\n" + kStep, 3, 23, "PPC must be a whole number in [1, 32]");
+}
+
+// A deck with a bad card is not checked as a whole: the scene it describes is not the
+// one the user meant, and checking it would add messages for problems that are echoes
+// of the first (a bad MATERIAL card would also make its clusters "undefined").
+TEST_CASE("deck: a card error is reported alone, without echoes from the scene check") {
+    Scene s;
+    const Diagnostics d = read_text(kBase + "FOO 1\nCLUSTER 7 2 2 4 4\n", s);
+    INFO(listing(d));
+    REQUIRE(d.size() == 1);
+    CHECK(d[0].pos.line == 5);
+    CHECK(has(d[0].message, "unknown card 'FOO'"));
+}
+
+// Once wrong: a line holding only a '!' comment ends a continued card, while a '*'
+// comment card does not; a comment should not change what the card says.
+TEST_CASE("deck: & continues a card across a '!' comment line too") {
+    const Scene s = read_ok("GRID 4 4 &\n   ! the cell side in metres:\n   1\n" + kMaterial + kCluster + kStep);
+    CHECK(s.cell_m == 1);
+}
+
+// Once wrong: a '&' followed only by blank lines up to the end of the deck is reported as
+// "missing field" after the last field, not as a '&' with no line after it.
+TEST_CASE("deck error: & followed only by blank lines is a continuation with no line") {
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 1E-4 &\n\n\n", 4, 11, "'&' continues the card, but no line follows");
+}
+
+// Once wrong: a UTF-8 byte order mark (written by some Windows editors, which the CRLF
+// rule otherwise serves) makes the first card "unknown card '\xEF\xBB\xBFGRID'" (the
+// mark is invisible) and then "no GRID card".
+TEST_CASE("deck: a UTF-8 byte order mark before the first card is skipped") {
+    CHECK(read_ok("\xEF\xBB\xBF" + kBase).mx == 4);
+}
+
+// Once wrong: a deck with old Mac line endings (CR only) is reported as "binary data
+// (byte 0x0d)"; the message should name the line endings (or CR be read as a line end).
+TEST_CASE("deck: CR-only line endings are read or named as such") {
+    Scene s;
+    const Diagnostics d = read_text("GRID 4 4 1\rMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\rCLUSTER 1 0 0 2 2\rSTEP 1E-4 10\r", s);
+    INFO(listing(d));
+    if (!d.empty()) {
+        REQUIRE(d.size() == 1);
+        CHECK(has(d[0].message, "line ending"));
+    }
+}
+
+// Once wrong: load_file does not see a read error. A directory given as the deck opens
+// as a stream, reads nothing, and is reported as "the deck is empty" at line 1 column 1;
+// the message should say that the deck cannot be read because it is a directory.
+TEST_CASE("deck error: a directory given as the deck is named as such") {
+    Scene s;
+    const Diagnostics d = lpfdm::read_deck(".", s);
+    INFO(listing(d));
+    REQUIRE(d.size() == 1);
+    CHECK(!has(d[0].message, "empty"));
+    CHECK(has(d[0].message, "directory"));
+}
+
+// Found in the scene set-up, reached from a deck: a FIX box whose edges lie more
+// than 2^31 cells past the lattice passes validate() (which counts nodes in long) but
+// Simulation::setup converts the edges to int, which overflows, and fixes no node at
+// all: "FIX XY -1E10 -1 1E10 0" leaves the base free and the material falls.
+TEST_CASE("deck: a FIX box far past the lattice holds the same nodes as a box just past it") {
+    auto settle = [](const std::string& fix) {
+        Scene s = read_ok(kGrid + kMaterial + "CLUSTER 1 0 0 4 2\n" + kStep + "GRAVITY 0 -9.81\n" + fix + "\n");
+        lpfdm::Simulation sim(s);
+        for (int n = 0; n < 50; ++n) sim.step();
+        return sim.points().y;
+    };
+    CHECK(settle("FIX XY -1E10 -1 1E10 0") == settle("FIX XY -1 -1 5 0"));
+}
