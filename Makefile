@@ -5,7 +5,7 @@ WARN      = -std=c++17 -Wall -Wextra -Wpedantic
 EIGEN     = -I/usr/include/eigen3
 LIBS      = -lfmt
 OUT      ?= out
-SAN       = -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+SAN       = -O1 -g -fsanitize=address,undefined,float-cast-overflow -fno-omit-frame-pointer -fno-sanitize-recover=all
 PACKAGES  = libeigen3-dev libfmt-dev doctest-dev gnuplot-nox
 TESTS     = $(wildcard tests/test_*.cpp)
 
@@ -58,6 +58,21 @@ demo: lpfdm
 	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.png'; title='Cliff failure (Fig. 5)'; frame=-1" tools/snapshot.gp
 	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.gif'; title='Cliff failure'; delay=25" tools/animate.gp 2>/dev/null
 	@echo "pictures: $(OUT)/cliff.png $(OUT)/cliff.gif"
+
+# The paper's three experiments (Figs. 4-6) and their pictures.
+figures: lpfdm
+	@mkdir -p $(OUT)
+	./lpfdm -q -o $(OUT) decks/psc.deck
+	./lpfdm -q -o $(OUT) decks/cliff.deck
+	./lpfdm -q -o $(OUT) decks/trapdoor.deck
+	gnuplot -e "in='$(OUT)/psc_history.txt'; out='$(OUT)/psc_curve.png'; wall=1; width=0.1; height=0.2; c=9800; phi=28.648" tools/psc_curve.gp
+	gnuplot -e "in='$(OUT)/psc_points.txt'; out='$(OUT)/psc_specimen.png'; L=0.01; mat=1; title='Plane-strain compression (Fig. 4)'" tools/specimen.gp
+	gnuplot -e "in='$(OUT)/psc_points.txt'; out='$(OUT)/psc.gif'; title='Plane-strain compression'; epmax=0.05" tools/animate.gp 2>/dev/null
+	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.png'; title='Cliff failure (Fig. 5)'; frame=-1" tools/snapshot.gp
+	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.gif'; title='Cliff failure'; delay=25" tools/animate.gp 2>/dev/null
+	gnuplot -e "in='$(OUT)/trapdoor_points.txt'; out='$(OUT)/trapdoor.png'; title='Trapdoor (Fig. 6)'; frame=-1; size='900,800'" tools/snapshot.gp
+	gnuplot -e "in='$(OUT)/trapdoor_points.txt'; out='$(OUT)/trapdoor.gif'; title='Trapdoor'; delay=25" tools/animate.gp 2>/dev/null
+	@echo "figures in $(OUT)/"
 
 clean:
 	rm -rf build $(OUT) lpfdm
