@@ -1,6 +1,7 @@
 # lpfdm — build, test, demo, figures, clean. Plain g++; `make help` lists the targets.
 CXX      ?= g++
 CXXFLAGS ?= -O2
+OMP      ?= -fopenmp
 WARN      = -std=c++17 -Wall -Wextra -Wpedantic
 EIGEN     = -I/usr/include/eigen3
 LIBS      = -lfmt
@@ -9,7 +10,7 @@ SAN       = -O1 -g -fsanitize=address,undefined,float-cast-overflow -fno-omit-fr
 PACKAGES  = libeigen3-dev libfmt-dev doctest-dev gnuplot-nox
 TESTS     = $(wildcard tests/test_*.cpp)
 
-.PHONY: all deps test test-unit test-san test-decks demo figures clean help
+.PHONY: all deps test demo figures verify fuzz clean help
 all: lpfdm
 
 help:
@@ -17,6 +18,8 @@ help:
 	@echo "make demo     build and run the collapsing cliff, draw $(OUT)/cliff.png and $(OUT)/cliff.gif"
 	@echo "make test     unit tests (-O2 and ASan+UBSan) and deck tests"
 	@echo "make figures  run the paper's three scenes and draw them into $(OUT)/"
+	@echo "make verify   verification ladder: out/verify.tsv, work-precision and convergence plots"
+	@echo "make fuzz     fuzz the deck reader with libFuzzer (FUZZ_SECONDS, default 1800)"
 	@echo "make clean    remove what the build made"
 
 # Missing Debian packages are installed when running as root; otherwise the exact
@@ -35,19 +38,19 @@ deps:
 	fi
 
 lpfdm: lpfdm.cpp lpfdm.hpp | deps
-	$(CXX) $(WARN) $(CXXFLAGS) -o $@ lpfdm.cpp $(LIBS)
+	$(CXX) $(WARN) $(CXXFLAGS) $(OMP) -o $@ lpfdm.cpp $(LIBS)
 
 build/tests: $(TESTS) tests/main.cpp lpfdm.hpp | deps
 	@mkdir -p build
-	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(EIGEN) -o $@ tests/main.cpp $(TESTS) $(LIBS)
+	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) -o $@ tests/main.cpp $(TESTS) $(LIBS)
 
 build/tests-san: $(TESTS) tests/main.cpp lpfdm.hpp | deps
 	@mkdir -p build
-	$(CXX) $(WARN) -Werror $(SAN) $(EIGEN) -o $@ tests/main.cpp $(TESTS) $(LIBS)
+	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) -o $@ tests/main.cpp $(TESTS) $(LIBS)
 
 build/lpfdm-san: lpfdm.cpp lpfdm.hpp | deps
 	@mkdir -p build
-	$(CXX) $(WARN) -Werror $(SAN) -o $@ lpfdm.cpp $(LIBS)
+	$(CXX) $(WARN) -Werror $(SAN) $(OMP) -o $@ lpfdm.cpp $(LIBS)
 
 test: build/tests build/tests-san lpfdm build/lpfdm-san
 	@bash tests/run.sh
@@ -58,6 +61,16 @@ demo: lpfdm
 	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.png'; title='Cliff failure (Fig. 5)'; frame=-1" tools/snapshot.gp
 	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.gif'; title='Cliff failure'; delay=25" tools/animate.gp 2>/dev/null
 	@echo "pictures: $(OUT)/cliff.png $(OUT)/cliff.gif"
+
+# Verification ladder (resolutions, points per cell) against closed-form references.
+verify: lpfdm
+	@mkdir -p $(OUT)
+	bash tools/verify.sh ./lpfdm $(OUT)
+
+# Coverage-guided fuzzing of the deck reader (clang's libFuzzer).
+FUZZ_SECONDS ?= 1800
+fuzz: | deps
+	bash tools/fuzz.sh $(FUZZ_SECONDS)
 
 # The paper's three experiments (Figs. 4-6) and their pictures.
 figures: lpfdm

@@ -28,6 +28,9 @@ const char* kUsage =
     "  --refine K    K times finer lattice: same geometry in metres, dt / K, K times the steps\n"
     "  --steps N     run N steps instead of the deck's\n"
     "  --seed N      seed of the strength scatter instead of the deck's SEED\n"
+    "  --set K=V     override one deck parameter, e.g. --set MATERIAL1.C=12000, --set CLUSTER1.PPC=4,\n"
+    "                --set DAMPING.ALPHA=0 (CARD.PARAM; MATERIAL and WALL by id, CLUSTER and FIX by\n"
+    "                their order in the deck from 1); may be given several times\n"
     "  -q            quiet: no progress line and no summary\n"
     "  --help        this text\n"
     "  --version     the version\n"
@@ -39,6 +42,7 @@ struct Options {
     long refine = 1, steps = 0;
     long long seed = -1;
     bool quiet = false;
+    std::vector<std::pair<std::string, double>> settings;
 };
 
 bool parse_long(const char* s, long long lo, long long hi, long long& v) {
@@ -111,6 +115,14 @@ int main(int argc, char** argv) {
             const char* d = value("--seed");
             if (!d || !parse_long(d, 0, 9'007'199'254'740'992LL, v)) return usage_error("--seed needs a whole number >= 0");
             opt.seed = v;
+        } else if (s == "--set") {
+            const char* d = value("--set");
+            const std::string kv = d ? d : "";
+            const std::size_t eq = kv.find('=');
+            double x = 0;
+            if (eq == std::string::npos || !lpfdm::detail::parse_real(kv.substr(eq + 1), x))
+                return usage_error("--set needs CARD.PARAM=VALUE with a finite number, e.g. --set MATERIAL1.C=12000");
+            opt.settings.push_back({kv.substr(0, eq), x});
         } else if (!s.empty() && s[0] == '-' && s != "-") {
             return usage_error("unknown option '" + s + "'");
         } else {
@@ -125,6 +137,11 @@ int main(int argc, char** argv) {
     std::string text;
     lpfdm::Diagnostics diags = lpfdm::load_file(opt.deck, text);
     if (diags.empty()) diags = lpfdm::parse_deck_text(text, opt.deck, scene);
+    for (const auto& kv : opt.settings) {
+        if (!diags.empty()) break;
+        const std::string e = lpfdm::apply_setting(scene, kv.first, kv.second);
+        if (!e.empty()) return usage_error("--set " + kv.first + ": " + e);
+    }
     if (diags.empty()) {
         if (opt.refine > 1) {
             if (long(scene.mx) * opt.refine > 1'000'000 || long(scene.my) * opt.refine > 1'000'000)

@@ -39,6 +39,8 @@
 //     cell's volume into a cell, its smeared stress is their volume average instead of
 //     an overcount (that overcount made cells stiffer in proportion to their number of
 //     points, and errors grew under refinement: see tests/test_cycle.cpp).
+//   * Points move by eq. 7a/7b about node [1] by default; MOTION CENTRE (the same map
+//     about the cell centre, mirror-symmetric) and MOTION BILINEAR are options.
 //   * Eq. 12 uses the strain increments of the cell containing x_node - du_node; a
 //     lookup outside the lattice or into an empty cell compensates nothing (an empty
 //     cell has no strain: taken from nodes at rest beside moving ones, it made every
@@ -85,6 +87,17 @@
 #include <fstream>
 #include <sstream>
 #include <fmt/format.h>
+#endif
+
+// Loops over points, cells and node rows run in parallel when compiled with OpenMP
+// (-fopenmp). Every sum that reaches a result is taken in one fixed order, so the
+// output is the same, byte for byte, with any number of threads.
+#if defined(_OPENMP)
+#include <omp.h>
+#define LPFDM_STR_(...) #__VA_ARGS__
+#define LPFDM_OMP(...) _Pragma(LPFDM_STR_(__VA_ARGS__))
+#else
+#define LPFDM_OMP(...)
 #endif
 
 namespace lpfdm {
@@ -188,8 +201,15 @@ struct Output {
     Pos pos;
 };
 
+// How points move with the lattice: the paper's eq. 7a/7b (affine about node [1] of the
+// cell), the same affine map about the cell centre with the mean of the four nodal
+// increments (mirror-symmetric), or the bilinear interpolation of the four increments
+// (as in MPM). All three agree for any affine increment field.
+enum class Motion : std::uint8_t { Paper, Centre, Bilinear };
+
 // Everything a run needs; built by the deck reader or in code. Zero means unset.
 struct Scene {
+    Motion motion = Motion::Paper;
     std::string title;
     int mx = 0, my = 0;
     double cell_m = 0;                  // L
@@ -385,6 +405,40 @@ inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStre
     if (trial[i1] > trial[i2]) std::swap(i1, i2);
     const double fs = trial[i1] - trial[i3] * np + two_c_sq, ft = sig_t - trial[i3];
     if (fs >= 0 && ft >= 0) return res;
+    const double a1 = k.a1, a2 = k.a2;
+    const double tol = 1e-11 * (std::fabs(trial[0]) + std::fabs(trial[1]) + std::fabs(trial[2]) + two_c_sq + (std::isfinite(sig_t) ? sig_t : 0));
+    auto to_xy = [&](const double sg[3]) {  // same principal direction, new principal values
+        const double pn = 0.5 * (sg[1] + sg[0]), rn = 0.5 * (sg[1] - sg[0]);
+        const double c2 = r > 0 ? a / r : 1.0, s2 = r > 0 ? s.xy / r : 0.0;
+        s.xx = pn + rn * c2; s.yy = pn - rn * c2; s.xy = rn * s2; s.zz = sg[2];
+    };
+    // FLAC's closed form: shear on (sig1, sig3) or tension on sig3, chosen by h. Most
+    // corrections end here; the result is admissible when no plane is violated.
+    const double alpha_p = std::sqrt(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
+    const double h = trial[i3] - sig_t + alpha_p * (trial[i1] - sig_p);
+    const bool shear_first = fs < 0 && (ft >= 0 || !(h > 0));
+    {
+        double sg[3] = {trial[0], trial[1], trial[2]}, e1 = 0, e3 = 0;
+        if (shear_first) {  // mu D (e1 - N_psi e3), mu = -fs / (n . D m)
+            const double ns0 = st.n_psi;
+            const double d1 = a1 - a2 * ns0, d2 = a2 * (1 - ns0), d3 = a2 - a1 * ns0;
+            const double mu = -fs / (d1 - np * d3);
+            sg[i1] += mu * d1; sg[i2] += mu * d2; sg[i3] += mu * d3;
+            e1 = -mu; e3 = mu * ns0;
+        } else {  // mu D (-e3), mu = -ft / a1
+            const double mu = -ft / a1;
+            sg[i1] -= mu * a2; sg[i2] -= mu * a2; sg[i3] -= mu * a1;
+            e3 = mu;
+        }
+        const double lo = std::min({sg[0], sg[1], sg[2]}), hi = std::max({sg[0], sg[1], sg[2]});
+        if (lo - np * hi + two_c_sq >= -tol && sig_t - hi >= -tol) {
+            res.mode = shear_first ? MohrResult::Shear : MohrResult::Tension;
+            res.d_gamma_p = std::fabs(e1 - e3);
+            res.d_vol_p = e1 + e3;
+            to_xy(sg);
+            return res;
+        }
+    }
 
     // The nine planes: f = n . sig + kk >= 0, flow m.
     struct Plane { double n[3], kk, m[3]; };
@@ -407,14 +461,11 @@ inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStre
             }
     };
     build();
-    auto plane_index = [&](int i, int j) { return i * 2 + (j > i ? j - 1 : j); };  // shear plane (i, j)
-    const double a1 = k.a1, a2 = k.a2;
     auto Dm = [&](const Plane& q, double out[3]) {  // D m in principal space
         const double tr = q.m[0] + q.m[1] + q.m[2];
         for (int t = 0; t < 3; ++t) out[t] = a2 * tr + (a1 - a2) * q.m[t];
     };
     auto f_at = [&](const Plane& q, const double sg[3]) { return q.n[0] * sg[0] + q.n[1] * sg[1] + q.n[2] * sg[2] + q.kk; };
-    const double tol = 1e-11 * (std::fabs(trial[0]) + std::fabs(trial[1]) + std::fabs(trial[2]) + two_c_sq + (std::isfinite(sig_t) ? sig_t : 0));
 
     // Solves the active set act[0..na) and checks the result; true if admissible.
     double best[3] = {0, 0, 0}, best_mu[3] = {0, 0, 0};
@@ -456,13 +507,8 @@ inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStre
         return true;
     };
 
-    // FLAC's closed form: shear on (sig1, sig3) or tension on sig3, chosen by h.
-    const double alpha_p = std::sqrt(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
-    const double h = trial[i3] - sig_t + alpha_p * (trial[i1] - sig_p);
-    const bool shear_first = fs < 0 && (ft >= 0 || !(h > 0));
-    const int first = shear_first ? plane_index(i1, i3) : 6 + i3;
-    bool found = try_set(&first, 1);
-    res.mode = shear_first ? MohrResult::Shear : MohrResult::Tension;
+    // The closed form was not admissible: another single plane, then edges, corner, apex.
+    bool found = false;
     // Another single plane (the h function chose the other one), then edges, corner,
     // apex. With psi < phi the flow vectors can leave gaps between the
     // regions they span near an edge, where no non-associated return exists; there the
@@ -490,10 +536,7 @@ inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStre
     res.d_gamma_p = std::max({ep[0], ep[1], ep[2]}) - std::min({ep[0], ep[1], ep[2]});
     res.d_vol_p = ep[0] + ep[1] + ep[2];
 
-    // Back to x, y: same principal direction, new principal values.
-    const double pn = 0.5 * (best[1] + best[0]), rn = 0.5 * (best[1] - best[0]);
-    const double c2 = r > 0 ? a / r : 1.0, s2 = r > 0 ? s.xy / r : 0.0;
-    s.xx = pn + rn * c2; s.yy = pn - rn * c2; s.xy = rn * s2; s.zz = best[2];
+    to_xy(best);
     return res;
 }
 
@@ -575,6 +618,72 @@ inline double count_points(const Scene& s);
 inline void refine(Scene& s, int k) {
     s.mx *= k; s.my *= k; s.cell_m /= k; s.dt_s /= k; s.steps *= k;
     for (auto& o : s.outputs) o.every *= k;
+}
+
+// Overrides one parameter of a scene, as a parameter study does: key is CARD.PARAM with
+// the card's id (MATERIAL, WALL) or its 1-based position among cards of its kind
+// (CLUSTER, FIX) glued to it, e.g. MATERIAL1.C, CLUSTER2.PPC, WALL1.VY, DAMPING.ALPHA,
+// STEP.DT, STEP.N, GRAVITY.GY, SEED.N, GRID.L. Returns an empty string or the problem.
+inline std::string apply_setting(Scene& s, const std::string& key_in, double v) {
+    std::string key;
+    for (char ch : key_in) key += char(std::toupper(static_cast<unsigned char>(ch)));
+    const std::size_t dot = key.find('.');
+    if (dot == std::string::npos) return "expected CARD.PARAM=VALUE, e.g. MATERIAL1.C=12000";
+    std::string card = key.substr(0, dot);
+    const std::string par = key.substr(dot + 1);
+    std::size_t d = card.size();
+    while (d > 0 && std::isdigit(static_cast<unsigned char>(card[d - 1]))) --d;
+    const int num = d < card.size() ? std::atoi(card.c_str() + d) : 0;
+    card.resize(d);
+    auto whole = [&](long lo, long hi, long& out) {
+        if (v != std::floor(v) || v < double(lo) || v > double(hi)) return false;
+        out = long(v);
+        return true;
+    };
+    auto box = [&](Box& b) {
+        if (par == "X0") b.x0 = v; else if (par == "Y0") b.y0 = v; else if (par == "X1") b.x1 = v; else if (par == "Y1") b.y1 = v;
+        else return false;
+        return true;
+    };
+    long w = 0;
+    if (card == "MATERIAL") {
+        for (auto& m : s.materials) {
+            if (m.id != num) continue;
+            double* f = par == "E" ? &m.E : par == "NU" ? &m.nu : par == "RHO" ? &m.rho : par == "PHI" ? &m.phi_deg : par == "C" ? &m.c
+                      : par == "PSI" ? &m.psi_deg : par == "TENSION" ? &m.tension : par == "SOFTEN" ? &m.soften : par == "SCATTER" ? &m.scatter : nullptr;
+            if (!f) return "MATERIAL has no parameter " + par;
+            *f = v;
+            return "";
+        }
+        return "no MATERIAL with id " + std::to_string(num);
+    }
+    if (card == "CLUSTER" || card == "FIX") {
+        const std::size_t n = card == "CLUSTER" ? s.clusters.size() : s.fixes.size();
+        if (num < 1 || std::size_t(num) > n) return "there is no " + card + " number " + std::to_string(num) + " (cards of a kind count from 1)";
+        if (card == "FIX") return box(s.fixes[std::size_t(num - 1)].box) ? "" : "FIX has no parameter " + par;
+        Cluster& c = s.clusters[std::size_t(num - 1)];
+        if (par == "PPC") return whole(1, 32, w) ? (c.ppc = int(w), "") : "PPC must be a whole number in [1, 32]";
+        if (par == "MAT") return whole(1, 65535, w) ? (c.mat = int(w), "") : "MAT must be a material id";
+        return box(c.box) ? "" : "CLUSTER has no parameter " + par;
+    }
+    if (card == "WALL") {
+        for (auto& wl : s.walls) {
+            if (wl.id != num) continue;
+            if (par == "VX") { wl.vx = v; return ""; }
+            if (par == "VY") { wl.vy = v; return ""; }
+            return box(wl.box) ? "" : "WALL has no parameter " + par;
+        }
+        return "no WALL with id " + std::to_string(num);
+    }
+    if (card == "GRID" && par == "L") { s.cell_m = v; return ""; }
+    if (card == "GRID" && (par == "MX" || par == "MY")) return whole(1, 1000000, w) ? ((par == "MX" ? s.mx : s.my) = int(w), "") : "cells must be a whole number in [1, 1e6]";
+    if (card == "STEP" && par == "DT") { s.dt_s = v; return ""; }
+    if (card == "STEP" && par == "N") return whole(1, 1000000000, w) ? (s.steps = w, "") : "STEP.N must be a whole number in [1, 1e9]";
+    if (card == "GRAVITY" && par == "GX") { s.gravity_x = v; return ""; }
+    if (card == "GRAVITY" && par == "GY") { s.gravity_y = v; return ""; }
+    if (card == "DAMPING" && par == "ALPHA") { s.damping = v; return ""; }
+    if (card == "SEED" && par == "N") return whole(0, 9007199254740992L, w) ? (s.seed = std::uint64_t(w), "") : "SEED.N must be a whole number >= 0";
+    return "unknown setting " + key_in + " (e.g. MATERIAL1.C, CLUSTER1.PPC, WALL1.VY, DAMPING.ALPHA, STEP.DT, STEP.N, GRAVITY.GY, SEED.N, GRID.L)";
 }
 
 // -------------------------------------------------------------- checks ---
@@ -727,7 +836,7 @@ public:
     // Replace the constitutive model of a material by a callable of eq. 6's signature.
     void set_user_model(int mat_id, UserModel f) {
         for (std::size_t m = 0; m < sc_.materials.size(); ++m) {
-            if (sc_.materials[m].id != mat_id) continue;
+            if (sc_.materials[m].id != mat_id) continue;  // consts_ keeps its addresses: group_consts_ stays valid
             consts_[m].model = Model::User;
             consts_[m].user = int(user_models_.size());
             user_models_.push_back(std::move(f));
@@ -789,6 +898,8 @@ private:
     double L_ = 0, invL_ = 0;
     std::vector<MaterialConstants> consts_;
     std::vector<Group> groups_;
+    std::vector<const MaterialConstants*> group_consts_;  // per group, for the point loop
+    std::vector<double> row_sum_a_, row_sum_b_;            // per node row: fixed-order reductions
     std::vector<UserModel> user_models_;
     Points p_;
     // nodes
@@ -862,6 +973,9 @@ inline void Simulation::setup() {
         walls_.push_back(std::move(ws));
     }
     create_points();
+    for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
+    row_sum_a_.assign(std::size_t(my_ + 1), 0.0);
+    row_sum_b_.assign(std::size_t(my_ + 1), 0.0);
     map_to_lattice();
     strained_ = occupied_.grow(2, mx_, my_);
     live_nodes_ = {};
@@ -956,6 +1070,7 @@ inline void Simulation::create_points() {
 // rotation of eq. 5f as an exact orthogonal matrix (Cayley form: no trigonometry).
 inline void Simulation::cell_strains() {
     strained_ = occupied_.grow(2, mx_, my_);
+    LPFDM_OMP(omp parallel for schedule(static) if ((strained_.j1 - strained_.j0) * (strained_.i1 - strained_.i0) > 8192))
     for (int j = strained_.j0; j < strained_.j1; ++j)
         for (int i = strained_.i0; i < strained_.i1; ++i) {
             const int c = cell(i, j);
@@ -970,57 +1085,80 @@ inline void Simulation::cell_strains() {
 // eq. 6 (one consult of the constitutive model per point), the Jaumann rotation by
 // eq. 5f, the volume change, and the motion of eq. 7a/7b about node [1] of the cell.
 inline void Simulation::update_points() {
-    const std::size_t n = p_.size();
+    const long n = long(p_.size());
     const double X = mx_ * L_, Y = my_ * L_;
     const bool plastic = !p_.plastic_shear.empty(), scatter = !p_.c0.empty();
-    for (std::size_t k = 0; k < n; ++k) {
-        const int c = p_.cell[k];
+    const Motion motion = sc_.motion;
+    long departed = 0;
+    // User models may not be thread-safe: they are consulted from one thread.
+    LPFDM_OMP(omp parallel for schedule(static) reduction(+ : departed) if (n > 4096 && user_models_.empty()))
+    for (long k = 0; k < n; ++k) {
+        const int c = p_.cell[std::size_t(k)];
         const StrainIncrement e{exx_[c], eyy_[c], exy_[c], eyx_[c]};
-        const MaterialConstants& mc = consts_[std::size_t(groups_[p_.group[k]].mat_index)];
-        Stress s{p_.sxx[k], p_.syy[k], p_.sxy[k], p_.szz[k]};
+        const MaterialConstants& mc = *group_consts_[p_.group[std::size_t(k)]];
+        const std::size_t q = std::size_t(k);
+        Stress s{p_.sxx[q], p_.syy[q], p_.sxy[q], p_.szz[q]};
         rotate_stress(s, rc_[c], rs_[c]);  // Jaumann: the old stress turns with the material
         switch (mc.model) {
         case Model::Elastic:
-            elastic_increment(mc, e, s);
+            elastic_increment(mc, e, s);  // eq. 6
             break;
         case Model::MohrCoulomb: {
-            elastic_increment(mc, e, s);
+            elastic_increment(mc, e, s);  // eq. 6: elastic trial, then the plastic correction
             MohrStrength st;
-            const double c0 = scatter ? p_.c0[k] : mc.c;
-            st.c = p_.yielded[k] ? c0 * (1 - mc.soften) : c0;
-            st.n_phi = scatter ? p_.n_phi[k] : mc.n_phi;
+            const double c0 = scatter ? p_.c0[q] : mc.c;
+            st.c = p_.yielded[q] ? c0 * (1 - mc.soften) : c0;
+            st.n_phi = scatter ? p_.n_phi[q] : mc.n_phi;
             st.n_psi = std::min(mc.n_psi, st.n_phi);
             st.tension = mc.tension;
             const MohrResult r = mohr_coulomb_return(mc, st, s);
             if (r.mode != MohrResult::Elastic) {
-                p_.plastic_shear[k] += r.d_gamma_p;
-                p_.yielded[k] = 1;  // softening takes effect from the next consult
+                p_.plastic_shear[q] += r.d_gamma_p;
+                p_.yielded[q] = 1;  // softening takes effect from the next consult
             }
             break;
         }
         case Model::User: {
-            PointState ps{plastic ? p_.plastic_shear[k] : 0.0, plastic && p_.yielded[k]};
+            PointState ps{plastic ? p_.plastic_shear[q] : 0.0, plastic && p_.yielded[q]};
             user_models_[std::size_t(mc.user)](e, s, ps);
-            if (plastic) { p_.plastic_shear[k] = ps.plastic_shear; p_.yielded[k] = ps.yielded; }
+            if (plastic) { p_.plastic_shear[q] = ps.plastic_shear; p_.yielded[q] = ps.yielded; }
             break;
         }
         }
-        p_.sxx[k] = s.xx; p_.syy[k] = s.yy; p_.sxy[k] = s.xy; p_.szz[k] = s.zz;
-        p_.vol[k] *= 1 + e.xx + e.yy;
-        // eq. 7a/7b
-        const int i = c % mx_, j = c / mx_, n1 = node(i, j);
-        const double dx = p_.x[k] - i * L_, dy = p_.y[k] - j * L_;
-        const double x = p_.x[k] + e.xx * dx + e.xy * dy + dux_[n1];
-        const double y = p_.y[k] + e.yy * dy + e.yx * dx + duy_[n1];
-        p_.x[k] = x; p_.y[k] = y;
+        p_.sxx[q] = s.xx; p_.syy[q] = s.yy; p_.sxy[q] = s.xy; p_.szz[q] = s.zz;
+        p_.vol[q] *= 1 + e.xx + e.yy;
+        // eq. 7a/7b, about node [1] of the cell (found from the position as the cell was)
+        const double x0 = p_.x[q], y0 = p_.y[q];
+        const bool finite = x0 >= 0 && y0 >= 0;  // false only for a non-finite point the guard will name
+        const int i = finite ? std::min(mx_ - 1, int(x0 * invL_)) : c % mx_;
+        const int j = finite ? std::min(my_ - 1, int(y0 * invL_)) : c / mx_, n1 = node(i, j);
+        const double dx = x0 - i * L_, dy = y0 - j * L_;
+        double x, y;
+        if (motion == Motion::Paper) {  // eq. 7a/7b
+            x = x0 + e.xx * dx + e.xy * dy + dux_[n1];
+            y = y0 + e.yy * dy + e.yx * dx + duy_[n1];
+        } else {
+            const int n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
+            if (motion == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
+                const double cx = dx - 0.5 * L_, cy = dy - 0.5 * L_;
+                x = x0 + e.xx * cx + e.xy * cy + 0.25 * (dux_[n1] + dux_[n2] + dux_[n3] + dux_[n4]);
+                y = y0 + e.yy * cy + e.yx * cx + 0.25 * (duy_[n1] + duy_[n2] + duy_[n3] + duy_[n4]);
+            } else {  // bilinear shape functions of the cell
+                const double u = dx * invL_, v = dy * invL_;
+                const double w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
+                x = x0 + w1 * dux_[n1] + w2 * dux_[n2] + w3 * dux_[n3] + w4 * dux_[n4];
+                y = y0 + w1 * duy_[n1] + w2 * duy_[n2] + w3 * duy_[n3] + w4 * duy_[n4];
+            }
+        }
+        p_.x[q] = x; p_.y[q] = y;
         if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
-            p_.cell[k] = -1;
-            ++departed_;
+            p_.cell[q] = -1;
+            ++departed;
             continue;
         }
-        const int ni = std::min(mx_ - 1, int(x * invL_)), nj = std::min(my_ - 1, int(y * invL_));
-        p_.cell[k] = cell(ni, nj);
+        p_.cell[q] = cell(std::min(mx_ - 1, int(x * invL_)), std::min(my_ - 1, int(y * invL_)));
     }
+    departed_ = std::size_t(departed);
     if (departed_) remove_departed();
 }
 
@@ -1060,8 +1198,9 @@ inline void Simulation::map_to_lattice() {
             const int c = cell(i, j);
             cmass_[c] = cvol_[c] = svxx_[c] = svyy_[c] = svxy_[c] = 0;
         }
-    Range r{mx_, 0, my_, 0};
-    mass_in_ = 0;
+    // One pass in point order: the sums are the same whatever the number of threads.
+    int cmin = mx_ * my_, cmax = -1, imin = mx_, imax = -1;
+    double mass = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const int c = p_.cell[k];
         const double m = groups_[p_.group[k]].mass, v = p_.vol[k];
@@ -1070,12 +1209,13 @@ inline void Simulation::map_to_lattice() {
         svxx_[c] += v * p_.sxx[k];      // eq. 8
         svyy_[c] += v * p_.syy[k];
         svxy_[c] += v * p_.sxy[k];
-        mass_in_ += m;
-        const int i = c % mx_, j = c / mx_;
-        r.i0 = std::min(r.i0, i); r.i1 = std::max(r.i1, i + 1);
-        r.j0 = std::min(r.j0, j); r.j1 = std::max(r.j1, j + 1);
+        mass += m;
+        cmin = std::min(cmin, c); cmax = std::max(cmax, c);
+        const int i = p_.x[k] >= 0 ? std::min(mx_ - 1, int(p_.x[k] * invL_)) : c % mx_;
+        imin = std::min(imin, i); imax = std::max(imax, i);
     }
-    occupied_ = r.empty() ? Range{} : r;
+    mass_in_ = mass;
+    occupied_ = cmax < 0 ? Range{} : Range{imin, imax + 1, cmin / mx_, cmax / mx_ + 1};
 }
 
 // Net nodal force: each node gathers from its (up to) four cells, eq. 9 replaced by
@@ -1085,25 +1225,31 @@ inline void Simulation::nodal_forces() {
     const Range nr{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     const double inv2L = 0.5 * invL_, L2 = L_ * L_;
     const Range keep = nr.grow(1, mx_ + 1, my_ + 1);  // compensate() asks which nodes are new
+    [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
+    LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = keep.j0; j < keep.j1; ++j)
         for (int i = keep.i0; i < keep.i1; ++i) nmass_prev_[node(i, j)] = nmass_[node(i, j)];
+    // eq. 8 with the fill capped at one, applied once per cell (map_to_lattice clears it).
+    LPFDM_OMP(omp parallel for schedule(static) if (par))
+    for (int j = occupied_.j0; j < occupied_.j1; ++j)
+        for (int i = occupied_.i0; i < occupied_.i1; ++i) {
+            const int c = cell(i, j);
+            const double w = inv2L * (cvol_[c] > L2 ? L2 / cvol_[c] : 1.0);
+            svxx_[c] *= w; svyy_[c] *= w; svxy_[c] *= w;
+        }
+    LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = nr.j0; j < nr.j1; ++j)
         for (int i = nr.i0; i < nr.i1; ++i) {
+            // The node is corner [1] of cell (i, j), [2] of (i-1, j), [3] of (i, j-1) and
+            // [4] of (i-1, j-1); with b = (+-1, +-1)/2L the transpose of eq. 5 gives the
+            // signs below (X, Y, S = sum V sigma_xx, _yy, _xy, already divided by 2L).
+            // Cells outside the lattice count as empty; empty cells hold zeros.
             double fx = 0, fy = 0, m = 0;
-            // cell (i-1+di, j-1+dj) sees this node as its node [a]
-            for (int dj = 0; dj < 2; ++dj)
-                for (int di = 0; di < 2; ++di) {
-                    const int ci = i - 1 + di, cj = j - 1 + dj;
-                    if (ci < 0 || cj < 0 || ci >= mx_ || cj >= my_) continue;
-                    const int c = cell(ci, cj);
-                    if (cmass_[c] == 0) continue;  // eq. 10: empty cells contribute nothing
-                    const int a = (1 - di) + 2 * (1 - dj);  // 0..3 for nodes [1]..[4]
-                    const double sx = (a & 1) ? 1.0 : -1.0, sy = (a & 2) ? 1.0 : -1.0;
-                    const double w = inv2L * (cvol_[c] > L2 ? L2 / cvol_[c] : 1.0);  // eq. 8, fill <= 1
-                    fx -= (svxx_[c] * sx + svxy_[c] * sy) * w;
-                    fy -= (svxy_[c] * sx + svyy_[c] * sy) * w;
-                    m += cmass_[c];
-                }
+            const bool left = i > 0, right = i < mx_, below = j > 0, above = j < my_;
+            if (right && above) { const int c = cell(i, j); fx += svxx_[c] + svxy_[c]; fy += svxy_[c] + svyy_[c]; m += cmass_[c]; }
+            if (left && above) { const int c = cell(i - 1, j); fx += svxy_[c] - svxx_[c]; fy += svyy_[c] - svxy_[c]; m += cmass_[c]; }
+            if (right && below) { const int c = cell(i, j - 1); fx += svxx_[c] - svxy_[c]; fy += svxy_[c] - svyy_[c]; m += cmass_[c]; }
+            if (left && below) { const int c = cell(i - 1, j - 1); fx -= svxx_[c] + svxy_[c]; fy -= svxy_[c] + svyy_[c]; m += cmass_[c]; }
             const int n = node(i, j);
             nmass_[n] = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
             fx_[n] = fx + sc_.gravity_x * nmass_[n];
@@ -1117,6 +1263,8 @@ inline void Simulation::compensate() {
     const Range nr{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     // Nodes that gained mass this step take the mean increment of their neighbours that
     // had mass (read before those are compensated, so the order does not matter).
+    [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
+    LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = nr.j0; j < nr.j1; ++j)
         for (int i = nr.i0; i < nr.i1; ++i) {
             const int n = node(i, j);
@@ -1130,17 +1278,29 @@ inline void Simulation::compensate() {
                 }
             if (msum > 0) { dux_[n] = mx / msum; duy_[n] = my / msum; }
         }
+    LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = nr.j0; j < nr.j1; ++j)
         for (int i = nr.i0; i < nr.i1; ++i) {
             const int n = node(i, j);
             const double ux = dux_[n], uy = duy_[n];
             if ((ux == 0 && uy == 0) || nmass_prev_[n] == 0) continue;
-            const double xs = i * L_ - ux, ys = j * L_ - uy;
-            const int ci = int(std::floor(xs * invL_)), cj = int(std::floor(ys * invL_));
-            if (ci < strained_.i0 || cj < strained_.j0 || ci >= strained_.i1 || cj >= strained_.j1) continue;
-            const int c = cell(ci, cj);
-            dux_[n] = ux * (1 - exx_[c]) - uy * exy_[c];  // eq. 12a
-            duy_[n] = uy * (1 - eyy_[c]) - ux * eyx_[c];  // eq. 12b
+            // The cell holding x_node - du_node; where that point lies exactly on a cell
+            // edge (a zero component of du), the cells on both sides share the lookup,
+            // so that a mirror-symmetric motion stays symmetric.
+            const double fxs = i - ux * invL_, fys = j - uy * invL_;
+            const int ci = int(std::floor(fxs)), cj = int(std::floor(fys));
+            const int ci0 = fxs == ci ? ci - 1 : ci, cj0 = fys == cj ? cj - 1 : cj;
+            double exx = 0, eyy = 0, exy = 0, eyx = 0, w = 0;
+            for (int b = cj0; b <= cj; ++b)
+                for (int a = ci0; a <= ci; ++a) {
+                    if (a < strained_.i0 || b < strained_.j0 || a >= strained_.i1 || b >= strained_.j1) continue;
+                    const int c = cell(a, b);
+                    exx += exx_[c]; eyy += eyy_[c]; exy += exy_[c]; eyx += eyx_[c]; w += 1;
+                }
+            if (w == 0) continue;
+            if (w > 1) { exx /= w; eyy /= w; exy /= w; eyx /= w; }
+            dux_[n] = ux * (1 - exx) - uy * exy;  // eq. 12a
+            duy_[n] = uy * (1 - eyy) - ux * eyx;  // eq. 12b
         }
 }
 
@@ -1154,7 +1314,11 @@ inline void Simulation::integrate() {
     auto sgn = [](double v) { return double((v > 0) - (v < 0)); };
     double ke = 0, fmax = 0, fgross = 0, maxdu = 0;
     long counted = 0;
-    for (int j = nr.j0; j < nr.j1; ++j)
+    [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
+    // Sums are kept per node row and added in row order: the same with any thread count.
+    LPFDM_OMP(omp parallel for schedule(static) reduction(max : fmax) reduction(+ : counted) if (par))
+    for (int j = nr.j0; j < nr.j1; ++j) {
+        double row_gross = 0;
         for (int i = nr.i0; i < nr.i1; ++i) {
             const int n = node(i, j);
             const bool inside = i >= nodes_now.i0 && i < nodes_now.i1 && j >= nodes_now.j0 && j < nodes_now.j1;
@@ -1167,11 +1331,15 @@ inline void Simulation::integrate() {
             dux_[n] = ux; duy_[n] = uy;
             if (fixed_[n] != (kFixX | kFixY)) {
                 const double fxf = (fixed_[n] & kFixX) ? 0.0 : fx, fyf = (fixed_[n] & kFixY) ? 0.0 : fy;
-                fmax = std::max(fmax, std::hypot(fxf, fyf));
-                fgross += std::hypot(fx - sc_.gravity_x * m, fy - sc_.gravity_y * m) + m * g;
+                fmax = std::max(fmax, std::sqrt(fxf * fxf + fyf * fyf));
+                const double sx = fx - sc_.gravity_x * m, sy = fy - sc_.gravity_y * m;
+                row_gross += std::sqrt(sx * sx + sy * sy) + m * g;
                 ++counted;
             }
         }
+        row_sum_b_[std::size_t(j)] = row_gross;
+    }
+    for (int j = nr.j0; j < nr.j1; ++j) fgross += row_sum_b_[std::size_t(j)];
     rx_ = ry_ = 0;
     for (const std::int32_t n : fixed_nodes_) {
         if (fixed_[n] & kFixX) { dux_[n] = 0; rx_ -= fx_[n]; }
@@ -1195,13 +1363,18 @@ inline void Simulation::integrate() {
         ws.shift_i = int(std::trunc(ws.dx * invL_ * (1 + 1e-12)));
         ws.shift_j = int(std::trunc(ws.dy * invL_ * (1 + 1e-12)));
     }
-    for (int j = nr.j0; j < nr.j1; ++j)
+    LPFDM_OMP(omp parallel for schedule(static) reduction(max : maxdu) if (par))
+    for (int j = nr.j0; j < nr.j1; ++j) {
+        double row_ke = 0;
         for (int i = nr.i0; i < nr.i1; ++i) {
             const int n = node(i, j);
             if (nmass_[n] == 0) continue;
-            ke += 0.5 * nmass_[n] * (dux_[n] * dux_[n] + duy_[n] * duy_[n]);
+            row_ke += 0.5 * nmass_[n] * (dux_[n] * dux_[n] + duy_[n] * duy_[n]);
             maxdu = std::max(maxdu, std::max(std::fabs(dux_[n]), std::fabs(duy_[n])));
         }
+        row_sum_a_[std::size_t(j)] = row_ke;
+    }
+    for (int j = nr.j0; j < nr.j1; ++j) ke += row_sum_a_[std::size_t(j)];
     ke_ = ke / dt2;
     max_du_ = maxdu;
     unbal_ = counted && fgross > 0 ? fmax / (fgross / counted) : 0.0;
@@ -1470,7 +1643,7 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
     }
     Lexed lx = lex(text, file, d);
     if (!d.empty()) return d;
-    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false;
+    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false;
     Pos last{file, 1, 1};
     int cluster_cards = 0;
     for (std::size_t ci = 0; ci < lx.cards.size() && !have_end; ++ci) {
@@ -1621,6 +1794,16 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             for (const auto& prev : sc.outputs)
                 if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
             if (r.ok()) sc.outputs.push_back(o);
+        } else if (kw == "MOTION") {
+            once(have_motion);
+            const Token* t = r.field("PAPER, CENTRE or BILINEAR");
+            if (t) {
+                const std::string u = upper(t->text);
+                if (u == "PAPER") sc.motion = Motion::Paper;
+                else if (u == "CENTRE" || u == "CENTER") sc.motion = Motion::Centre;
+                else if (u == "BILINEAR") sc.motion = Motion::Bilinear;
+                else r.fail(t->pos, "unknown motion '" + t->text + "' (PAPER, CENTRE or BILINEAR)");
+            }
         } else if (kw == "END") {
             have_end = true;
             sc.end_pos = kp;
