@@ -1,0 +1,125 @@
+#!/usr/bin/env bash
+# Embedding check (issue 8): lpfdm.hpp compiles with LPFDM_NO_IO using only the C++17
+# standard library (and Eigen, if present), with fmt out of reach, and tools/embed_example.cpp
+# builds a scene in code, steps it, reads it back and plugs in a user constitutive model.
+#
+# usage: tests/check_embed.sh EXE
+#
+# EXE is the program of the run (./lpfdm or the sanitizer build); it is not run here, its
+# name only chooses the flags: a name containing "san" compiles the example with
+# AddressSanitizer and UBSan as well. Checks, one compile in all:
+#   1. the example and a copy of lpfdm.hpp, alone in a temporary directory, compile with
+#      -DLPFDM_NO_IO (no OpenMP) and link without -lfmt, while every fmt header name on
+#      the include path is a file that stops the compile with #error;
+#   2. that compile gives no warning with -Wall -Wextra -Wpedantic (an embedding project
+#      may build with -Werror);
+#   3. the compiler's -H list of included headers names no header under a fmt/ directory;
+#   4. the trap works: the header preprocessed WITHOUT LPFDM_NO_IO hits it (or uses no fmt);
+#   5. tools/embed_example.cpp is shorter than 100 lines;
+#   6. the example runs, exits 0, and each of its own checks prints "ok";
+#   7. the first rung of the teaching ladder, decks/freefall.deck, runs with EXE: the block
+#      falls at g (kinetic energy (1/2) m (g t)^2 just before the impact) and the floor
+#      first pushes at step 2433, when the lowest points enter the cells touching it.
+# One line per failure, and last "embed: N passed, M failed".
+set -u
+cd "$(dirname "$0")/.." || exit 2
+exe=${1:-./lpfdm}
+cxx=${CXX:-g++}
+passed=0 failed=0
+pass() { passed=$((passed + 1)); }
+fail() { echo "FAIL $1"; failed=$((failed + 1)); }
+finish() { echo "embed: $passed passed, $failed failed"; [ "$failed" -eq 0 ]; exit $?; }
+
+tmp=$(mktemp -d) || exit 2
+trap 'rm -rf "$tmp"' EXIT
+mkdir -p "$tmp/src" "$tmp/trap/fmt"
+cp lpfdm.hpp tools/embed_example.cpp "$tmp/src/" || { fail "cannot copy lpfdm.hpp and tools/embed_example.cpp"; finish; }
+
+# Every fmt header name (those of the installed fmt and the usual set) becomes a trap.
+names="args.h chrono.h color.h compile.h core.h format.h format-inl.h os.h ostream.h printf.h ranges.h std.h xchar.h"
+for d in /usr/include/fmt /usr/local/include/fmt; do
+    [ -d "$d" ] && names="$names $(cd "$d" && ls)"
+done
+for n in $names; do
+    echo "#error \"fmt is out of reach: <fmt/$n> must not be needed with LPFDM_NO_IO\"" >"$tmp/trap/fmt/$n"
+done
+inc=(-I"$tmp/trap")
+[ -d /usr/include/eigen3 ] && inc+=(-isystem /usr/include/eigen3)  # allowed by the contract, not required
+
+flags=(-std=c++17 -O1 -Wall -Wextra -Wpedantic -DLPFDM_NO_IO)
+variant="-O1"
+case $(basename "$exe") in
+    *san*) flags+=(-g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer); variant="ASan+UBSan" ;;
+esac
+
+# 1 + 2 + 3: one compile, with the list of included headers (-H) on stderr.
+(cd "$tmp/src" && timeout 300 "$cxx" "${flags[@]}" "${inc[@]}" -H embed_example.cpp -o embed) >"$tmp/log" 2>&1
+rc=$?
+# Compiler messages without -H's header list and its include-guard advice.
+awk '/^Multiple include guards may be useful for:/ { skip = 1; next }
+     skip && /^\// { next } { skip = 0 } !/^\.+ / { print }' "$tmp/log" >"$tmp/messages"
+if [ $rc -eq 0 ]; then
+    pass
+else
+    fail "tools/embed_example.cpp with -DLPFDM_NO_IO ($variant, no -lfmt, fmt out of reach) does not compile:"
+    head -n 20 "$tmp/messages"
+fi
+if [ $rc -eq 0 ] && ! grep -q 'warning:' "$tmp/messages"; then
+    pass
+elif [ $rc -eq 0 ]; then
+    fail "lpfdm.hpp or the example gives warnings with -DLPFDM_NO_IO -Wall -Wextra -Wpedantic (no OpenMP):"
+    grep 'warning:' "$tmp/messages" | sort -u | head -n 10
+fi
+headers=$(grep -E '^\.+ ' "$tmp/log" | sed -E 's/^\.+ //' | sort -u)
+fmt_headers=$(grep -E '(^|/)fmt/' <<<"$headers")
+if [ -n "$headers" ] && [ -z "$fmt_headers" ]; then
+    pass
+    echo "embed: $(wc -l <<<"$headers") headers included, none from fmt"
+else
+    fail "the LPFDM_NO_IO build includes fmt headers or listed none: ${fmt_headers:-(no -H list)}"
+fi
+
+# 3: the trap catches fmt when I/O is compiled in (preprocessing only).
+if "$cxx" -std=c++17 "${inc[@]}" -E -x c++ "$tmp/src/lpfdm.hpp" -o /dev/null >"$tmp/log3" 2>&1; then
+    pass  # the header uses no fmt even with I/O: nothing to catch
+elif grep -q 'fmt is out of reach' "$tmp/log3"; then
+    pass
+else
+    fail "preprocessing lpfdm.hpp without LPFDM_NO_IO failed for another reason:"; head -n 5 "$tmp/log3"
+fi
+
+# 4: short enough to read in one sitting.
+lines=$(wc -l <tools/embed_example.cpp)
+if [ "$lines" -lt 100 ]; then pass; else fail "tools/embed_example.cpp has $lines lines (must be < 100)"; fi
+
+# 5: run it; its own checks print "ok  ..." or "FAIL ...".
+if [ -x "$tmp/src/embed" ]; then
+    ASAN_OPTIONS=detect_leaks=1 timeout 300 "$tmp/src/embed" >"$tmp/run" 2>&1
+    rc=$?
+    sed 's/^/  /' "$tmp/run"
+    ok=$(grep -c '^ok ' "$tmp/run") bad=$(grep -c '^FAIL ' "$tmp/run")
+    passed=$((passed + ok)); failed=$((failed + bad))
+    if [ $rc -eq 0 ] && [ "$ok" -gt 0 ] && grep -q 'all checks passed' "$tmp/run"; then
+        pass
+    else
+        fail "the embed example exited with status $rc ($ok checks ok, $bad failed)"
+    fi
+else
+    fail "no embed example to run (the compile failed)"
+fi
+
+# 7: the free-fall deck through the program (2600 of its steps: fall and impact).
+if [ -x "$exe" ] && timeout 120 "$exe" -q -o "$tmp/ff" --steps 2600 decks/freefall.deck >"$tmp/ff.log" 2>&1; then
+    # step time ke ...: first row where the floor reaction ry (last column) is not 0, and
+    # ke of the row before it against (1/2) m (g dt n)^2, m = 2000 kg/m, dt = 2.5e-4 s.
+    verdict=$(awk '!/^#/ && NF { if ($NF != 0) { n = $1; exit } prev_n = $1; prev_ke = $3 }
+        END { v = 9.81 * 2.5e-4 * prev_n; ke = 1000 * v * v
+              ok = (n >= 2432 && n <= 2434) && (prev_ke - ke) ^ 2 <= (1e-6 * ke) ^ 2
+              printf "%s first contact at step %s (expected 2433), ke before it %.6g (free fall %.6g)\n", ok ? "ok" : "bad", n, prev_ke, ke }' \
+        "$tmp/ff/freefall_history.txt" 2>/dev/null)
+    echo "embed: freefall.deck: ${verdict#* }"
+    if [ "${verdict%% *}" = ok ]; then pass; else fail "decks/freefall.deck: ${verdict:-no history written}"; fi
+else
+    fail "decks/freefall.deck does not run with $exe: $(head -n 3 "$tmp/ff.log" 2>/dev/null)"
+fi
+finish
