@@ -10,7 +10,7 @@ SAN       = -O1 -g -fsanitize=address,undefined,float-cast-overflow -fno-omit-fr
 PACKAGES  = libeigen3-dev libfmt-dev doctest-dev gnuplot-nox
 TESTS     = $(wildcard tests/test_*.cpp)
 
-.PHONY: all deps test demo figures verify fuzz clean help
+.PHONY: all deps test demo figures verify fuzz bench clean help
 all: lpfdm
 
 help:
@@ -20,6 +20,7 @@ help:
 	@echo "make figures  run the paper's three scenes and draw them into $(OUT)/"
 	@echo "make verify   verification ladder: out/verify.tsv, work-precision and convergence plots"
 	@echo "make fuzz     fuzz the deck reader with libFuzzer (FUZZ_SECONDS, default 1800)"
+	@echo "make bench    particle-steps/s on the benchmark scenes, 1 and 2 threads, against the plain loop"
 	@echo "make clean    remove what the build made"
 
 # Missing Debian packages are installed when running as root; otherwise the exact
@@ -66,6 +67,10 @@ demo: lpfdm
 verify: lpfdm
 	@mkdir -p $(OUT)
 	bash tools/verify.sh ./lpfdm $(OUT)
+
+# Speed on the named benchmark scenes (decks/bench_*.deck), with the plain loop beside it.
+bench: lpfdm
+	bash tools/bench.sh ./lpfdm 5
 
 # Coverage-guided fuzzing of the deck reader (clang's libFuzzer).
 FUZZ_SECONDS ?= 1800

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -31,6 +32,8 @@ const char* kUsage =
     "  --set K=V     override one deck parameter, e.g. --set MATERIAL1.C=12000, --set CLUSTER1.PPC=4,\n"
     "                --set DAMPING.ALPHA=0 (CARD.PARAM; MATERIAL and WALL by id, CLUSTER and FIX by\n"
     "                their order in the deck from 1); may be given several times\n"
+    "  --threads N   use N threads (default: all cores; the output is the same for any N)\n"
+    "  --profile     print the time of each phase of the cycle, peak memory and bytes per point\n"
     "  -q            quiet: no progress line and no summary\n"
     "  --help        this text\n"
     "  --version     the version\n"
@@ -41,7 +44,8 @@ struct Options {
     std::string deck, outdir = ".";
     long refine = 1, steps = 0;
     long long seed = -1;
-    bool quiet = false;
+    bool quiet = false, profile = false;
+    long threads = 0;
     std::vector<std::pair<std::string, double>> settings;
 };
 
@@ -99,6 +103,7 @@ int main(int argc, char** argv) {
         if (s == "--help" || s == "-h") { std::fputs(kUsage, stdout); return 0; }
         if (s == "--version") { std::printf("lpfdm %s\n", lpfdm::kVersion); return 0; }
         if (s == "-q") { opt.quiet = true; continue; }
+        if (s == "--profile") { opt.profile = true; continue; }
         if (s == "-o") {
             const char* d = value("-o");
             if (!d) return usage_error("-o needs a directory");
@@ -115,6 +120,10 @@ int main(int argc, char** argv) {
             const char* d = value("--seed");
             if (!d || !parse_long(d, 0, 9'007'199'254'740'992LL, v)) return usage_error("--seed needs a whole number >= 0");
             opt.seed = v;
+        } else if (s == "--threads") {
+            const char* d = value("--threads");
+            if (!d || !parse_long(d, 1, 1024, v)) return usage_error("--threads needs a whole number from 1 to 1024");
+            opt.threads = long(v);
         } else if (s == "--set") {
             const char* d = value("--set");
             const std::string kv = d ? d : "";
@@ -170,7 +179,14 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "lpfdm: error: cannot create the output directory '%s': %s\n", opt.outdir.c_str(), std::strerror(errno));
         return kExitBadInput;
     }
+#if defined(_OPENMP)
+    if (opt.threads > 0) omp_set_num_threads(int(opt.threads));
+    const int nthreads = omp_get_max_threads();
+#else
+    const int nthreads = 1;
+#endif
     lpfdm::Simulation sim(scene);
+    sim.set_profiling(opt.profile);
     std::vector<OutFile> outs;
     for (const auto& o : sim.scene().outputs) {
         OutFile of;
@@ -260,6 +276,17 @@ int main(int argc, char** argv) {
     if (progress) std::fputc('\n', stderr);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!finish_outputs(note) && status == 0) status = kExitBadInput;
+    if (opt.profile) {
+        struct rusage ru;
+        getrusage(RUSAGE_SELF, &ru);
+        double total = 0;
+        for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
+        std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays\n", nthreads, double(ru.ru_maxrss) / 1024.0,
+                    sim.bytes_per_point());
+        for (int k = 0; k < lpfdm::Simulation::kPhases; ++k)
+            std::printf("profile: %-15s %8.3f s  %5.1f %%\n", lpfdm::Simulation::phase_name(k), sim.phase_seconds()[k],
+                        total > 0 ? 100 * sim.phase_seconds()[k] / total : 0.0);
+    }
     if (!opt.quiet)
         std::printf("lpfdm: %ld steps, %zu points, %.3f s, %.3g particle-steps/s; mass inside %.9g, outflow %.9g, initial %.9g kg/m\n",
                     sim.step_count(), sim.points().size(), wall, wall > 0 ? particle_steps / wall : 0.0, sim.mass_inside(), sim.mass_outflow(),

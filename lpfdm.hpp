@@ -71,6 +71,7 @@
 #define LPFDM_HPP
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -788,45 +789,67 @@ public:
 
     // One LPFDM cycle (paper section 2), one function per phase.
     void step() {
+        if (profiling_) { step_profiled(); return; }
         cell_strains();    // eq. 5a-5f
-        update_points();   // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b
-        map_to_lattice();  // eq. 7, 8 (the lattice is back at its original position)
+        if (serial()) {
+            advance_points<true>();  // update_points and map_to_lattice in one pass
+        } else {
+            update_points();   // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b
+            map_to_lattice();  // eq. 7, 8 (the lattice is back at its original position)
+        }
         nodal_forces();    // virtual work transpose of eq. 5, gravity eq. 10
         compensate();      // eq. 12
         integrate();       // eq. 13-14, fixed nodes, moving walls
         ++step_;
     }
 
+    // Wall-clock seconds spent in each phase of step() while profiling is on.
+    static constexpr int kPhases = 6;
+    static const char* phase_name(int k) {
+        static const char* names[kPhases] = {"cell_strains", "update_points", "map_to_lattice", "nodal_forces", "compensate", "integrate"};
+        return names[k];
+    }
+    void set_profiling(bool on) { profiling_ = on; }                 // time each phase from now on
+    const double* phase_seconds() const { return phase_s_; }          // kPhases entries, in step order
+    // Bytes the point arrays hold per point (capacity, all arrays).
+    double bytes_per_point() const {
+        const double n = double(std::max<std::size_t>(1, p_.size()));
+        double b = 0;
+        for (const auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol, &p_.plastic_shear, &p_.c0, &p_.n_phi}) b += double(v->capacity()) * 8;
+        b += double(p_.cell.capacity() + p_.id.capacity()) * 4 + double(p_.group.capacity()) * 2 + double(p_.yielded.capacity());
+        return b / n;
+    }
+
     // Read access for writers, tests and embedding programs.
-    const Scene& scene() const { return sc_; }
-    const Points& points() const { return p_; }
+    const Scene& scene() const { return sc_; }                        // the scene as run (after set_* calls)
+    const Points& points() const { return p_; }                       // the points, structure of arrays
     Points& points() { return p_; }  // e.g. to set an initial stress field before the first step
-    const std::vector<Group>& groups() const { return groups_; }
-    const std::vector<WallState>& walls() const { return walls_; }
-    long step_count() const { return step_; }
-    double time() const { return step_ * sc_.dt_s; }
-    double kinetic_energy() const { return ke_; }
-    double mass_inside() const { return mass_in_; }
-    double mass_outflow() const { return mass_out_; }
-    double mass_initial() const { return mass0_; }
-    double unbalanced_ratio() const { return unbal_; }
-    double reaction_x() const { return rx_; }
+    const std::vector<Group>& groups() const { return groups_; }      // material and mass of each point group
+    const std::vector<WallState>& walls() const { return walls_; }    // force and travel of each wall, deck order
+    long step_count() const { return step_; }                         // steps taken
+    double time() const { return step_ * sc_.dt_s; }                 // model time [s]
+    double kinetic_energy() const { return ke_; }                     // nodal, at the last half step [J/m]
+    double mass_inside() const { return mass_in_; }                   // [kg/m]
+    double mass_outflow() const { return mass_out_; }                 // of the points that left [kg/m]
+    double mass_initial() const { return mass0_; }                    // inside + outflow, exactly
+    double unbalanced_ratio() const { return unbal_; }                // max unbalanced / mean gross nodal force
+    double reaction_x() const { return rx_; }                         // sum of fixed-node reactions [N/m]
     double reaction_y() const { return ry_; }
-    int mx() const { return mx_; }
-    int my() const { return my_; }
-    double cell_size() const { return L_; }
-    int node(int i, int j) const { return j * (mx_ + 1) + i; }
-    int cell(int i, int j) const { return j * mx_ + i; }
+    int mx() const { return mx_; }                                    // cells in x
+    int my() const { return my_; }                                    // cells in y
+    double cell_size() const { return L_; }                           // L [m]
+    int node(int i, int j) const { return j * (mx_ + 1) + i; }        // index of node (i, j)
+    int cell(int i, int j) const { return j * mx_ + i; }              // index of cell (i, j)
     double point_mass(std::size_t k) const { return groups_[p_.group[k]].mass; }
     int material_id(std::size_t k) const { return sc_.materials[groups_[p_.group[k]].mat_index].id; }
 
     // Nodal and cell fields (whole lattice, row-major).
-    std::vector<double>& du_x() { return dux_; }
+    std::vector<double>& du_x() { return dux_; }                      // nodal increments du_x [m]
     std::vector<double>& du_y() { return duy_; }
-    const std::vector<double>& force_x() const { return fx_; }
+    const std::vector<double>& force_x() const { return fx_; }        // net nodal force, gravity included [N/m]
     const std::vector<double>& force_y() const { return fy_; }
-    const std::vector<double>& node_mass() const { return nmass_; }
-    const std::vector<double>& cell_mass() const { return cmass_; }
+    const std::vector<double>& node_mass() const { return nmass_; }   // lumped mass, eq. 10 [kg/m]
+    const std::vector<double>& cell_mass() const { return cmass_; }   // eq. 7 [kg/m]
 
     // Changes a wall's velocity from the next step on (staged loading; 0 holds it).
     void set_wall_velocity(int wall_id, double vx, double vy) {
@@ -859,25 +882,14 @@ public:
         return e;
     }
 
-    // Nodal forces of one cell from its smeared stress (design: virtual work, the
-    // transpose of eq. 5): F[a] = -L^2 (sig . b[a]), b_x = (-1,+1,-1,+1)/2L,
-    // b_y = (-1,-1,+1,+1)/2L for nodes [1]..[4]. sv = sum V sigma = L^2 <sigma>_J.
-    static void cell_forces(double svxx, double svyy, double svxy, double inv2L, double fx[4], double fy[4]) {
-        static constexpr double bx[4] = {-1, 1, -1, 1}, by[4] = {-1, -1, 1, 1};
-        for (int a = 0; a < 4; ++a) {
-            fx[a] = -(svxx * bx[a] + svxy * by[a]) * inv2L;
-            fy[a] = -(svxy * bx[a] + svyy * by[a]) * inv2L;
-        }
-    }
-
     // The point a non-finite value was first seen at, or -1.
     long first_nonfinite_point() const {
         for (std::size_t k = 0; k < p_.size(); ++k)
             if (!std::isfinite(p_.x[k] + p_.y[k] + p_.sxx[k] + p_.syy[k] + p_.sxy[k] + p_.szz[k] + p_.vol[k])) return long(k);
         return -1;
     }
-    bool healthy() const { return std::isfinite(ke_) && max_du_ <= 0.5 * L_; }
-    double max_du() const { return max_du_; }
+    bool healthy() const { return std::isfinite(ke_) && max_du_ <= 0.5 * L_; }  // finite, no node beyond half a cell a step
+    double max_du() const { return max_du_; }                         // largest nodal increment of the last step [m]
 
     // The phases of step(), in order; public so that tests and lessons can step
     // through one cycle. Normal use calls step().
@@ -892,6 +904,28 @@ private:
     void setup();
     void create_points();
     void remove_departed();
+    void clear_cells();
+    template <bool Fused> void advance_points();
+    bool serial() const {
+#if defined(_OPENMP)
+        return omp_get_max_threads() == 1 || p_.size() <= 4096 || !user_models_.empty();
+#else
+        return true;
+#endif
+    }
+    void step_profiled() {
+        using clock = std::chrono::steady_clock;
+        void (Simulation::*phase[kPhases])() = {&Simulation::cell_strains, &Simulation::update_points, &Simulation::map_to_lattice,
+                                                &Simulation::nodal_forces, &Simulation::compensate, &Simulation::integrate};
+        for (int k = 0; k < kPhases; ++k) {
+            const auto t0 = clock::now();
+            (this->*phase[k])();
+            phase_s_[k] += std::chrono::duration<double>(clock::now() - t0).count();
+        }
+        ++step_;
+    }
+    bool profiling_ = false;
+    double phase_s_[kPhases] = {0, 0, 0, 0, 0, 0};
 
     Scene sc_;
     int mx_ = 0, my_ = 0;
@@ -1084,14 +1118,22 @@ inline void Simulation::cell_strains() {
 
 // eq. 6 (one consult of the constitutive model per point), the Jaumann rotation by
 // eq. 5f, the volume change, and the motion of eq. 7a/7b about node [1] of the cell.
-inline void Simulation::update_points() {
+inline void Simulation::update_points() { advance_points<false>(); }
+
+// The points' phase; Fused also does map_to_lattice's sums in the same pass (serial
+// runs: one read of the points instead of two; the sums are taken in the same order).
+template <bool Fused>
+inline void Simulation::advance_points() {
+    if constexpr (Fused) clear_cells();
+    int cmin = mx_ * my_, cmax = -1, imin = mx_, imax = -1;
+    double mass = 0;
     const long n = long(p_.size());
     const double X = mx_ * L_, Y = my_ * L_;
     const bool plastic = !p_.plastic_shear.empty(), scatter = !p_.c0.empty();
     const Motion motion = sc_.motion;
     long departed = 0;
     // User models may not be thread-safe: they are consulted from one thread.
-    LPFDM_OMP(omp parallel for schedule(static) reduction(+ : departed) if (n > 4096 && user_models_.empty()))
+    LPFDM_OMP(omp parallel for schedule(static) reduction(+ : departed) if (!Fused && n > 4096 && user_models_.empty()))
     for (long k = 0; k < n; ++k) {
         const int c = p_.cell[std::size_t(k)];
         const StrainIncrement e{exx_[c], eyy_[c], exy_[c], eyx_[c]};
@@ -1156,10 +1198,26 @@ inline void Simulation::update_points() {
             ++departed;
             continue;
         }
-        p_.cell[q] = cell(std::min(mx_ - 1, int(x * invL_)), std::min(my_ - 1, int(y * invL_)));
+        const int ni = std::min(mx_ - 1, int(x * invL_)), cn = cell(ni, std::min(my_ - 1, int(y * invL_)));
+        p_.cell[q] = cn;
+        if constexpr (Fused) {
+            const double m = groups_[p_.group[q]].mass, v = p_.vol[q];
+            cmass_[cn] += m;                // eq. 7
+            cvol_[cn] += v;
+            svxx_[cn] += v * s.xx;          // eq. 8
+            svyy_[cn] += v * s.yy;
+            svxy_[cn] += v * s.xy;
+            mass += m;
+            cmin = std::min(cmin, cn); cmax = std::max(cmax, cn);
+            imin = std::min(imin, ni); imax = std::max(imax, ni);
+        }
     }
     departed_ = std::size_t(departed);
     if (departed_) remove_departed();
+    if constexpr (Fused) {
+        mass_in_ = mass;
+        occupied_ = cmax < 0 ? Range{} : Range{imin, imax + 1, cmin / mx_, cmax / mx_ + 1};
+    }
 }
 
 // Points that left the lattice leave the cycle; their mass becomes outflow. The order
@@ -1192,12 +1250,16 @@ inline void Simulation::remove_departed() {
 
 // eq. 7 (cell mass) and eq. 8 (stress smeared over the cell, sum V sigma / L^2; kept
 // here as sum V sigma and sum V; nodal_forces divides by max(L^2, sum V)).
-inline void Simulation::map_to_lattice() {
+inline void Simulation::clear_cells() {
     for (int j = occupied_.j0; j < occupied_.j1; ++j)
         for (int i = occupied_.i0; i < occupied_.i1; ++i) {
             const int c = cell(i, j);
             cmass_[c] = cvol_[c] = svxx_[c] = svyy_[c] = svxy_[c] = 0;
         }
+}
+
+inline void Simulation::map_to_lattice() {
+    clear_cells();
     // One pass in point order: the sums are the same whatever the number of threads.
     int cmin = mx_ * my_, cmax = -1, imin = mx_, imax = -1;
     double mass = 0;
@@ -1288,8 +1350,16 @@ inline void Simulation::compensate() {
             // edge (a zero component of du), the cells on both sides share the lookup,
             // so that a mirror-symmetric motion stays symmetric.
             const double fxs = i - ux * invL_, fys = j - uy * invL_;
-            const int ci = int(std::floor(fxs)), cj = int(std::floor(fys));
+            int ci = int(fxs), cj = int(fys);  // floor without a library call (|du| < L/2)
+            ci -= fxs < ci; cj -= fys < cj;
             const int ci0 = fxs == ci ? ci - 1 : ci, cj0 = fys == cj ? cj - 1 : cj;
+            if (ci0 == ci && cj0 == cj) {  // the usual case: one cell
+                if (ci < strained_.i0 || cj < strained_.j0 || ci >= strained_.i1 || cj >= strained_.j1) continue;
+                const int c = cell(ci, cj);
+                dux_[n] = ux * (1 - exx_[c]) - uy * exy_[c];  // eq. 12a
+                duy_[n] = uy * (1 - eyy_[c]) - ux * eyx_[c];  // eq. 12b
+                continue;
+            }
             double exx = 0, eyy = 0, exy = 0, eyx = 0, w = 0;
             for (int b = cj0; b <= cj; ++b)
                 for (int a = ci0; a <= ci; ++a) {

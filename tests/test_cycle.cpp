@@ -75,24 +75,30 @@ TEST_CASE("eq. 5: a rigid translation strains nothing; a small rigid rotation gi
 }
 
 TEST_CASE("nodal forces are the virtual-work transpose of eq. 5: sum F.du = -L^2 sigma:d_eps") {
-    Scene s = block_scene(1, 1, 0.7, {0, 0, 0.7, 0.7});
+    // One full cell (one point of volume L^2) with a random stress; nodal_forces() turns
+    // it into forces, and any nodal increments must do the work of the stress on eq. 5's strain.
+    const double L = 0.7;
+    Scene s = block_scene(1, 1, L, {0, 0, L, L}, 1);
     Simulation sim(s);
     Noise rnd;
-    const double L = 0.7;
+    Points& p = sim.points();
+    REQUIRE(p.vol[0] == doctest::Approx(L * L).epsilon(1e-12));
     for (int trial = 0; trial < 200; ++trial) {
-        for (int n = 0; n < 4; ++n) { sim.du_x()[std::size_t(n)] = 1e-3 * rnd(); sim.du_y()[std::size_t(n)] = 1e-3 * rnd(); }
         const double sxx = 1e5 * rnd(), syy = 1e5 * rnd(), sxy = 1e5 * rnd();
-        double fx[4], fy[4];
-        Simulation::cell_forces(L * L * sxx, L * L * syy, L * L * sxy, 0.5 / L, fx, fy);
-        const int nodes[4] = {sim.node(0, 0), sim.node(1, 0), sim.node(0, 1), sim.node(1, 1)};  // [1]..[4]
-        double work = 0;
-        for (int a = 0; a < 4; ++a) work += fx[a] * sim.du_x()[std::size_t(nodes[a])] + fy[a] * sim.du_y()[std::size_t(nodes[a])];
+        p.sxx[0] = sxx; p.syy[0] = syy; p.sxy[0] = sxy;
+        sim.map_to_lattice();
+        sim.nodal_forces();
+        for (int n = 0; n < 4; ++n) { sim.du_x()[std::size_t(n)] = 1e-3 * rnd(); sim.du_y()[std::size_t(n)] = 1e-3 * rnd(); }
+        double work = 0, sum_x = 0, sum_y = 0;
+        for (int n = 0; n < 4; ++n) {
+            work += sim.force_x()[std::size_t(n)] * sim.du_x()[std::size_t(n)] + sim.force_y()[std::size_t(n)] * sim.du_y()[std::size_t(n)];
+            sum_x += sim.force_x()[std::size_t(n)];
+            sum_y += sim.force_y()[std::size_t(n)];
+        }
         const StrainIncrement e = sim.strain_of_cell(0, 0);
-        const double expect = -L * L * (sxx * e.xx + syy * e.yy + sxy * e.gamma());
+        const double expect = -p.vol[0] * (sxx * e.xx + syy * e.yy + sxy * e.gamma());
         CHECK(work == doctest::Approx(expect).epsilon(1e-12).scale(1e-6));
-        double sum_x = 0, sum_y = 0;  // a cell's forces are self-equilibrated
-        for (int a = 0; a < 4; ++a) { sum_x += fx[a]; sum_y += fy[a]; }
-        CHECK(std::fabs(sum_x) < 1e-9);
+        CHECK(std::fabs(sum_x) < 1e-9);  // a cell's forces are self-equilibrated
         CHECK(std::fabs(sum_y) < 1e-9);
     }
 }

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# make bench: particle-steps per second on the named benchmark scenes, 1 and 2 threads,
+# median of 5 runs (with min and max), peak memory, bytes per point and the time split by
+# phase. With git history, the same scenes also run on the plain serial loop the
+# optimised cycle replaced (BEFORE, default the commit that introduced the benchmark's
+# predecessor), side by side, and the ratio is printed.
+#   bash tools/bench.sh [EXE] [RUNS]
+set -u
+cd "$(dirname "$0")/.."
+exe=${1:-./lpfdm}; runs=${2:-5}
+before_rev=${BEFORE:-4fdf066}
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+# name | deck | extra options (the million-point scenes run fewer steps)
+scenes=(
+  "elastic-65k|decks/bench_elastic.deck|"
+  "mohr-65k|decks/bench_mohr.deck|"
+  "elastic-1M|decks/bench_elastic.deck|--refine 4 --steps 60"
+  "mohr-1M|decks/bench_mohr.deck|--refine 4 --steps 60"
+)
+before=""
+if git rev-parse -q --verify "$before_rev^{commit}" >/dev/null 2>&1; then
+  mkdir -p "$tmp/before"
+  git show "$before_rev:lpfdm.hpp" >"$tmp/before/lpfdm.hpp" && git show "$before_rev:lpfdm.cpp" >"$tmp/before/lpfdm.cpp" &&
+    g++ -std=c++17 -O2 -o "$tmp/before/lpfdm" "$tmp/before/lpfdm.cpp" -lfmt && before="$tmp/before/lpfdm"
+fi
+rate() {  # exe, threads, deck, options -> particle-steps/s of one run
+  OMP_NUM_THREADS=$2 "$1" -o "$tmp/o" $4 "$3" 2>/dev/null | sed -nE 's/.* ([0-9.e+]+) particle-steps\/s.*/\1/p'
+}
+stats() {  # numbers on stdin -> "median min max"
+  sort -g | awk '{a[NR]=$1} END {if (NR == 0) {print "- - -"; exit} m = (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2; printf "%.3g %.3g %.3g\n", m, a[1], a[NR]}'
+}
+printf "%-12s %-7s %10s %10s %10s %9s %9s\n" scene threads median min max "peak_MiB" "B/point"
+for sc in "${scenes[@]}"; do
+  IFS='|' read -r name deck opts <<<"$sc"
+  for t in 1 2; do
+    med=$(for r in $(seq "$runs"); do rate "$exe" "$t" "$deck" "$opts"; done | stats)
+    prof=$(OMP_NUM_THREADS=$t "$exe" --profile -q -o "$tmp/o" $opts "$deck" 2>/dev/null)
+    mem=$(sed -nE 's/.*peak memory ([0-9.]+) MiB, ([0-9.]+) bytes per point.*/\1 \2/p' <<<"$prof")
+    printf "%-12s %-7s %10s %10s %10s %9s %9s\n" "$name" "$t" $med $mem
+    echo "$prof" | grep -E "^profile: [a-z_]+ " | sed 's/^profile:/      /'
+  done
+  if [ -n "$before" ]; then
+    old=$(for r in $(seq "$runs"); do rate "$before" 1 "$deck" "$opts"; done | stats)
+    new1=$(for r in $(seq "$runs"); do rate "$exe" 1 "$deck" "$opts"; done | stats)
+    printf "%-12s %-7s %10s %10s %10s   (plain serial loop of %s; ratio now/before %s)\n" "$name" before $old "$before_rev" \
+      "$(awk -v a="${new1%% *}" -v b="${old%% *}" 'BEGIN {printf "%.2f", a / b}')"
+  fi
+done
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load now $(cut -d' ' -f1-3 /proc/loadavg)"
