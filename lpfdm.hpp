@@ -41,6 +41,9 @@
 //     points, and errors grew under refinement: see tests/test_cycle.cpp).
 //   * Points move by eq. 7a/7b about node [1] by default; MOTION CENTRE (the same map
 //     about the cell centre, mirror-symmetric) and MOTION BILINEAR are options.
+//   * Eq. 5's one strain per cell does not see the checkerboard pattern (+1,-1,-1,+1) of
+//     nodal increments: nothing resists it. HOURGLASS kappa (off by default) adds the
+//     smallest remedy, a viscous force on that pattern alone (see nodal_forces).
 //   * Eq. 12 uses the strain increments of the cell containing x_node - du_node; a
 //     lookup outside the lattice or into an empty cell compensates nothing (an empty
 //     cell has no strain: taken from nodes at rest beside moving ones, it made every
@@ -211,6 +214,7 @@ enum class Motion : std::uint8_t { Paper, Centre, Bilinear };
 // Everything a run needs; built by the deck reader or in code. Zero means unset.
 struct Scene {
     Motion motion = Motion::Paper;
+    double hourglass = 0;               // kappa: viscous control of eq. 5's zero-energy mode (0: off)
     std::string title;
     int mx = 0, my = 0;
     double cell_m = 0;                  // L
@@ -683,6 +687,7 @@ inline std::string apply_setting(Scene& s, const std::string& key_in, double v) 
     if (card == "GRAVITY" && par == "GX") { s.gravity_x = v; return ""; }
     if (card == "GRAVITY" && par == "GY") { s.gravity_y = v; return ""; }
     if (card == "DAMPING" && par == "ALPHA") { s.damping = v; return ""; }
+    if (card == "HOURGLASS" && par == "KAPPA") { s.hourglass = v; return ""; }
     if (card == "SEED" && par == "N") return whole(0, 9007199254740992L, w) ? (s.seed = std::uint64_t(w), "") : "SEED.N must be a whole number >= 0";
     return "unknown setting " + key_in + " (e.g. MATERIAL1.C, CLUSTER1.PPC, WALL1.VY, DAMPING.ALPHA, STEP.DT, STEP.N, GRAVITY.GY, SEED.N, GRID.L)";
 }
@@ -765,6 +770,7 @@ inline Diagnostics validate(const Scene& s) {
         }
     }
     if (s.damping < 0 || s.damping >= 1) err(s.damping_pos, "DAMPING must lie in [0, 1)");
+    if (!(s.hourglass >= 0 && s.hourglass <= 1)) err(s.grid_pos, "HOURGLASS kappa must lie in [0, 1]");
     for (const auto& o : s.outputs) {
         if (o.every < 0) err(o.pos, "EVERY must be >= 1");
         if (o.kind == Output::History && s.steps >= 1 && o.every > s.steps)
@@ -943,6 +949,7 @@ private:
     // cells
     std::vector<double> cmass_, cvol_, svxx_, svyy_, svxy_;
     std::vector<double> exx_, eyy_, exy_, eyx_, rc_, rs_;  // strain and rotation per cell
+    std::vector<double> hgx_, hgy_;                        // hourglass increment per cell (HOURGLASS only)
     Range occupied_;   // cells holding points after the last mapping
     Range strained_;   // cells whose strains are current
     Range live_nodes_; // nodes that may hold a non-zero du
@@ -983,6 +990,7 @@ inline void Simulation::setup() {
     fixed_.assign(nodes, 0);
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &exx_, &eyy_, &exy_, &eyx_, &rs_}) v->assign(cells, 0.0);
     rc_.assign(cells, 1.0);
+    if (sc_.hourglass > 0) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
     for (const auto& m : sc_.materials) consts_.push_back(constants_of(m));
 
     const double tol = 1e-3 * L_;
@@ -1113,6 +1121,11 @@ inline void Simulation::cell_strains() {
             const StrainIncrement e = cmass_[c] > 0 ? strain_of_cell(i, j) : StrainIncrement{};
             exx_[c] = e.xx; eyy_[c] = e.yy; exy_[c] = e.xy; eyx_[c] = e.yx;
             jaumann_rotation(e.theta(), rc_[c], rs_[c]);  // eq. 5f
+            if (!hgx_.empty()) {  // the checkerboard part h = (+1, -1, -1, +1)/4 that eq. 5 cannot see
+                const int n1 = node(i, j), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
+                hgx_[c] = cmass_[c] > 0 ? 0.25 * (dux_[n1] - dux_[n2] - dux_[n3] + dux_[n4]) : 0.0;
+                hgy_[c] = cmass_[c] > 0 ? 0.25 * (duy_[n1] - duy_[n2] - duy_[n3] + duy_[n4]) : 0.0;
+            }
         }
 }
 
@@ -1312,6 +1325,22 @@ inline void Simulation::nodal_forces() {
             if (left && above) { const int c = cell(i - 1, j); fx += svxy_[c] - svxx_[c]; fy += svyy_[c] - svxy_[c]; m += cmass_[c]; }
             if (right && below) { const int c = cell(i, j - 1); fx += svxx_[c] - svxy_[c]; fy += svxy_[c] - svyy_[c]; m += cmass_[c]; }
             if (left && below) { const int c = cell(i - 1, j - 1); fx -= svxx_[c] + svxy_[c]; fy -= svxy_[c] + svyy_[c]; m += cmass_[c]; }
+            if (!hgx_.empty()) {
+                // HOURGLASS: a viscous force on the zero-energy mode only, F[a] = -kappa
+                // (M_J / 4) q_J h[a] / dt^2. It is orthogonal to every affine increment
+                // field (sum h = sum h x = sum h y = 0), so uniform strain and rigid motion
+                // feel nothing, and it only ever takes energy out.
+                const double k = sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s);
+                auto hg = [&](int ci, int cj, double h) {
+                    const int c = cell(ci, cj);
+                    fx -= k * cmass_[c] * hgx_[c] * h;
+                    fy -= k * cmass_[c] * hgy_[c] * h;
+                };
+                if (right && above) hg(i, j, 1);
+                if (left && above) hg(i - 1, j, -1);
+                if (right && below) hg(i, j - 1, -1);
+                if (left && below) hg(i - 1, j - 1, 1);
+            }
             const int n = node(i, j);
             nmass_[n] = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
             fx_[n] = fx + sc_.gravity_x * nmass_[n];
@@ -1713,7 +1742,7 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
     }
     Lexed lx = lex(text, file, d);
     if (!d.empty()) return d;
-    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false;
+    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_hourglass = false;
     Pos last{file, 1, 1};
     int cluster_cards = 0;
     for (std::size_t ci = 0; ci < lx.cards.size() && !have_end; ++ci) {
@@ -1864,6 +1893,11 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             for (const auto& prev : sc.outputs)
                 if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
             if (r.ok()) sc.outputs.push_back(o);
+        } else if (kw == "HOURGLASS") {
+            once(have_hourglass);
+            const Token* t = r.peek();
+            sc.hourglass = r.real("kappa");
+            if (r.ok() && !(sc.hourglass >= 0 && sc.hourglass <= 1)) r.fail(t->pos, "HOURGLASS kappa must lie in [0, 1]");
         } else if (kw == "MOTION") {
             once(have_motion);
             const Token* t = r.field("PAPER, CENTRE or BILINEAR");
