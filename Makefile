@@ -41,19 +41,30 @@ deps:
 lpfdm: lpfdm.cpp lpfdm.hpp | deps
 	$(CXX) $(WARN) $(CXXFLAGS) $(OMP) -o $@ lpfdm.cpp $(LIBS)
 
-build/tests: $(TESTS) tests/main.cpp lpfdm.hpp | deps
-	@mkdir -p build
-	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) -o $@ tests/main.cpp $(TESTS) $(LIBS)
+# The tests are built one object per file, so that both cores compile at once.
+TEST_OBJ = $(patsubst tests/%.cpp,build/o2/%.o,$(TESTS) tests/main.cpp)
+SAN_OBJ  = $(patsubst tests/%.cpp,build/san/%.o,$(TESTS) tests/main.cpp)
 
-build/tests-san: $(TESTS) tests/main.cpp lpfdm.hpp | deps
-	@mkdir -p build
-	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) -o $@ tests/main.cpp $(TESTS) $(LIBS)
+build/o2/%.o: tests/%.cpp lpfdm.hpp | deps
+	@mkdir -p build/o2
+	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) -c -o $@ $<
+
+build/san/%.o: tests/%.cpp lpfdm.hpp | deps
+	@mkdir -p build/san
+	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) -c -o $@ $<
+
+build/tests: $(TEST_OBJ)
+	$(CXX) $(CXXFLAGS) $(OMP) -o $@ $^ $(LIBS)
+
+build/tests-san: $(SAN_OBJ)
+	$(CXX) $(SAN) $(OMP) -o $@ $^ $(LIBS)
 
 build/lpfdm-san: lpfdm.cpp lpfdm.hpp | deps
 	@mkdir -p build
 	$(CXX) $(WARN) -Werror $(SAN) $(OMP) -o $@ lpfdm.cpp $(LIBS)
 
-test: build/tests build/tests-san lpfdm build/lpfdm-san
+test: | deps
+	@$(MAKE) --no-print-directory -j$$(nproc) build/tests build/tests-san lpfdm build/lpfdm-san
 	@bash tests/run.sh
 
 demo: lpfdm

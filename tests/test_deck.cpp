@@ -961,3 +961,47 @@ TEST_CASE("deck: a FIX box far past the lattice holds the same nodes as a box ju
     };
     CHECK(settle("FIX XY -1E10 -1 1E10 0") == settle("FIX XY -1 -1 5 0"));
 }
+
+// ======================================================= later cards and --set ===
+
+TEST_CASE("deck: MOTION chooses how points move; HOURGLASS gives kappa; both default off") {
+    CHECK(read_ok(kBase).motion == lpfdm::Motion::Paper);
+    CHECK(read_ok(kBase).hourglass == 0.0);
+    CHECK(read_ok(plus("MOTION centre")).motion == lpfdm::Motion::Centre);
+    CHECK(read_ok(plus("motion CENTER")).motion == lpfdm::Motion::Centre);
+    CHECK(read_ok(plus("MOTION BILINEAR")).motion == lpfdm::Motion::Bilinear);
+    CHECK(read_ok(plus("MOTION PAPER")).motion == lpfdm::Motion::Paper);
+    CHECK(read_ok(plus("HOURGLASS .05")).hourglass == 0.05);
+}
+
+TEST_CASE("deck error: a bad MOTION or HOURGLASS card") {
+    CHECK_ONE_ERROR(plus("MOTION SIDEWAYS"), 5, 8, "unknown motion 'SIDEWAYS'");
+    CHECK_ONE_ERROR(plus("MOTION"), 5, 7, "missing field");
+    CHECK_ONE_ERROR(plus("HOURGLASS 1.5"), 5, 11, "HOURGLASS kappa must lie in [0, 1]");
+    CHECK_ONE_ERROR(plus("HOURGLASS 0.1\nHOURGLASS 0.2"), 6, 1, "HOURGLASS is given twice");
+}
+
+TEST_CASE("apply_setting: CARD.PARAM overrides what the deck said, and names what it cannot") {
+    lpfdm::Scene s = read_ok(plus("WALL 3 0 4 4 4 0 -0.01") + "DAMPING 0.8\n");
+    CHECK(lpfdm::apply_setting(s, "material1.e", 6e7).empty());
+    CHECK(s.materials[0].E == 6e7);
+    CHECK(lpfdm::apply_setting(s, "CLUSTER1.PPC", 4).empty());
+    CHECK(s.clusters[0].ppc == 4);
+    CHECK(lpfdm::apply_setting(s, "WALL3.VY", -0.02).empty());
+    CHECK(s.walls[0].vy == -0.02);
+    CHECK(lpfdm::apply_setting(s, "DAMPING.ALPHA", 0).empty());
+    CHECK(s.damping == 0.0);
+    CHECK(lpfdm::apply_setting(s, "STEP.N", 77).empty());
+    CHECK(s.steps == 77);
+    CHECK(lpfdm::apply_setting(s, "HOURGLASS.KAPPA", 0.1).empty());
+    CHECK(s.hourglass == 0.1);
+    CHECK(lpfdm::apply_setting(s, "MATERIAL9.C", 1) == "no MATERIAL with id 9");
+    CHECK(lpfdm::apply_setting(s, "CLUSTER2.PPC", 1).find("no CLUSTER number 2") != std::string::npos);
+    CHECK(lpfdm::apply_setting(s, "CLUSTER1.PPC", 2.5) == "PPC must be a whole number in [1, 32]");
+    CHECK(lpfdm::apply_setting(s, "MATERIAL1.FOO", 1) == "MATERIAL has no parameter FOO");
+    CHECK(lpfdm::apply_setting(s, "NOPE", 1).find("CARD.PARAM") != std::string::npos);
+    CHECK(lpfdm::apply_setting(s, "STEP.N", 0).find("whole number") != std::string::npos);
+    CHECK(lpfdm::validate(s).empty());
+    CHECK(lpfdm::apply_setting(s, "DAMPING.ALPHA", 1.5).empty());  // accepted here, refused by validate()
+    CHECK(!lpfdm::validate(s).empty());
+}
