@@ -232,15 +232,28 @@ int main(int argc, char** argv) {
         sim.step();
         if (!sim.healthy()) {
             const long k = sim.first_nonfinite_point();
+            const auto& p = sim.points();
             std::string where;
             if (k >= 0) {
-                const auto& p = sim.points();
                 where = fmt::format("; first bad point: id {} in cell ({}, {})", p.id[std::size_t(k)], p.cell[std::size_t(k)] % sim.mx(), p.cell[std::size_t(k)] / sim.mx());
+            } else {
+                int ni = 0, nj = 0;
+                long q = -1;
+                sim.worst_node(ni, nj, q);
+                where = fmt::format("; worst node ({}, {}) at x = {:.6g} m, y = {:.6g} m", ni, nj, ni * sim.cell_size(), nj * sim.cell_size());
+                if (q >= 0) where += fmt::format(", next to point id {} in cell ({}, {})", p.id[std::size_t(q)], p.cell[std::size_t(q)] % sim.mx(), p.cell[std::size_t(q)] / sim.mx());
             }
             const std::string why = std::isfinite(sim.kinetic_energy())
                 ? fmt::format("a node moved {:.3g} m in one step, more than half a cell: the run is unstable", sim.max_du())
                 : "a non-finite value appeared";
             std::fprintf(stderr, "lpfdm: error: numerical trouble at step %ld (t = %.6g s): %s%s\n", n, sim.time(), why.c_str(), where.c_str());
+            // The points are still finite when the trouble is in the nodal increments: their
+            // state at this step is the last good one, so it is written as the last frame.
+            if (k < 0)
+                for (auto& o : outs) {
+                    if (o.spec->kind != lpfdm::Output::History) lpfdm::write_points_frame(o.f, sim, false);
+                    else if (std::isfinite(sim.kinetic_energy())) lpfdm::write_history_row(o.f, sim);
+                }
             note = fmt::format("run stopped at step {}: numerical trouble; the frames above are the last good ones", n);
             status = kExitNumerical;
             break;
@@ -254,9 +267,13 @@ int main(int argc, char** argv) {
             }
         }
         if (g_interrupted) {
-            for (auto& o : outs) {
-                if (o.spec->kind == lpfdm::Output::History) lpfdm::write_history_row(o.f, sim);
-                else if (!(o.spec->every > 0 && n % o.spec->every == 0)) lpfdm::write_points_frame(o.f, sim, false);
+            for (auto& o : outs) {  // unless this step's row or frame was just written
+                const long every = o.spec->every;
+                if (o.spec->kind == lpfdm::Output::History) {
+                    if (n % (every > 0 ? every : 1) != 0) lpfdm::write_history_row(o.f, sim);
+                } else if (!((every > 0 && n % every == 0) || n == steps)) {
+                    lpfdm::write_points_frame(o.f, sim, false);
+                }
             }
             note = fmt::format("run interrupted at step {} of {}", n, steps);
             std::fprintf(stderr, "\nlpfdm: interrupted at step %ld of %ld; the last frame and a history row were written\n", n, steps);

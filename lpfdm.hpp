@@ -44,6 +44,10 @@
 //   * Eq. 5's one strain per cell does not see the checkerboard pattern (+1,-1,-1,+1) of
 //     nodal increments: nothing resists it. HOURGLASS kappa (off by default) adds the
 //     smallest remedy, a viscous force on that pattern alone (see nodal_forces).
+//   * In eq. 8 a point smears at most its initial volume m / rho_0. A point failing in
+//     tension keeps dilating (53 times its volume was seen behind a wall pushed through
+//     soil); its smeared stiffness grew with its volume while its mass did not, and the
+//     run went unstable with the wall at rest. Compression is unaffected.
 //   * Eq. 12 uses the strain increments of the cell containing x_node - du_node; a
 //     lookup outside the lattice or into an empty cell compensates nothing (an empty
 //     cell has no strain: taken from nodes at rest beside moving ones, it made every
@@ -68,8 +72,9 @@
 //   * Moving walls: all nodes of a wall get (vx, vy) dt each step; after each whole cell
 //     of travel along an axis the wall passes to the next line of nodes on that axis.
 //     Where a wall meets a fixed node, the fixed direction wins.
-//   * Stability: dt must not exceed L / c_p of the stiffest material, c_p = sqrt((K +
-//     4G/3)/rho): the limit of the lumped-mass, one-point-strain lattice (see tests).
+//   * Stability: dt must not exceed L sqrt(rho / ((M + lambda)(1 + alpha))), M = K + 4G/3,
+//     lambda = K - 2G/3: below L / c_p, the limit of a full lattice, because a lone cell
+//     has a faster mode and local damping stiffens the fastest one (see stable_dt).
 #ifndef LPFDM_HPP
 #define LPFDM_HPP
 
@@ -573,6 +578,7 @@ struct Points {
 struct Group {
     int mat_index = 0;
     double mass = 0;  // kg per metre of thickness, a multiple of the mass quantum
+    double vol0 = 0;  // initial volume m / rho: the most a point smears in eq. 8
 };
 
 struct WallState {
@@ -596,11 +602,21 @@ struct Range {  // half-open index box
     }
 };
 
-// Stable time step of the lattice: L / c_p of the stiffest material.
+// Stable time step of the lattice. A full lattice is stable up to L / c_p, but a lone
+// cell (any free corner of a body) has a faster mode, stiffness M + lambda instead of
+// M (M = K + 4G/3, lambda = K - 2G/3; 2G when lambda < 0), and local damping makes the
+// fastest mode see (1 + alpha) times its stiffness:
+//     dt <= L sqrt(rho / ((M + lambda)(1 + alpha)))   for the stiffest material.
+// Measured (tests/test_hard.cpp): the limit at alpha = 0.8 is 0.74-0.75 of L / c_p,
+// predicted 0.745; a lone cell at nu = 0.25 0.866, predicted sqrt(3/4).
 inline double stable_dt(const Scene& s) {
-    double cmax = 0;
-    for (const auto& m : s.materials) cmax = std::max(cmax, m.p_wave_speed());
-    return cmax > 0 ? s.cell_m / cmax : std::numeric_limits<double>::infinity();
+    double dt = std::numeric_limits<double>::infinity();
+    for (const auto& m : s.materials) {
+        const double K = m.bulk(), G = m.shear(), M = K + 4 * G / 3, lam = K - 2 * G / 3;
+        const double k = (lam >= 0 ? M + lam : 2 * G) * (1 + std::max(0.0, s.damping));
+        dt = std::min(dt, s.cell_m * std::sqrt(m.rho / k));
+    }
+    return dt;
 }
 
 // Bytes the arrays of a scene will take (for the memory check before anything is allocated).
@@ -780,7 +796,7 @@ inline Diagnostics validate(const Scene& s) {
         const double lim = stable_dt(s);
         if (s.dt_s > lim) {
             char buf[160];
-            std::snprintf(buf, sizeof buf, "time step %.6g s is above the stable limit %.6g s (L / c_p of the stiffest material)", s.dt_s, lim);
+            std::snprintf(buf, sizeof buf, "time step %.6g s is above the stable limit %.6g s (L sqrt(rho / ((M + lambda)(1 + damping))) of the stiffest material)", s.dt_s, lim);
             err(s.step_pos, buf);
         }
     }
@@ -895,6 +911,25 @@ public:
         return -1;
     }
     bool healthy() const { return std::isfinite(ke_) && max_du_ <= 0.5 * L_; }  // finite, no node beyond half a cell a step
+    // The node with the largest (or a non-finite) increment, and a point in a cell beside
+    // it (-1 if none): where a run that stopped went wrong.
+    void worst_node(int& i, int& j, long& point) const {
+        double worst = -1;
+        i = j = 0;
+        for (int b = 0; b <= my_; ++b)
+            for (int a = 0; a <= mx_; ++a) {
+                const int n = node(a, b);
+                const double v = std::fabs(dux_[n]) + std::fabs(duy_[n]);
+                const bool bad = !std::isfinite(v) || !std::isfinite(fx_[n]) || !std::isfinite(fy_[n]);
+                if (bad || v > worst) { worst = bad ? std::numeric_limits<double>::infinity() : v; i = a; j = b; }
+                if (bad) { b = my_ + 1; break; }
+            }
+        point = -1;
+        for (std::size_t k = 0; k < p_.size() && point < 0; ++k) {
+            const int c = p_.cell[k], ci = c % mx_, cj = c / mx_;
+            if (ci >= i - 1 && ci <= i && cj >= j - 1 && cj <= j) point = long(k);
+        }
+    }
     double max_du() const { return max_du_; }                         // largest nodal increment of the last step [m]
 
     // The phases of step(), in order; public so that tests and lessons can step
@@ -1062,7 +1097,8 @@ inline void Simulation::create_points() {
         const double h = L_ / keys[g].second;
         const double m = sc_.materials[std::size_t(keys[g].first)].rho * h * h;
         const double q = std::max(1.0, std::nearbyint(std::ldexp(m, -qexp)));
-        groups_.push_back({keys[g].first, std::ldexp(q, qexp)});
+        const double mq = std::ldexp(q, qexp);
+        groups_.push_back({keys[g].first, mq, mq / sc_.materials[std::size_t(keys[g].first)].rho});
     }
 
     bool plastic = false, scatter = false;
@@ -1214,7 +1250,8 @@ inline void Simulation::advance_points() {
         const int ni = std::min(mx_ - 1, int(x * invL_)), cn = cell(ni, std::min(my_ - 1, int(y * invL_)));
         p_.cell[q] = cn;
         if constexpr (Fused) {
-            const double m = groups_[p_.group[q]].mass, v = p_.vol[q];
+            const Group& g = groups_[p_.group[q]];
+            const double m = g.mass, v = std::min(p_.vol[q], g.vol0);
             cmass_[cn] += m;                // eq. 7
             cvol_[cn] += v;
             svxx_[cn] += v * s.xx;          // eq. 8
@@ -1278,7 +1315,8 @@ inline void Simulation::map_to_lattice() {
     double mass = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const int c = p_.cell[k];
-        const double m = groups_[p_.group[k]].mass, v = p_.vol[k];
+        const Group& g = groups_[p_.group[k]];
+        const double m = g.mass, v = std::min(p_.vol[k], g.vol0);
         cmass_[c] += m;                 // eq. 7
         cvol_[c] += v;
         svxx_[c] += v * p_.sxx[k];      // eq. 8
@@ -1882,7 +1920,7 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
                     const auto ps = r.params({"EVERY"}, {"EVERY"});
                     for (const auto& q : ps) {
                         if (q.value != std::floor(q.value) || q.value < 1 || q.value > 1e9) r.fail(q.pos, "EVERY n must be a whole number in [1, 1e9]");
-                        o.every = long(q.value);
+                        else o.every = long(q.value);
                     }
                 } else {
                     e = r.field("EVERY");

@@ -636,12 +636,15 @@ TEST_CASE("deck error: dt <= 0 and steps < 1") {
 }
 
 TEST_CASE("deck error: dt above the stable limit; the message gives the limit") {
-    // E = 5e7 Pa, nu = 0.3, rho = 2000 kg/m^3: c_p = 183.45 m/s, L / c_p = 5.45108e-3 s.
-    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 6E-3 10\n", 4, 1, "above the stable limit 0.00545108 s");
-    read_ok(kGrid + kMaterial + kCluster + "STEP 5.45E-3 10\n");
+    // E = 5e7 Pa, nu = 0.3, rho = 2000 kg/m^3: M = K + 4G/3 = 6.7308e7 Pa, lambda = K - 2G/3 =
+    // 2.8846e7 Pa, limit L sqrt(rho / (M + lambda)) = 4.5607e-3 s (L / c_p would be 5.451e-3 s).
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 5E-3 10\n", 4, 1, "above the stable limit 0.0045607 s");
+    read_ok(kGrid + kMaterial + kCluster + "STEP 4.56E-3 10\n");
+    // Local damping lowers it by sqrt(1 + alpha): 4.5607e-3 / sqrt(1.8) = 3.3994e-3 s.
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 4E-3 10\nDAMPING 0.8\n", 4, 1, "above the stable limit 0.00339935 s");
     // The stiffest material decides, used by a cluster or not.
     CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 1E-3 10\nMATERIAL 2 ELASTIC E=5E9 NU=0.3 RHO=2000\n", 4, 1,
-                    "above the stable limit 0.000545108 s");
+                    "above the stable limit 0.00045607 s");
 }
 
 TEST_CASE("deck error: walls that select no node, hold fixed nodes or move too fast") {
