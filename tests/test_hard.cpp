@@ -402,6 +402,9 @@ TEST_CASE("hard: a block dropped 0.5 m onto a fixed floor bounces, no higher tha
 // the energy of the spinning block below. A remedy that keeps free fall exact: give the
 // new node the increment of the material that arrives, i.e. the mass-weighted mean over
 // the points now in its cells of the bilinear interpolation of du at their old positions.
+// Tried since: the mass-weighted mean displacement in the step of the points now in the
+// node's cells made it worse (rebound 1.34, spin +5.0 %, a symmetric impact lost its
+// symmetry by 1 cm), so the neighbour mean stays and this is open.
 TEST_CASE("hard: a block dropped 2 m onto a fixed floor does not bounce above its start" * doctest::skip()) {
     const Drop d = drop(2.0, 0.1);
     MESSAGE("drop 2 m, dt 0.1 of the limit: rebound to " << d.rebound << " of the drop height; energy gain " << d.energy << " of the drop energy");
