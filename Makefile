@@ -94,8 +94,8 @@ figures: lpfdm
 	./lpfdm -q -o $(OUT) decks/psc.deck
 	./lpfdm -q -o $(OUT) decks/cliff.deck
 	./lpfdm -q -o $(OUT) decks/trapdoor.deck
-	gnuplot -e "in='$(OUT)/psc_history.txt'; out='$(OUT)/psc_curve.png'; wall=1; width=0.1; height=0.2; c=9800; phi=28.648" tools/psc_curve.gp
-	gnuplot -e "in='$(OUT)/psc_points.txt'; out='$(OUT)/psc_specimen.png'; L=0.01; mat=1; title='Plane-strain compression (Fig. 4)'" tools/specimen.gp
+	gnuplot -e "in='$(OUT)/psc_history.txt'; out='$(OUT)/psc_curve.png'; wall=1; width=0.1; height=0.2; c=9800; phi=28.648; title='Plane-strain compression (Fig. 4): Table 1 soil, scatter and softening'" tools/psc_curve.gp
+	gnuplot -e "in='$(OUT)/psc_points.txt'; out='$(OUT)/psc_specimen.png'; L=0.01; mat=1; epmax=0.2; title='Plane-strain compression (Fig. 4)'" tools/specimen.gp
 	gnuplot -e "in='$(OUT)/psc_points.txt'; out='$(OUT)/psc.gif'; title='Plane-strain compression'; epmax=0.05" tools/animate.gp 2>/dev/null
 	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.png'; title='Cliff failure (Fig. 5)'; frame=-1" tools/snapshot.gp
 	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.gif'; title='Cliff failure'; delay=25" tools/animate.gp 2>/dev/null
