@@ -20,8 +20,11 @@
 #   VERIFY_THREADS=1 threads per run (--threads); one thread measures the method, not the
 #                    machine's other jobs (a thread waiting at a barrier for a core that
 #                    another job holds makes a shared machine's times erratic)
-# A run is timed from the program's own summary line (the time of the steps, without
-# start-up); the cut's time is the sum of its bisection runs, each timed once.
+#   VERIFY_APPEND=1  add rows to an existing OUT/verify.tsv (e.g. after one case) instead
+#                    of starting it anew; orders and pictures are made from all its rows
+# A run is timed from the program's own summary line (the time of the steps and of the
+# output written during them, without start-up); the cut's time is the sum of its
+# bisection runs, each timed once; the hopper's the sum of its four slot widths.
 set -u
 exe=${1:-./lpfdm}
 out=${2:-out}
@@ -39,7 +42,6 @@ tsv=$out/verify.tsv
 command -v "$exe" >/dev/null 2>&1 || [ -x "$exe" ] || { echo "verify: no program $exe" >&2; exit 2; }
 if [ ! -s "$tsv" ] || [ "${VERIFY_APPEND:-0}" = 0 ]; then
     printf 'case\tcells\tppc\tsteps\twall_s\tpsteps_per_s\tmeasured\treference\trel_error\tcpu_s\n' >"$tsv"
-    printf 'case\tppc\tcells_from\tcells_to\torder\n' >"$out/verify_orders.tsv"
     printf 'a\tcells\tppc\trunout\tfarthest\tmass_out_fraction\n' >"$out/verify_collapse.tsv"
     printf 'cells_per_L0\tppc\tD_m\tD_cells\trate_kg_per_s_m\tbeverloo_C\n' >"$out/verify_hopper.tsv"
 fi
@@ -254,6 +256,7 @@ done
 # p = log(e1 / e2) / log(n2 / n1) with e the relative error and n the cells over the
 # characteristic length. For the collapse (no exact reference) also the self-convergence
 # order from three rungs, log(|m1 - m2| / |m2 - m3|) / log 2, as case "<case>_self".
+printf 'case\tppc\tcells_from\tcells_to\torder\n' >"$out/verify_orders.tsv"
 awk -F'\t' 'NR > 1 {
         k = $1 SUBSEP $3; n[k]++; c[k, n[k]] = $2; e[k, n[k]] = ($9 < 0 ? -$9 : $9); m[k, n[k]] = $7
         if (!(k in seen)) { seen[k] = 1; order[++nk] = k }

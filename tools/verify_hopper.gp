@@ -9,6 +9,7 @@ set output out
 set title 'Discharge through a slot of width D (rate from 1 s to 2 s)'
 set logscale xy
 set xrange [0.2:1.2]
+set yrange [300:20000]
 set xlabel 'slot width D [m]'
 set ylabel 'discharge [kg/s per m]'
 set key left top
