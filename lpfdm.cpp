@@ -94,38 +94,34 @@ int main(int argc, char** argv) {
     Options opt;
     for (int a = 1; a < argc; ++a) {
         const std::string s = argv[a];
-        auto value = [&](const char* name) -> const char* {
-            if (a + 1 >= argc) return nullptr;
-            (void)name;
-            return argv[++a];
-        };
+        auto value = [&]() -> const char* { return a + 1 < argc ? argv[++a] : nullptr; };
         long long v = 0;
         if (s == "--help" || s == "-h") { std::fputs(kUsage, stdout); return 0; }
         if (s == "--version") { std::printf("lpfdm %s\n", lpfdm::kVersion); return 0; }
         if (s == "-q") { opt.quiet = true; continue; }
         if (s == "--profile") { opt.profile = true; continue; }
         if (s == "-o") {
-            const char* d = value("-o");
+            const char* d = value();
             if (!d) return usage_error("-o needs a directory");
             opt.outdir = d;
         } else if (s == "--refine") {
-            const char* d = value("--refine");
+            const char* d = value();
             if (!d || !parse_long(d, 1, 64, v)) return usage_error("--refine needs a whole number from 1 to 64");
             opt.refine = long(v);
         } else if (s == "--steps") {
-            const char* d = value("--steps");
+            const char* d = value();
             if (!d || !parse_long(d, 1, 1'000'000'000LL, v)) return usage_error("--steps needs a whole number from 1 to 1e9");
             opt.steps = long(v);
         } else if (s == "--seed") {
-            const char* d = value("--seed");
+            const char* d = value();
             if (!d || !parse_long(d, 0, 9'007'199'254'740'992LL, v)) return usage_error("--seed needs a whole number >= 0");
             opt.seed = v;
         } else if (s == "--threads") {
-            const char* d = value("--threads");
+            const char* d = value();
             if (!d || !parse_long(d, 1, 1024, v)) return usage_error("--threads needs a whole number from 1 to 1024");
             opt.threads = long(v);
         } else if (s == "--set") {
-            const char* d = value("--set");
+            const char* d = value();
             const std::string kv = d ? d : "";
             const std::size_t eq = kv.find('=');
             double x = 0;

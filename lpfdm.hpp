@@ -602,6 +602,25 @@ struct Range {  // half-open index box
     }
 };
 
+namespace detail {
+
+// Boxes select cells by their centres and nodes by their positions, with a tolerance of a
+// thousandth of a cell, so a degenerate box selects a line. The index span [lo, hi] is
+// clipped to the lattice (lo > hi: nothing); edges far outside are clamped before any
+// conversion to int.
+inline void cell_span(double a, double b, double L, int n, int& lo, int& hi) {
+    const double tol = 1e-3 * L;
+    lo = int(std::clamp(std::ceil((a - tol) / L - 0.5), 0.0, double(n)));
+    hi = int(std::clamp(std::floor((b + tol) / L - 0.5), -1.0, double(n - 1)));
+}
+inline void node_span(double a, double b, double L, int n, int& lo, int& hi) {
+    const double tol = 1e-3 * L;
+    lo = int(std::clamp(std::ceil((a - tol) / L), 0.0, double(n + 1)));
+    hi = int(std::clamp(std::floor((b + tol) / L), -1.0, double(n)));
+}
+
+}  // namespace detail
+
 // Stable time step of the lattice. A full lattice is stable up to L / c_p, but a lone
 // cell (any free corner of a body) has a faster mode, stiffness M + lambda instead of
 // M (M = K + 4G/3, lambda = K - 2G/3; 2G when lambda < 0), and local damping makes the
@@ -750,16 +769,17 @@ inline Diagnostics validate(const Scene& s) {
             err(c.pos, "the cluster box reaches outside the lattice [0, " + std::to_string(X) + "] x [0, " + std::to_string(Y) + "] m");
             continue;
         }
-        const int ci0 = int(std::ceil((c.box.x0 - tol) / s.cell_m - 0.5)), ci1 = int(std::floor((c.box.x1 + tol) / s.cell_m - 0.5));
-        const int cj0 = int(std::ceil((c.box.y0 - tol) / s.cell_m - 0.5)), cj1 = int(std::floor((c.box.y1 + tol) / s.cell_m - 0.5));
+        int ci0, ci1, cj0, cj1;
+        detail::cell_span(c.box.x0, c.box.x1, s.cell_m, s.mx, ci0, ci1);
+        detail::cell_span(c.box.y0, c.box.y1, s.cell_m, s.my, cj0, cj1);
         if (ci1 < ci0 || cj1 < cj0) err(c.pos, "the cluster box holds no cell centre");
     }
     auto node_count = [&](const Box& b) {
         if (b.x0 > b.x1 || b.y0 > b.y1) return -1L;
-        auto idx = [](double v, long hi) { return long(std::clamp(v, -1.0, double(hi) + 1.0)); };  // no overflow far outside
-        const long i0 = std::max(0L, idx(std::ceil((b.x0 - tol) / s.cell_m), s.mx)), i1 = std::min(long(s.mx), idx(std::floor((b.x1 + tol) / s.cell_m), s.mx));
-        const long j0 = std::max(0L, idx(std::ceil((b.y0 - tol) / s.cell_m), s.my)), j1 = std::min(long(s.my), idx(std::floor((b.y1 + tol) / s.cell_m), s.my));
-        return (i1 < i0 || j1 < j0) ? 0L : (i1 - i0 + 1) * (j1 - j0 + 1);
+        int i0, i1, j0, j1;
+        detail::node_span(b.x0, b.x1, s.cell_m, s.mx, i0, i1);
+        detail::node_span(b.y0, b.y1, s.cell_m, s.my, j0, j1);
+        return (i1 < i0 || j1 < j0) ? 0L : (i1 - i0 + 1L) * (j1 - j0 + 1L);
     };
     for (const auto& f : s.fixes) {
         const long n = node_count(f.box);
@@ -996,7 +1016,6 @@ private:
 
 inline double count_points(const Scene& s) {
     if (s.mx <= 0 || s.my <= 0 || !(s.cell_m > 0)) return 0;
-    const double tol = 1e-3 * s.cell_m;
     double n = 0;
     // Per cell the last cluster wins; count by scanning the clusters' cell ranges.
     const long cells = long(s.mx) * s.my;
@@ -1007,10 +1026,9 @@ inline double count_points(const Scene& s) {
     std::vector<int> owner(std::size_t(cells), -1);
     for (std::size_t ci = 0; ci < s.clusters.size(); ++ci) {
         const auto& c = s.clusters[ci];
-        const int i0 = std::max(0, int(std::ceil((c.box.x0 - tol) / s.cell_m - 0.5)));
-        const int i1 = std::min(s.mx - 1, int(std::floor((c.box.x1 + tol) / s.cell_m - 0.5)));
-        const int j0 = std::max(0, int(std::ceil((c.box.y0 - tol) / s.cell_m - 0.5)));
-        const int j1 = std::min(s.my - 1, int(std::floor((c.box.y1 + tol) / s.cell_m - 0.5)));
+        int i0, i1, j0, j1;
+        detail::cell_span(c.box.x0, c.box.x1, s.cell_m, s.mx, i0, i1);
+        detail::cell_span(c.box.y0, c.box.y1, s.cell_m, s.my, j0, j1);
         for (int j = j0; j <= j1; ++j)
             for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * s.mx + i] = int(ci);
     }
@@ -1028,11 +1046,9 @@ inline void Simulation::setup() {
     if (sc_.hourglass > 0) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
     for (const auto& m : sc_.materials) consts_.push_back(constants_of(m));
 
-    const double tol = 1e-3 * L_;
     auto node_range = [&](const Box& b, int& i0, int& i1, int& j0, int& j1) {
-        auto idx = [](double v, int hi) { return int(std::clamp(v, -1.0, double(hi) + 1.0)); };  // no overflow far outside
-        i0 = std::max(0, idx(std::ceil((b.x0 - tol) * invL_), mx_)); i1 = std::min(mx_, idx(std::floor((b.x1 + tol) * invL_), mx_));
-        j0 = std::max(0, idx(std::ceil((b.y0 - tol) * invL_), my_)); j1 = std::min(my_, idx(std::floor((b.y1 + tol) * invL_), my_));
+        detail::node_span(b.x0, b.x1, L_, mx_, i0, i1);
+        detail::node_span(b.y0, b.y1, L_, my_, j0, j1);
     };
     for (const auto& f : sc_.fixes) {
         int i0, i1, j0, j1;
@@ -1059,14 +1075,12 @@ inline void Simulation::setup() {
 }
 
 inline void Simulation::create_points() {
-    const double tol = 1e-3 * L_;
     std::vector<int> owner(std::size_t(mx_) * my_, -1);
     for (std::size_t ci = 0; ci < sc_.clusters.size(); ++ci) {
         const auto& c = sc_.clusters[ci];
-        const int i0 = std::max(0, int(std::ceil((c.box.x0 - tol) * invL_ - 0.5)));
-        const int i1 = std::min(mx_ - 1, int(std::floor((c.box.x1 + tol) * invL_ - 0.5)));
-        const int j0 = std::max(0, int(std::ceil((c.box.y0 - tol) * invL_ - 0.5)));
-        const int j1 = std::min(my_ - 1, int(std::floor((c.box.y1 + tol) * invL_ - 0.5)));
+        int i0, i1, j0, j1;
+        detail::cell_span(c.box.x0, c.box.x1, L_, mx_, i0, i1);
+        detail::cell_span(c.box.y0, c.box.y1, L_, my_, j0, j1);
         for (int j = j0; j <= j1; ++j)
             for (int i = i0; i <= i1; ++i) owner[std::size_t(cell(i, j))] = int(ci);
     }
