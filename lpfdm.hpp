@@ -41,6 +41,10 @@
 //     points, and errors grew under refinement: see tests/test_cycle.cpp).
 //   * Points move by eq. 7a/7b about node [1] by default; MOTION CENTRE (the same map
 //     about the cell centre, mirror-symmetric) and MOTION BILINEAR are options.
+//   * A cell edge whose two nodes are both fixed across it is impermeable: a point that
+//     eq. 7a/7b would carry across it stops on it, inside its cell. The affine map moves a
+//     point on a fixed floor by d_eps_yx dx when the nodes above move unequally; without
+//     this stop 14 % of a collapsing column left through its rough floor.
 //   * Eq. 5's one strain per cell does not see the checkerboard pattern (+1,-1,-1,+1) of
 //     nodal increments: nothing resists it. HOURGLASS kappa (off by default) adds the
 //     smallest remedy, a viscous force on that pattern alone (see nodal_forces).
@@ -967,6 +971,17 @@ private:
     void remove_departed();
     void clear_cells();
     template <bool Fused> void advance_points();
+    // The smallest coordinate in cell k along an axis, and the largest in cell k - 1.
+    double edge_above(int k) const {
+        double v = k * L_;
+        while (int(v * invL_) < k) v = std::nextafter(v, std::numeric_limits<double>::infinity());
+        return v;
+    }
+    double edge_below(int k) const {
+        double v = std::nextafter(k * L_, 0.0);
+        while (int(v * invL_) >= k) v = std::nextafter(v, 0.0);
+        return v;
+    }
     bool serial() const {
 #if defined(_OPENMP)
         return omp_get_max_threads() == 1 || p_.size() <= 4096 || !user_models_.empty();
@@ -1001,6 +1016,8 @@ private:
     std::vector<double> dux_, duy_, fx_, fy_, nmass_, nmass_prev_;
     std::vector<std::uint8_t> fixed_;
     std::vector<std::int32_t> fixed_nodes_;
+    enum : std::uint8_t { kEdgeBottom = 1, kEdgeTop = 2, kEdgeLeft = 4, kEdgeRight = 8 };
+    std::vector<std::uint8_t> fixed_edges_;  // per cell: which of its edges are fixed across
     // cells
     std::vector<double> cmass_, cvol_, svxx_, svyy_, svxy_;
     std::vector<double> exx_, eyy_, exy_, eyx_, rc_, rs_;  // strain and rotation per cell
@@ -1057,6 +1074,15 @@ inline void Simulation::setup() {
             for (int i = i0; i <= i1; ++i) fixed_[node(i, j)] |= std::uint8_t(f.dirs);
     }
     for (std::size_t n = 0; n < nodes; ++n) if (fixed_[n]) fixed_nodes_.push_back(std::int32_t(n));
+    // Cell edges whose two nodes are both fixed across the edge: no point may cross them.
+    fixed_edges_.assign(cells, 0);
+    for (int j = 0; j < my_; ++j)
+        for (int i = 0; i < mx_; ++i) {
+            const int n1 = node(i, j), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
+            auto both = [&](int a, int b, int d) { return (fixed_[a] & d) && (fixed_[b] & d); };
+            fixed_edges_[cell(i, j)] = std::uint8_t((both(n1, n2, kFixY) ? kEdgeBottom : 0) | (both(n3, n4, kFixY) ? kEdgeTop : 0) |
+                                                    (both(n1, n3, kFixX) ? kEdgeLeft : 0) | (both(n2, n4, kFixX) ? kEdgeRight : 0));
+        }
     for (const auto& w : sc_.walls) {
         WallState ws;
         int i0, i1, j0, j1;
@@ -1254,6 +1280,15 @@ inline void Simulation::advance_points() {
                 x = x0 + w1 * dux_[n1] + w2 * dux_[n2] + w3 * dux_[n3] + w4 * dux_[n4];
                 y = y0 + w1 * duy_[n1] + w2 * duy_[n2] + w3 * duy_[n3] + w4 * duy_[n4];
             }
+        }
+        if (const std::uint8_t fe = fixed_edges_[std::size_t(c)]) {
+            // A fixed edge is impermeable: eq. 7a/7b is an affine map of the whole cell and
+            // moves a point on a fixed edge by d_eps_yx dx (or d_eps_xy dy) when the far
+            // nodes move unequally; it stops on the edge, inside its cell.
+            if ((fe & kEdgeBottom) && y < j * L_) y = edge_above(j);
+            if ((fe & kEdgeTop) && y >= (j + 1) * L_) y = edge_below(j + 1);
+            if ((fe & kEdgeLeft) && x < i * L_) x = edge_above(i);
+            if ((fe & kEdgeRight) && x >= (i + 1) * L_) x = edge_below(i + 1);
         }
         p_.x[q] = x; p_.y[q] = y;
         if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)

@@ -737,6 +737,42 @@ TEST_CASE("hard: points leave through every side; mass balance exact at every st
     }
 }
 
+TEST_CASE("hard: no point crosses a fixed edge: a granular column collapses on a rough floor against a smooth wall") {
+    // The coarsest rung of the collapse (decks/verify_collapse.deck, a = 0.5: 1 m x 0.5 m,
+    // L = 0.125 m, no damping, 4 s). Eq. 7a/7b alone let 14 % (2 x 2 points per cell) and
+    // 22 % (1 x 1) of the mass out through the floor; every point must stay at y >= 0 (the
+    // rough floor, fixed in x and y) and x >= 0 (the smooth wall, fixed in x).
+    for (const Motion motion : {Motion::Paper, Motion::Centre})
+        for (const int ppc : {1, 2}) {
+            Scene s;
+            s.mx = 80; s.my = 34; s.cell_m = 0.125;
+            s.materials.push_back(Material::mohr(1, 1e7, 0.3, 2000, 30, 0));
+            s.clusters.push_back({1, {0, 0, 1, 0.5}, ppc, {}});
+            s.fixes.push_back({kFixX, {0, 0, 0, 4.25}, {}});
+            s.fixes.push_back({kFixX | kFixY, {0, 0, 10, 0}, {}});
+            s.gravity_y = -9.81; s.dt_s = 5e-4; s.steps = 8000; s.motion = motion;
+            REQUIRE(validate(s).empty());
+            Simulation sim(s);
+            const Points& p = sim.points();
+            bool ok = true, mass = true;
+            double xmin = 1e300, ymin = 1e300, xmax = 0;
+            for (long k = 0; k < s.steps && ok; ++k) {
+                sim.step();
+                ok = finite(sim);
+                mass &= mass_exact(sim);
+                for (std::size_t q = 0; q < p.size(); ++q) { xmin = std::min(xmin, p.x[q]); ymin = std::min(ymin, p.y[q]); xmax = std::max(xmax, p.x[q]); }
+            }
+            MESSAGE("collapse a = 0.5, " << ppc << " x " << ppc << " points, motion " << int(motion) << ": outflow " << sim.mass_outflow()
+                                         << " kg/m, lowest point y = " << ymin << ", x = " << xmin << ", front at x = " << xmax);
+            CHECK(ok);
+            CHECK(mass);
+            CHECK(sim.mass_outflow() == 0);
+            CHECK(ymin >= 0);
+            CHECK(xmin >= 0);
+            CHECK(xmax > 1.1);  // it did collapse and spread
+        }
+}
+
 // ------------------------------------------------------------------- wall ---
 
 namespace {
