@@ -42,8 +42,8 @@ lpfdm: lpfdm.cpp lpfdm.hpp | deps
 	$(CXX) $(WARN) $(CXXFLAGS) $(OMP) -o $@ lpfdm.cpp $(LIBS)
 
 # The tests are built one object per file, so that both cores compile at once.
-TEST_OBJ = $(patsubst tests/%.cpp,build/o2/%.o,$(TESTS) tests/main.cpp)
-SAN_OBJ  = $(patsubst tests/%.cpp,build/san/%.o,$(TESTS) tests/main.cpp)
+TEST_OBJ = $(patsubst tests/%.cpp,build/o2/%.o,$(TESTS) tests/main.cpp tests/alloc_counter.cpp)
+SAN_OBJ  = $(patsubst tests/%.cpp,build/san/%.o,$(TESTS) tests/main.cpp tests/alloc_counter.cpp)
 
 build/o2/%.o: tests/%.cpp lpfdm.hpp | deps
 	@mkdir -p build/o2
