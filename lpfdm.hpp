@@ -60,6 +60,10 @@
 //     weighted mean increment of its neighbours that had mass (the material arriving
 //     brings its motion). With the paper's literal du = 0 a falling block is braked at
 //     every new row of cells it enters (tests: free fall at exactly g).
+//     Known, open: the lumped nodal masses move with the points while each node keeps
+//     its increment, so where mass flows into faster nodes (a surface rising faster than
+//     the body behind it) kinetic energy appears. A 2 m drop onto a floor rebounds to 1.27
+//     of its height; no rule for new nodes cures it (tests/test_hard.cpp lists those tried).
 //   * Eq. 14 uses sgn(0) = 0 and the compensated du; a node without mass has du = 0.
 //   * Point volume follows V <- V (1 + d_eps_xx + d_eps_yy); a rigid rotation keeps it.
 //   * A point belongs to the cell floor(x/L), floor(y/L); the lattice is the half-open

@@ -391,20 +391,25 @@ TEST_CASE("hard: a block dropped 0.5 m onto a fixed floor bounces, no higher tha
     CHECK(d.rebound < 1.0);       // ... and does not gain height
 }
 
-// Finding: from higher up the block bounces above its starting height. Measured (1.6 s,
-// no damping): drop 1 m at dt = 0.1 / 0.25 of the limit: rebound 1.007 / 1.013 of the drop;
-// drop 2 m: 1.28 (dt 0.1), 1.07 (dt 0.5). The energy comes from eq. 12's companion rule
-// "a node that gains mass takes the mass-weighted mean increment of its neighbours":
-// with that rule switched off in a copy of the kernel the shadow energy never rose above
-// its start (+1e-15) and the 2 m drop rebounded to 0.47. The mean of the eight
-// neighbours mixes in nodes whose material is not the material arriving (at an impact,
-// nodes still moving down next to nodes already stopped). The same rule gains 2.8 % of
-// the energy of the spinning block below. A remedy that keeps free fall exact: give the
-// new node the increment of the material that arrives, i.e. the mass-weighted mean over
-// the points now in its cells of the bilinear interpolation of du at their old positions.
-// Tried since: the mass-weighted mean displacement in the step of the points now in the
-// node's cells made it worse (rebound 1.34, spin +5.0 %, a symmetric impact lost its
-// symmetry by 1 cm), so the neighbour mean stays and this is open.
+// Finding (open): from higher up the block bounces above its starting height. Measured
+// (1.6 s, no damping): drop 1 m at dt = 0.1 / 0.25 of the limit: rebound 1.007 / 1.013 of
+// the drop; drop 2 m: 1.27 (dt 0.1), 1.07 (dt 0.5); the 0.5 m drop above: 0.98.
+// Mechanism, from splitting each step's change of nodal kinetic energy (2 m drop, rebound
+// from 0.62 s to 0.88 s: +14.9 kJ/m against 39.2 kJ/m of drop energy): the lumped nodal
+// masses move with the points, but each node keeps its own increment. Where mass flows
+// into nodes that move faster than the nodes it left (the top surface rising faster than
+// the block below it as it leaves the floor), kinetic energy appears: +5.3 kJ/m at nodes
+// created in the last 20 steps as they fill, +4.3 kJ/m inside, +7.2 kJ/m at surface nodes;
+// creating and emptying nodes nets +0.9 kJ/m; eq. 12 removes about 3 kJ/m. In free fall
+// the same terms cancel exactly. The rule for a node that gains mass only sets what such
+// a node carries while it fills, so no such rule cures it. Rebound (2 m) and spin gain
+// (below, L = 0.25 m) for the rules tried: neighbour mean (kept) 1.27, +2.8 %; du = 0
+// (the paper) 0.49 (free fall braked to 0.72 of g), +8e-6; smallest neighbour 1.17,
+// +1.2 %; least-squares affine fit over 5 x 5 nodes 1.36, +8.1 %; eq. 12's own map of the
+// source cell 1.29, +8.0 %; the momentum of the mass moved 1.16, +2.9 %. Rules that move
+// momentum with the mass (PIC-like) never add energy (rebound 0.83, spin +4e-16) but
+// damp a rigid spin to 0.42 of its energy and fail the shape test below (69 deg against
+// 90). Curing it means carrying momentum on the points (a FLIP-like blend), beyond eq. 12.
 TEST_CASE("hard: a block dropped 2 m onto a fixed floor does not bounce above its start" * doctest::skip()) {
     const Drop d = drop(2.0, 0.1);
     MESSAGE("drop 2 m, dt 0.1 of the limit: rebound to " << d.rebound << " of the drop height; energy gain " << d.energy << " of the drop energy");
@@ -489,13 +494,14 @@ TEST_CASE("hard: a stress-free block spun as a rigid body through 90 degrees kee
     CHECK(b.energy_end < 1.0);
 }
 
-// Finding: with no source the spinning block's shadow energy rose 2.8 % (L = 0.25 m) and
-// 1.2 % (L = 0.125 m) above its start before it fell, from the neighbour-mean rule of new
-// nodes (off in a copy of the kernel: +4e-3 J of 540 J). See the 2 m drop above.
+// Finding (open): with no source the spinning block's shadow energy rose 2.8 % (L = 0.25 m)
+// and 1.2 % (L = 0.125 m) above its start before it fell; see the 2 m drop above. The bound
+// is eq. 12's own: on a rigid rotation by w per step it turns du and scales |du|^2 by
+// 1 + w^2 each step, (pi/2)^2 / n = 1.2e-3 over the n = 2000 steps of the quarter turn.
 TEST_CASE("hard: the energy of a spinning block never grows" * doctest::skip()) {
     const Spin a = spin(1);
     MESSAGE("spin: shadow energy up to +" << a.energy_gain * 100 << " %");
-    CHECK(a.energy_gain < 1e-6);
+    CHECK(a.energy_gain < (kPi / 2) * (kPi / 2) / 2000);
 }
 
 // ----------------------------------------------------------- checkerboard ---
