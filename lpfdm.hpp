@@ -339,6 +339,7 @@ struct MaterialConstants {
     double rho = 0;
     // Mohr-Coulomb (means; per-point values replace c and n_phi when scattered)
     double c = 0, n_phi = 1, n_psi = 1, tension = -1, soften = 0;
+    double sqrt_n_phi = 1;           // of the mean n_phi, taken once
     bool scatter = false;
     int user = -1;                   // index of a user model
 };
@@ -350,6 +351,7 @@ inline MaterialConstants constants_of(const Material& m) {
     k.a1 = K + 4 * G / 3; k.a2 = K - 2 * G / 3; k.G = G; k.rho = m.rho;
     if (m.model == Model::MohrCoulomb) {
         k.c = m.c; k.n_phi = detail::flow_number(m.phi_deg); k.n_psi = detail::flow_number(m.psi_deg);
+        k.sqrt_n_phi = std::sqrt(k.n_phi);
         k.tension = m.tension; k.soften = m.soften; k.scatter = m.scatter > 0;
     }
     return k;
@@ -384,7 +386,8 @@ inline void rotate_stress(Stress& s, double c2, double s2) {
 // Strength of one Mohr-Coulomb point at this moment.
 struct MohrStrength {
     double c = 0, n_phi = 1, n_psi = 1;
-    double tension = -1;  // < 0: apex c / tan(phi)
+    double tension = -1;     // < 0: apex c / tan(phi)
+    double sqrt_n_phi = 0;   // sqrt(n_phi) when known (per material); 0: taken here
 };
 
 // What a plastic correction did (principal plastic strains, tension positive).
@@ -405,9 +408,28 @@ struct MohrResult {
 // principal order changed: an edge, the shear-tension corner, the apex), the two or
 // three planes meeting there are made active together and a 2x2 or 3x3 system gives
 // the multipliers: still closed form, never an iteration.
+namespace detail {
+// The whole correction (below), out of line: only points that yield reach it.
+inline MohrResult mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, Stress& s);
+}  // namespace detail
+
+// The elastic test, inline in the point loop: the trial stress inside every plane is
+// left as it is. It repeats the first lines of the correction exactly.
 inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStrength& st, Stress& s) {
+    const double np = st.n_phi, sq = st.sqrt_n_phi > 0 ? st.sqrt_n_phi : std::sqrt(np), two_c_sq = 2 * st.c * sq;
+    double sig_t = std::numeric_limits<double>::infinity();
+    if (np > 1) sig_t = two_c_sq / (np - 1);  // apex: c / tan(phi)
+    if (st.tension >= 0) sig_t = std::min(sig_t, st.tension);
+    const double p = 0.5 * (s.xx + s.yy), a = 0.5 * (s.xx - s.yy);
+    const double r = std::sqrt(a * a + s.xy * s.xy);
+    const double lo = std::min(p - r, s.zz), hi = std::max(p + r, s.zz);
+    if (lo - hi * np + two_c_sq >= 0 && sig_t - hi >= 0) return {};
+    return detail::mohr_coulomb_correct(k, st, s);
+}
+
+inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, Stress& s) {
     MohrResult res;
-    const double np = st.n_phi, sq = std::sqrt(np), two_c_sq = 2 * st.c * sq;
+    const double np = st.n_phi, sq = st.sqrt_n_phi > 0 ? st.sqrt_n_phi : std::sqrt(np), two_c_sq = 2 * st.c * sq;
     double ns = st.n_psi;
     double sig_t = std::numeric_limits<double>::infinity();
     if (np > 1) sig_t = two_c_sq / (np - 1);  // apex: c / tan(phi)
@@ -1253,6 +1275,7 @@ inline void Simulation::advance_points() {
             st.n_phi = scatter ? p_.n_phi[q] : mc.n_phi;
             st.n_psi = std::min(mc.n_psi, st.n_phi);
             st.tension = mc.tension;
+            st.sqrt_n_phi = scatter ? 0.0 : mc.sqrt_n_phi;
             const MohrResult r = mohr_coulomb_return(mc, st, s);
             if (r.mode != MohrResult::Elastic) {
                 p_.plastic_shear[q] += r.d_gamma_p;
