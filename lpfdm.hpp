@@ -409,42 +409,45 @@ struct MohrResult {
 // three planes meeting there are made active together and a 2x2 or 3x3 system gives
 // the multipliers: still closed form, never an iteration.
 namespace detail {
-// The whole correction (below), out of line: only points that yield reach it.
-inline MohrResult mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, Stress& s);
+// The trial stress in principal space and the strength terms, shared by the elastic test
+// and the correction.
+struct MohrTrial {
+    double np, two_c_sq, sig_t;  // N_phi, 2 c sqrt(N_phi), tension limit
+    double a, r;                 // in-plane (sxx - syy) / 2 and radius of Mohr's circle
+    double sig[3];               // p - r, p + r, sig_zz
+};
+inline MohrResult mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, const MohrTrial& t, Stress& s);
 }  // namespace detail
 
 // The elastic test, inline in the point loop: the trial stress inside every plane is
-// left as it is. It repeats the first lines of the correction exactly.
+// left as it is; only a point that yields calls the correction.
 inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStrength& st, Stress& s) {
-    const double np = st.n_phi, sq = st.sqrt_n_phi > 0 ? st.sqrt_n_phi : std::sqrt(np), two_c_sq = 2 * st.c * sq;
-    double sig_t = std::numeric_limits<double>::infinity();
-    if (np > 1) sig_t = two_c_sq / (np - 1);  // apex: c / tan(phi)
-    if (st.tension >= 0) sig_t = std::min(sig_t, st.tension);
-    const double p = 0.5 * (s.xx + s.yy), a = 0.5 * (s.xx - s.yy);
-    const double r = std::sqrt(a * a + s.xy * s.xy);
-    const double lo = std::min(p - r, s.zz), hi = std::max(p + r, s.zz);
-    if (lo - hi * np + two_c_sq >= 0 && sig_t - hi >= 0) return {};
-    return detail::mohr_coulomb_correct(k, st, s);
+    detail::MohrTrial t;
+    t.np = st.n_phi;
+    t.two_c_sq = 2 * st.c * (st.sqrt_n_phi > 0 ? st.sqrt_n_phi : std::sqrt(t.np));
+    t.sig_t = std::numeric_limits<double>::infinity();
+    if (t.np > 1) t.sig_t = t.two_c_sq / (t.np - 1);  // apex: c / tan(phi)
+    if (st.tension >= 0) t.sig_t = std::min(t.sig_t, st.tension);
+    const double p = 0.5 * (s.xx + s.yy);
+    t.a = 0.5 * (s.xx - s.yy);
+    t.r = std::sqrt(t.a * t.a + s.xy * s.xy);
+    t.sig[0] = p - t.r; t.sig[1] = p + t.r; t.sig[2] = s.zz;
+    const double lo = std::min(t.sig[0], t.sig[2]), hi = std::max(t.sig[1], t.sig[2]);
+    if (lo - hi * t.np + t.two_c_sq >= 0 && t.sig_t - hi >= 0) return {};
+    return detail::mohr_coulomb_correct(k, st, t, s);
 }
 
-inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, Stress& s) {
+inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, const MohrTrial& t, Stress& s) {
     MohrResult res;
-    const double np = st.n_phi, sq = st.sqrt_n_phi > 0 ? st.sqrt_n_phi : std::sqrt(np), two_c_sq = 2 * st.c * sq;
+    const double np = t.np, two_c_sq = t.two_c_sq, sig_t = t.sig_t, a = t.a, r = t.r;
     double ns = st.n_psi;
-    double sig_t = std::numeric_limits<double>::infinity();
-    if (np > 1) sig_t = two_c_sq / (np - 1);  // apex: c / tan(phi)
-    if (st.tension >= 0) sig_t = std::min(sig_t, st.tension);
-
     // In-plane principal stresses about the current principal direction; index 2 is zz.
-    const double p = 0.5 * (s.xx + s.yy), a = 0.5 * (s.xx - s.yy);
-    const double r = std::sqrt(a * a + s.xy * s.xy);
-    const double trial[3] = {p - r, p + r, s.zz};
+    const double* trial = t.sig;
     int i1 = 0, i2 = 1, i3 = 2;  // sig1 <= sig2 <= sig3
     if (trial[i1] > trial[i2]) std::swap(i1, i2);
     if (trial[i2] > trial[i3]) std::swap(i2, i3);
     if (trial[i1] > trial[i2]) std::swap(i1, i2);
-    const double fs = trial[i1] - trial[i3] * np + two_c_sq, ft = sig_t - trial[i3];
-    if (fs >= 0 && ft >= 0) return res;
+    const double fs = trial[i1] - trial[i3] * np + two_c_sq, ft = sig_t - trial[i3];  // not both >= 0 here
     const double a1 = k.a1, a2 = k.a2;
     const double tol = 1e-11 * (std::fabs(trial[0]) + std::fabs(trial[1]) + std::fabs(trial[2]) + two_c_sq + (std::isfinite(sig_t) ? sig_t : 0));
     auto to_xy = [&](const double sg[3]) {  // same principal direction, new principal values
