@@ -78,6 +78,9 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
     CHECK(news_in_steps(s, 200) == 0);
     s.motion = Motion::Bilinear;
     CHECK(news_in_steps(s, 200) == 0);
+    s.advect = Advect::Points;  // increments carried by the points
+    CHECK(news_in_steps(s, 200) == 0);
+    CHECK(news_in_steps(s, 20, true) == 0);
 }
 
 TEST_CASE("no allocation inside the time step when points leave the lattice") {

@@ -178,6 +178,59 @@ TEST_CASE("eq. 13-14: a free block falls at g undamped and at (1 - alpha) g with
     }
 }
 
+TEST_CASE("ADVECT POINTS: a free block falls at g undamped and at (1 - alpha) g damped, as with eq. 12") {
+    for (Motion motion : {Motion::Centre, Motion::Bilinear})
+        for (double alpha : {0.0, 0.3}) {
+            Scene s = block_scene(6, 40, 0.5, {1, 15, 2, 19});
+            s.gravity_y = -9.81; s.damping = alpha; s.dt_s = 1e-3;
+            s.advect = Advect::Points; s.motion = motion;
+            Simulation sim(s);
+            const double y0 = sim.points().y[0];
+            const int n = 500;
+            for (int k = 0; k < n; ++k) sim.step();
+            const double g = 9.81, dt2 = s.dt_s * s.dt_s;
+            const double expect = -g * dt2 * ((n - 1) + (1 - alpha) * (n - 1) * (n - 2) / 2.0);
+            const double du_n = g * dt2 * (1 + (n - 1) * (1 - alpha));
+            CHECK(sim.points().y[0] - y0 == doctest::Approx(expect).epsilon(1e-9));
+            CHECK(std::fabs(sim.points().syy[0]) < 1e-6);
+            CHECK(sim.kinetic_energy() == doctest::Approx(0.5 * sim.mass_inside() * du_n * du_n / dt2).epsilon(1e-9));
+        }
+}
+
+TEST_CASE("ADVECT POINTS carries a translation across cell edges unchanged, and the nodes it leaves come to rest") {
+    // A free block slides at 0.3 L per step with no force. Every node under it must carry
+    // the same increment after every step, to the rounding of a mass-weighted mean (the
+    // mean of n equal values may differ from them by n/2 ulp), and every point must move
+    // n u to the rounding of its coordinate.
+    for (Motion motion : {Motion::Centre, Motion::Bilinear}) {
+        Scene s = block_scene(40, 10, 0.5, {1, 2, 4, 5});
+        s.advect = Advect::Points; s.motion = motion;
+        Simulation sim(s);
+        const std::vector<double> x0(sim.points().x.begin(), sim.points().x.end());
+        const double u = 0.3 * s.cell_m, v = -0.05 * s.cell_m;
+        sim.step();
+        for (std::size_t q = 0; q < sim.du_x().size(); ++q)
+            if (sim.node_mass()[q] > 0) { sim.du_x()[q] = u; sim.du_y()[q] = v; }
+        const int n = 60;
+        double worst = 0;
+        bool rest = true;
+        for (int k = 0; k < n; ++k) {
+            sim.step();
+            for (std::size_t q = 0; q < sim.du_x().size(); ++q) {
+                if (sim.node_mass()[q] > 0) worst = std::max({worst, std::fabs(sim.du_x()[q] / u - 1), std::fabs(sim.du_y()[q] / v - 1)});
+                else rest &= sim.du_x()[q] == 0 && sim.du_y()[q] == 0;
+            }
+        }
+        CHECK(worst < 8 * 2.3e-16);  // 16 points reach a node: 8 ulp
+        CHECK(rest);
+        double err = 0;
+        for (std::size_t k = 0; k < sim.points().size(); ++k)
+            err = std::max(err, std::fabs(sim.points().x[k] - x0[std::size_t(sim.points().id[k])] - n * u));
+        CHECK(err < 1e-12);
+        CHECK(sim.mass_inside() == sim.mass_initial());
+    }
+}
+
 TEST_CASE("local damping takes energy out: a ringing column's kinetic-energy peaks fall when alpha > 0") {
     Scene s;
     REQUIRE(read_deck("decks/column_ringing.deck", s).empty());

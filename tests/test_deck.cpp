@@ -984,6 +984,22 @@ TEST_CASE("deck error: a bad MOTION or HOURGLASS card") {
     CHECK_ONE_ERROR(plus("HOURGLASS 0.1\nHOURGLASS 0.2"), 6, 1, "HOURGLASS is given twice");
 }
 
+TEST_CASE("deck: ADVECT chooses how the nodal increments follow the material; EQ12 by default") {
+    CHECK(read_ok(kBase).advect == lpfdm::Advect::Eq12);
+    CHECK(read_ok(plus("ADVECT eq12")).advect == lpfdm::Advect::Eq12);
+    CHECK(read_ok(plus("MOTION CENTRE\nADVECT POINTS")).advect == lpfdm::Advect::Points);
+    CHECK(read_ok(plus("advect points\nmotion bilinear")).advect == lpfdm::Advect::Points);
+}
+
+TEST_CASE("deck error: a bad ADVECT card, and ADVECT POINTS with the paper's motion") {
+    CHECK_ONE_ERROR(plus("ADVECT FLIP"), 5, 8, "unknown advection 'FLIP' (EQ12 or POINTS)");
+    CHECK_ONE_ERROR(plus("ADVECT"), 5, 7, "missing field");
+    CHECK_ONE_ERROR(plus("ADVECT POINTS 2"), 5, 15, "extra field '2'");
+    CHECK_ONE_ERROR(plus("MOTION CENTRE\nADVECT POINTS\nADVECT EQ12"), 7, 1, "ADVECT is given twice");
+    CHECK_ONE_ERROR(plus("ADVECT POINTS"), 5, 1, "ADVECT POINTS needs MOTION CENTRE or BILINEAR");
+    CHECK_ONE_ERROR(plus("ADVECT POINTS\nMOTION PAPER"), 5, 1, "ADVECT POINTS needs MOTION CENTRE or BILINEAR");
+}
+
 TEST_CASE("apply_setting: CARD.PARAM overrides what the deck said, and names what it cannot") {
     lpfdm::Scene s = read_ok(plus("WALL 3 0 4 4 4 0 -0.01") + "DAMPING 0.8\n");
     CHECK(lpfdm::apply_setting(s, "material1.e", 6e7).empty());

@@ -340,10 +340,12 @@ struct Drop {
     bool ok = true, mass = true, through = false;
 };
 
-// A 1 m x 1 m elastic block (4 x 4 cells, 2 x 2 points each) dropped from h onto a rough
-// fixed floor, no damping, for 1.6 s, dt = frac of the limit.
-Drop drop(double h, double frac) {
-    Scene s = elastic_scene(40, 24, 0.25, {4.5, h, 5.5, h + 1});
+// A 1 m x 1 m elastic block (4K x 4K cells, 2 x 2 points each) dropped from h onto a
+// rough fixed floor, no damping, for 1.6 s, dt = frac of the limit.
+Drop drop(double h, double frac, int K = 1, Advect advect = Advect::Eq12, Motion motion = Motion::Paper) {
+    Scene s = elastic_scene(40 * K, 24 * K, 0.25 / K, {4.5, h, 5.5, h + 1});
+    s.advect = advect;
+    s.motion = motion;
     s.fixes.push_back({kFixX | kFixY, {0, 0, 10, 0}, {}});
     s.gravity_y = -9.81;
     s.dt_s = frac * stable_dt(s);
@@ -391,32 +393,34 @@ TEST_CASE("hard: a block dropped 0.5 m onto a fixed floor bounces, no higher tha
     CHECK(d.rebound < 1.0);       // ... and does not gain height
 }
 
-// Finding (open): from higher up the block bounces above its starting height. Measured
-// (1.6 s, no damping): drop 1 m at dt = 0.1 / 0.25 of the limit: rebound 1.007 / 1.013 of
-// the drop; drop 2 m: 1.27 (dt 0.1), 1.07 (dt 0.5); the 0.5 m drop above: 0.98.
-// Mechanism, from splitting each step's change of nodal kinetic energy (2 m drop, rebound
-// from 0.62 s to 0.88 s: +14.9 kJ/m against 39.2 kJ/m of drop energy): the lumped nodal
-// masses move with the points, but each node keeps its own increment. Where mass flows
-// into nodes that move faster than the nodes it left (the top surface rising faster than
-// the block below it as it leaves the floor), kinetic energy appears: +5.3 kJ/m at nodes
-// created in the last 20 steps as they fill, +4.3 kJ/m inside, +7.2 kJ/m at surface nodes;
-// creating and emptying nodes nets +0.9 kJ/m; eq. 12 removes about 3 kJ/m. In free fall
-// the same terms cancel exactly. The rule for a node that gains mass only sets what such
-// a node carries while it fills, so no such rule cures it. Rebound (2 m) and spin gain
-// (below, L = 0.25 m) for the rules tried: neighbour mean (kept) 1.27, +2.8 %; du = 0
-// (the paper) 0.49 (free fall braked to 0.72 of g), +8e-6; smallest neighbour 1.17,
-// +1.2 %; least-squares affine fit over 5 x 5 nodes 1.36, +8.1 %; eq. 12's own map of the
-// source cell 1.29, +8.0 %; the momentum of the mass moved 1.16, +2.9 %. Rules that move
-// momentum with the mass (PIC-like) never add energy (rebound 0.83, spin +4e-16) but
-// damp a rigid spin to 0.42 of its energy and fail the shape test below (69 deg against
-// 90). Curing it means carrying momentum on the points (a FLIP-like blend), beyond eq. 12.
-TEST_CASE("hard: a block dropped 2 m onto a fixed floor does not bounce above its start" * doctest::skip()) {
-    const Drop d = drop(2.0, 0.1);
-    MESSAGE("drop 2 m, dt 0.1 of the limit: rebound to " << d.rebound << " of the drop height; energy gain " << d.energy << " of the drop energy");
-    CHECK(d.ok);
-    CHECK(d.mass);
-    CHECK(d.rebound < 1.0);
-    CHECK(d.energy < 0.01);
+// From higher up, a block only 4 cells across bounces above its start: the 2 m drop
+// rebounds to 1.27 of its height at dt = 0.1 of the limit (1.21 at 0.5), and the shadow
+// energy rises by 0.34 of the drop energy. The cause is resolution, not an instability:
+// the excess falls under refinement and the rebound goes below one from 8 cells across on
+// (measured at dt 0.1 / 0.5 of the limit, L = 0.25, 0.125, 0.0625 m: rebound 1.27 / 1.21,
+// 0.87 / 0.87, 0.83 / 0.78; energy excess 0.34 / 0.27, 0.035 / 0.026, 0.015 / 0.011).
+// A trace at L = 0.25 m shows when: through the contact itself the shadow energy holds to
+// 0.5 %; the excess comes after, in flight, with the block ringing, in jumps as its rows
+// of stressed points cross cell edges (+4.8 kJ/m as the bottom row leaves the floor's
+// cells, +2.7 as it crosses the third edge; 39 kJ/m is the drop energy). Carrying the
+// increments on the points (ADVECT POINTS) does not remove it (rebound 1.18 at 4 cells
+// across, 0.89 at 8), so it is not only the mass moving between nodes that eq. 12 leaves.
+TEST_CASE("hard: a block dropped 2 m bounces no higher than it fell once 8 cells span it; the energy excess falls with L [slow]") {
+    const Drop a = drop(2.0, 0.5, 1), b = drop(2.0, 0.5, 2), c = drop(2.0, 0.5, 4);
+    for (const Drop* d : {&a, &b, &c})
+        MESSAGE("drop 2 m, L = " << (d == &a ? 0.25 : d == &b ? 0.125 : 0.0625) << " m, dt 0.5 of the limit: rebound to " << d->rebound
+                                 << " of the drop height; shadow energy up to " << d->energy << " of the drop energy above the start");
+    for (const Drop* d : {&a, &b, &c}) {
+        CHECK(d->ok);
+        CHECK(d->mass);
+        CHECK_FALSE(d->through);
+    }
+    CHECK(b.rebound < 1.0);
+    CHECK(c.rebound < 1.0);
+    // A discretisation error: at least first order in L (each halving at most 0.6 of it).
+    CHECK(b.energy < 0.6 * a.energy);
+    CHECK(c.energy < 0.6 * b.energy);
+    CHECK(c.energy < 0.02);
 }
 
 // ------------------------------------------------------------- rigid spin ---
@@ -430,8 +434,10 @@ struct Spin {
 
 // A stress-free 2 m x 1 m block (8 x 4 cells of L/K, 2 x 2 points) given the increments of
 // a rigid rotation about its centre, 90 degrees in 2 s, no gravity, no damping.
-Spin spin(int K) {
+Spin spin(int K, Advect advect = Advect::Eq12, Motion motion = Motion::Paper) {
     Scene s = elastic_scene(16 * K, 16 * K, 0.25 / K, {1, 1.5, 3, 2.5});
+    s.advect = advect;
+    s.motion = motion;
     s.dt_s = 1e-3 / K;
     const long n = 2000L * K;
     const double w = (kPi / 2) / double(n);  // radians per step
@@ -468,40 +474,72 @@ Spin spin(int K) {
     return r;
 }
 
+void report(const char* what, const Spin& r, double L) {
+    MESSAGE(std::string(what) << " spin on L = " << L << " m: major axis at " << r.angle << " deg (90 expected, the sign is atan2's), point position error up to "
+                 << r.pos_err << " m, distances changed up to " << r.dist_err * 100 << " %, stress up to " << r.stress << " Pa = "
+                 << r.stress / r.centripetal << " rho omega^2 R^2; shadow energy up to +" << r.energy_gain * 100 << " %, at the end "
+                 << r.energy_end << " of the start");
+}
+
 }  // namespace
 
-TEST_CASE("hard: a stress-free block spun as a rigid body through 90 degrees keeps its shape and stays nearly stress-free [slow]") {
-    const Spin a = spin(1), b = spin(2);
-    for (const Spin* r : {&a, &b})
-        MESSAGE("spin on L = " << (r == &a ? 0.25 : 0.125) << " m: major axis at " << r->angle << " deg (90 expected), point position error up to "
-                           << r->pos_err << " m, distances changed up to " << r->dist_err * 100 << " %, stress up to " << r->stress << " Pa = "
-                           << r->stress / r->centripetal << " rho omega^2 R^2; shadow energy up to +" << r->energy_gain * 100 << " %, at the end "
-                           << r->energy_end << " of the start");
-    CHECK(a.ok);
-    CHECK(a.mass);
-    CHECK(b.ok);
-    CHECK(b.mass);
+// The shadow energy of the spinning block rises above its start before it falls (no
+// source: a defect). Like the 2 m drop's, it is a resolution error that falls with L
+// (measured +2.8 %, +1.2 %, +0.37 % at L = 0.25, 0.125, 0.0625 m). It is above eq. 12's
+// own share: on a rigid rotation by w per step eq. 12 scales |du|^2 by 1 + w^2 each step,
+// (pi/2)^2 / n = 1.2e-3, 6.2e-4, 3.1e-4 over the n steps of the quarter turn.
+TEST_CASE("hard: a stress-free block spun as a rigid body through 90 degrees keeps its shape and stays nearly stress-free; its energy excess falls with L [slow]") {
+    const Spin a = spin(1), b = spin(2), c = spin(4);
+    report("eq. 12", a, 0.25);
+    report("eq. 12", b, 0.125);
+    report("eq. 12", c, 0.0625);
+    for (const Spin* r : {&a, &b, &c}) {
+        CHECK(r->ok);
+        CHECK(r->mass);
+        CHECK(r->energy_end < 1.0);
+    }
     // Measured 86.3 deg, 0.092 m, 28 %, 25 kPa at L = 0.25 m; 88.6 deg, 0.033 m, 14 %,
     // 14 kPa at L = 0.125 m: a first-order lag and distortion, not a breakdown. The bounds
     // hold the measured values, and the finer lattice must do better.
     CHECK(a.angle > 85);
     CHECK(b.angle > 88);
+    CHECK(c.angle > b.angle);
     CHECK(a.pos_err < 0.5 * 0.25);
     CHECK(b.pos_err < 0.6 * a.pos_err);
+    CHECK(c.pos_err < 0.6 * b.pos_err);
     CHECK(b.dist_err < 0.6 * a.dist_err);
     CHECK(b.stress < a.stress);
-    CHECK(a.energy_end < 1.0);
-    CHECK(b.energy_end < 1.0);
+    CHECK(c.stress < b.stress);
+    // The energy excess: at least first order in L.
+    CHECK(b.energy_gain < 0.6 * a.energy_gain);
+    CHECK(c.energy_gain < 0.6 * b.energy_gain);
 }
 
-// Finding (open): with no source the spinning block's shadow energy rose 2.8 % (L = 0.25 m)
-// and 1.2 % (L = 0.125 m) above its start before it fell; see the 2 m drop above. The bound
-// is eq. 12's own: on a rigid rotation by w per step it turns du and scales |du|^2 by
-// 1 + w^2 each step, (pi/2)^2 / n = 1.2e-3 over the n = 2000 steps of the quarter turn.
-TEST_CASE("hard: the energy of a spinning block never grows" * doctest::skip()) {
-    const Spin a = spin(1);
-    MESSAGE("spin: shadow energy up to +" << a.energy_gain * 100 << " %");
-    CHECK(a.energy_gain < (kPi / 2) * (kPi / 2) / 2000);
+// ADVECT POINTS carries each cell's affine increment field on its points, so a rigid
+// rotation survives the remapping: the block turns with it instead of lagging and
+// shearing. What stress remains is the physical one, rho omega^2 R^2: a free elastic block
+// must be held together to spin rigidly. The nodal shadow energy is a poor measure here:
+// the lumped masses sit at nodes, so the block's nodal moment of inertia changes as it
+// turns over the lattice while omega does not (+8.6 %, +2.4 % at L = 0.25, 0.125 m,
+// falling as L^2); at the end the energy is 0.997 and 0.9985 of the start.
+TEST_CASE("hard: ADVECT POINTS turns a rigid body through 90 degrees with its shape kept to 1 % of a cell [slow]") {
+    const Spin a = spin(1, Advect::Points, Motion::Centre), b = spin(2, Advect::Points, Motion::Centre);
+    const Spin bl = spin(1, Advect::Points, Motion::Bilinear);
+    report("ADVECT POINTS, MOTION CENTRE", a, 0.25);
+    report("ADVECT POINTS, MOTION CENTRE", b, 0.125);
+    report("ADVECT POINTS, MOTION BILINEAR", bl, 0.25);
+    for (const Spin* r : {&a, &b, &bl}) {
+        CHECK(r->ok);
+        CHECK(r->mass);
+        CHECK(std::fabs(std::fabs(r->angle) - 90) < 0.5);
+        CHECK(r->pos_err < 0.02 * 0.25);                  // eq. 12: 0.093 m
+        CHECK(r->dist_err < 0.01);                        // eq. 12: 28 %
+        CHECK(r->stress < 1.5 * r->centripetal);          // eq. 12: 16 rho omega^2 R^2
+        CHECK(r->energy_end < 1.0);
+        CHECK(r->energy_end > 0.99);
+    }
+    CHECK(b.pos_err < 0.6 * a.pos_err);
+    CHECK(b.energy_gain < 0.6 * a.energy_gain);
 }
 
 // ----------------------------------------------------------- checkerboard ---
