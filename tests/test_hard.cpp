@@ -51,8 +51,26 @@ double potential_energy(const Simulation& sim) {
     return e;
 }
 
-// Steps a simulation and measures the shadow energy after each step.
-struct Shadow {
+bool nodes_finite(Simulation& sim) {
+    for (std::size_t q = 0; q < sim.du_x().size(); ++q)
+        if (!std::isfinite(sim.du_x()[q]) || !std::isfinite(sim.du_y()[q])) return false;
+    return true;
+}
+bool finite(Simulation& sim) { return sim.healthy() && sim.first_nonfinite_point() == -1 && nodes_finite(sim); }
+bool mass_exact(const Simulation& sim) { return sim.mass_inside() + sim.mass_outflow() == sim.mass_initial(); }
+
+// Whether every value stayed finite and the mass balance exact, checked after each step.
+struct Health {
+    bool ok = true, mass = true;
+    void check(Simulation& sim) {
+        ok &= finite(sim);
+        mass &= mass_exact(sim);
+    }
+};
+
+// Steps a simulation and measures the shadow energy after each step; checked() also
+// checks its health.
+struct Shadow : Health {
     std::vector<double> px, py;
     double first = 0, max = -1e300, min = 1e300, last = 0;
     long n = 0;
@@ -70,15 +88,15 @@ struct Shadow {
         min = std::min(min, last);
         return last;
     }
+    void checked(Simulation& sim) {
+        step(sim);
+        check(sim);
+    }
+    void run(Simulation& sim, long steps) {  // stops at the first non-finite value
+        for (long k = 0; k < steps && ok; ++k) checked(sim);
+    }
 };
 
-bool nodes_finite(Simulation& sim) {
-    for (std::size_t q = 0; q < sim.du_x().size(); ++q)
-        if (!std::isfinite(sim.du_x()[q]) || !std::isfinite(sim.du_y()[q])) return false;
-    return true;
-}
-bool finite(Simulation& sim) { return sim.healthy() && sim.first_nonfinite_point() == -1 && nodes_finite(sim); }
-bool mass_exact(const Simulation& sim) { return sim.mass_inside() + sim.mass_outflow() == sim.mass_initial(); }
 
 // One step at rest (so that every node knows its mass), then the field f(x, y) -> (ux, uy)
 // as the nodal increments of every node with mass.
@@ -126,21 +144,17 @@ TEST_CASE("hard: 10^5 undamped steps at 0.9 of the stable limit keep values fini
     set_increments(sim, [&](int, int, double, double, double& ux, double& uy) { ux = 5e-7 * rnd(); uy = 5e-7 * rnd(); });
     Shadow e;
     const long n = 100000;
-    bool ok = true, mass = true;
     double first_window = 0, last_window = 0;  // max of KE + W over the first and last 10 %
-    for (long k = 0; k < n; ++k) {
-        e.step(sim);
-        ok &= finite(sim);
-        mass &= mass_exact(sim);
-        if (!ok) break;
+    for (long k = 0; k < n && e.ok; ++k) {
+        e.checked(sim);
         const double raw = sim.kinetic_energy() + strain_energy(sim);
         if (k < n / 10) first_window = std::max(first_window, raw);
         if (k >= n - n / 10) last_window = std::max(last_window, raw);
     }
     MESSAGE("0.9 of the limit, 10^5 steps: shadow energy " << e.first << " J/m at the start, at most " << e.max << ", at the end " << e.last
                                                           << "; max KE + W over the last 10 % / the first 10 %: " << last_window / first_window);
-    CHECK(ok);
-    CHECK(mass);
+    CHECK(e.ok);
+    CHECK(e.mass);
     CHECK(sim.mass_outflow() == 0);
     CHECK(e.max <= e.first * (1 + 1e-9));       // never above the start
     CHECK(last_window <= first_window * 1.01);  // and no slow growth of the raw energy
@@ -160,15 +174,10 @@ TEST_CASE("hard: ADVECT POINTS at 0.9 of the stable limit: 2 x 10^4 undamped ste
     Noise rnd;
     set_increments(sim, [&](int, int, double, double, double& ux, double& uy) { ux = 5e-7 * rnd(); uy = 5e-7 * rnd(); });
     Shadow e;
-    bool ok = true, mass = true;
-    for (long k = 0; k < 20000 && ok; ++k) {
-        e.step(sim);
-        ok &= finite(sim);
-        mass &= mass_exact(sim);
-    }
+    e.run(sim, 20000);
     MESSAGE("ADVECT POINTS, 0.9 of the limit: shadow energy " << e.first << " J/m at the start, at most " << e.max << ", at the end " << e.last);
-    CHECK(ok);
-    CHECK(mass);
+    CHECK(e.ok);
+    CHECK(e.mass);
     CHECK(e.max <= e.first * (1 + 1e-9));
     CHECK(e.last < e.first);
 }
@@ -269,12 +278,7 @@ TEST_CASE("hard: nearly incompressible column under gravity, nu = 0.49 and 0.499
         const Points& p = sim.points();
         const std::vector<double> y0(p.y.begin(), p.y.end());
         Shadow e;
-        bool ok = true, mass = true;
-        for (long k = 0; k < 8000 && ok; ++k) {
-            e.step(sim);
-            ok = finite(sim);
-            mass &= mass_exact(sim);
-        }
+        e.run(sim, 8000);
         const Material& m = s.materials[0];
         const double H = 12, gamma = m.rho * 9.81, M = m.E * (1 - nu) / ((1 + nu) * (1 - 2 * nu));
         double num = 0, numx = 0, den = 0, top_err = 0, top_ref = 0;
@@ -292,8 +296,8 @@ TEST_CASE("hard: nearly incompressible column under gravity, nu = 0.49 and 0.499
         const double syy = std::sqrt(num / den), sxx = std::sqrt(numx / den), settle = top_err / top_ref;
         MESSAGE("nu = " << nu << ", dt " << s.dt_s << " s: sigma_yy L2 error " << syy << ", sigma_xx " << sxx << " (of |sigma_yy|), settlement "
                         << settle << "; unbalanced force ratio " << sim.unbalanced_ratio() << "; energy max - start " << e.max - e.first << " J/m");
-        CHECK(ok);
-        CHECK(mass);
+        CHECK(e.ok);
+        CHECK(e.mass);
         CHECK(syy < 0.025);
         CHECK(sxx < 0.025);
         CHECK(settle < 0.01);
@@ -325,14 +329,9 @@ TEST_CASE("hard: a cap 1000 times stiffer than the soil below it [slow]") {
         const Points& p = sim.points();
         const std::vector<double> y0(p.y.begin(), p.y.end());
         Shadow e;
-        bool ok = true, mass = true;
-        for (long k = 0; k < s.steps && ok; ++k) {
-            e.step(sim);
-            ok = finite(sim);
-            mass &= mass_exact(sim);
-        }
-        CHECK(ok);
-        CHECK(mass);
+        e.run(sim, s.steps);
+        CHECK(e.ok);
+        CHECK(e.mass);
         double num = 0, den = 0;
         cap_err = 0;
         for (std::size_t k = 0; k < p.size(); ++k) {
@@ -385,10 +384,8 @@ Drop drop(double h, double frac, int K = 1, Advect advect = Advect::Eq12, Motion
     bool contact = false;
     Shadow e;
     for (long n = 0; n < long(1.6 / s.dt_s); ++n) {
-        e.step(sim);
-        d.ok &= finite(sim);
-        d.mass &= mass_exact(sim);
-        if (!d.ok) break;
+        e.checked(sim);
+        if (!e.ok) break;
         centroid(sim, cx, cy);
         double ymin = 1e300;
         for (std::size_t k = 0; k < p.size(); ++k) { ymin = std::min(ymin, p.y[k]); d.peak_stress = std::max(d.peak_stress, -p.syy[k]); }
@@ -400,6 +397,8 @@ Drop drop(double h, double frac, int K = 1, Advect advect = Advect::Eq12, Motion
         if (contact && cy > cy_min) d.rebound = std::max(d.rebound, cy);
         cy_prev = cy;
     }
+    d.ok = e.ok;
+    d.mass = e.mass;
     d.through = sim.mass_outflow() > 0;
     d.rebound = (d.rebound - 0.5) / (cy0 - 0.5);
     d.energy = (e.max - e.first) / (2000 * 9.81 * h);
@@ -475,11 +474,11 @@ Spin spin(int K, Advect advect = Advect::Eq12, Motion motion = Motion::Paper) {
     Shadow e;
     Spin r;
     for (long k = 0; k < n; ++k) {
-        e.step(sim);
-        r.ok &= finite(sim);
-        r.mass &= mass_exact(sim);
+        e.checked(sim);
         for (std::size_t q = 0; q < p.size(); ++q) r.stress = std::max({r.stress, std::fabs(p.sxx[q]), std::fabs(p.syy[q]), std::fabs(p.sxy[q])});
     }
+    r.ok = e.ok;
+    r.mass = e.mass;
     double cx, cy;
     centroid(sim, cx, cy);
     double sxx = 0, syy = 0, sxy = 0;
@@ -593,9 +592,7 @@ Checker checkerboard(long n, double kappa) {
     Checker c;
     double ke0 = 0;
     for (long k = 0; k < n; ++k) {
-        e.step(sim);
-        c.ok &= finite(sim);
-        c.mass &= mass_exact(sim);
+        e.checked(sim);
         if (k == 0) ke0 = sim.kinetic_energy();
         c.ke_max = std::max(c.ke_max, sim.kinetic_energy() / ke0);
         for (std::size_t q = 0; q < p.size(); ++q) {
@@ -607,6 +604,8 @@ Checker checkerboard(long n, double kappa) {
             for (std::size_t q = 0; q < p.size(); ++q)
                 c.drift_early = std::max(c.drift_early, std::hypot(p.x[q] - x0[std::size_t(p.id[q])], p.y[q] - y0[std::size_t(p.id[q])]) / s.cell_m);
     }
+    c.ok = e.ok;
+    c.mass = e.mass;
     for (std::size_t q = 0; q < p.size(); ++q)
         c.drift = std::max(c.drift, std::hypot(p.x[q] - x0[std::size_t(p.id[q])], p.y[q] - y0[std::size_t(p.id[q])]) / s.cell_m);
     c.ke_end = sim.kinetic_energy() / ke0;
@@ -658,12 +657,7 @@ TEST_CASE("hard: one point per cell: the confined column still comes to rest at 
     const Points& p = sim.points();
     const std::vector<double> y0(p.y.begin(), p.y.end());
     Shadow e;
-    bool ok = true, mass = true;
-    for (long k = 0; k < s.steps && ok; ++k) {
-        e.step(sim);
-        ok = finite(sim);
-        mass &= mass_exact(sim);
-    }
+    e.run(sim, s.steps);
     double num = 0, den = 0;
     for (std::size_t k = 0; k < p.size(); ++k) {
         const double ref = -2000 * 9.81 * (12 - y0[std::size_t(p.id[k])]);
@@ -671,8 +665,8 @@ TEST_CASE("hard: one point per cell: the confined column still comes to rest at 
         den += ref * ref;
     }
     MESSAGE("one point per cell: sigma_yy L2 error " << std::sqrt(num / den) << " (2 x 2 points: 1.96 %), unbalanced ratio " << sim.unbalanced_ratio());
-    CHECK(ok);
-    CHECK(mass);
+    CHECK(e.ok);
+    CHECK(e.mass);
     CHECK(std::sqrt(num / den) < 0.03);
     CHECK(sim.unbalanced_ratio() < 1e-6);
     CHECK(e.max <= e.first + 1e-9 * std::fabs(e.first));
@@ -696,21 +690,18 @@ TEST_CASE("hard: isolated points fall onto a fixed floor and stay on it") {
     const Points& p = sim.points();
     REQUIRE(p.size() == 5);
     Shadow e;
-    bool ok = true, mass = true;
     double ymin = 1e300;
     const long n = long(2.0 / s.dt_s);
-    for (long k = 0; k < n && ok; ++k) {
-        e.step(sim);
-        ok = finite(sim);
-        mass &= mass_exact(sim);
+    for (long k = 0; k < n && e.ok; ++k) {
+        e.checked(sim);
         for (double y : p.y) ymin = std::min(ymin, y);
     }
     double ytop = 0;
     for (double y : p.y) ytop = std::max(ytop, y);
     MESSAGE("isolated points after 2 s: heights " << ymin << " .. " << ytop << " m (lowest ever " << ymin << "), kinetic energy "
                                                   << sim.kinetic_energy() << " J/m, shadow energy max - start " << e.max - e.first);
-    CHECK(ok);
-    CHECK(mass);
+    CHECK(e.ok);
+    CHECK(e.mass);
     CHECK(sim.mass_outflow() == 0);  // none passes the floor
     CHECK(p.size() == 5);
     CHECK(ymin > 0);
@@ -734,13 +725,12 @@ TEST_CASE("hard: points exactly on cell edges, nodes and the lattice boundary mo
     const std::vector<double> x0(p.x.begin(), p.x.end()), y0(p.y.begin(), p.y.end());
     const double ux = 1e-4, uy = 7e-5;
     set_increments(sim, [&](int, int, double, double, double& a, double& b) { a = ux; b = uy; });
-    bool ok = true, mass = true;
+    Health h;
     double stress = 0;
     const long n = 2000;
     for (long k = 0; k < n; ++k) {
         sim.step();
-        ok &= finite(sim);
-        mass &= mass_exact(sim);
+        h.check(sim);
         for (std::size_t q = 0; q < p.size(); ++q) stress = std::max({stress, std::fabs(p.sxx[q]), std::fabs(p.syy[q]), std::fabs(p.sxy[q])});
     }
     double err = 0;
@@ -749,8 +739,8 @@ TEST_CASE("hard: points exactly on cell edges, nodes and the lattice boundary mo
         err = std::max({err, std::fabs(p.x[q] - (x0[id] + n * ux)), std::fabs(p.y[q] - (y0[id] + n * uy))});
     }
     MESSAGE("points on edges after " << n << " steps of translation: position error up to " << err << " m, stress up to " << stress << " Pa");
-    CHECK(ok);
-    CHECK(mass);
+    CHECK(h.ok);
+    CHECK(h.mass);
     CHECK(p.size() == 16);
     CHECK(err < 1e-12);
     CHECK(stress < 1e-6);
@@ -785,20 +775,20 @@ TEST_CASE("hard: points leave through every side; mass balance exact at every st
         s.gravity_x = side.gx; s.gravity_y = side.gy;
         s.dt_s = 1e-3;
         Simulation sim(s);
-        bool ok = true, mass = true, monotone = true;
+        Health h;
+        bool monotone = true;
         double out = 0;
         long emptied = -1;
         for (long k = 0; k < 1500; ++k) {
             sim.step();
-            ok &= finite(sim);
-            mass &= mass_exact(sim);
+            h.check(sim);
             monotone &= sim.mass_outflow() >= out;
             out = sim.mass_outflow();
             if (emptied < 0 && (sim.points().size() == 0)) emptied = k;
         }
         MESSAGE("through the " << std::string(side.name) << " side: the lattice emptied at step " << emptied);
-        CHECK(ok);
-        CHECK(mass);
+        CHECK(h.ok);
+        CHECK(h.mass);
         CHECK(monotone);
         CHECK(emptied > 0);
         CHECK((sim.points().size() == 0));
@@ -825,18 +815,17 @@ TEST_CASE("hard: no point crosses a fixed edge: a granular column collapses on a
             REQUIRE(validate(s).empty());
             Simulation sim(s);
             const Points& p = sim.points();
-            bool ok = true, mass = true;
+            Health h;
             double xmin = 1e300, ymin = 1e300, xmax = 0;
-            for (long k = 0; k < s.steps && ok; ++k) {
+            for (long k = 0; k < s.steps && h.ok; ++k) {
                 sim.step();
-                ok = finite(sim);
-                mass &= mass_exact(sim);
+                h.check(sim);
                 for (std::size_t q = 0; q < p.size(); ++q) { xmin = std::min(xmin, p.x[q]); ymin = std::min(ymin, p.y[q]); xmax = std::max(xmax, p.x[q]); }
             }
             MESSAGE("collapse a = 0.5, " << ppc << " x " << ppc << " points, motion " << int(motion) << ": outflow " << sim.mass_outflow()
                                          << " kg/m, lowest point y = " << ymin << ", x = " << xmin << ", front at x = " << xmax);
-            CHECK(ok);
-            CHECK(mass);
+            CHECK(h.ok);
+            CHECK(h.mass);
             CHECK(sim.mass_outflow() == 0);
             CHECK(ymin >= 0);
             CHECK(xmin >= 0);
