@@ -18,21 +18,9 @@
 # than the time limit. One line per failure, and last "decks: N passed, M failed".
 set -u
 
-if [ $# -ne 1 ]; then
-    echo "usage: $0 EXE" >&2
-    exit 2
-fi
-exe=$1
-case $exe in
-    */*) exe="$(cd "$(dirname "$exe")" 2>/dev/null && pwd)/$(basename "$exe")" ;;
-    *) if [ -f "$exe" ]; then exe="$PWD/$exe"; else exe=$(command -v "$exe" || echo "$exe"); fi ;;
-esac
+. "$(dirname "$0")/lib.sh"
+need_program decks "$@"
 cd "$(dirname "$0")/.." || exit 2
-if [ ! -x "$exe" ] || [ -d "$exe" ]; then
-    echo "FAIL $1: not an executable program"
-    echo "decks: 0 passed, 1 failed"
-    exit 1
-fi
 
 limit=20  # seconds per run
 tmp=$(mktemp -d) || exit 2

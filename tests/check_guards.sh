@@ -15,20 +15,8 @@
 # counting it (for work in progress). Last line "guards: N passed, M failed".
 set -u
 
-if [ $# -ne 1 ]; then
-    echo "usage: $0 EXE" >&2
-    exit 2
-fi
-exe=$1
-case $exe in
-    */*) exe="$(cd "$(dirname "$exe")" 2>/dev/null && pwd)/$(basename "$exe")" ;;
-    *) if [ -f "$exe" ]; then exe="$PWD/$exe"; else exe=$(command -v "$exe" || echo "$exe"); fi ;;
-esac
-if [ ! -x "$exe" ] || [ -d "$exe" ]; then
-    echo "FAIL $1: not an executable program"
-    echo "guards: 0 passed, 1 failed"
-    exit 1
-fi
+. "$(dirname "$0")/lib.sh"
+need_program guards "$@"
 
 tmp=$(mktemp -d) || exit 2
 trap 'rm -rf "$tmp"' EXIT

@@ -1,0 +1,24 @@
+# Shared by the program-level checks (sourced, not run).
+
+# need_program LABEL ARGS...: the checks take one argument, the program. Sets exe to its
+# absolute path (the checks change directory), or exits: status 2 with the usage when the
+# arguments are wrong, status 1 with one failure and "LABEL: 0 passed, 1 failed" when it
+# is not an executable program.
+need_program() {
+    local label=$1
+    shift
+    if [ $# -ne 1 ]; then
+        echo "usage: $0 EXE" >&2
+        exit 2
+    fi
+    exe=$1
+    case $exe in
+        */*) exe="$(cd "$(dirname "$exe")" 2>/dev/null && pwd)/$(basename "$exe")" ;;
+        *) if [ -f "$exe" ]; then exe="$PWD/$exe"; else exe=$(command -v "$exe" || echo "$exe"); fi ;;
+    esac
+    if [ ! -x "$exe" ] || [ -d "$exe" ]; then
+        echo "FAIL $1: not an executable program"
+        echo "$label: 0 passed, 1 failed"
+        exit 1
+    fi
+}
