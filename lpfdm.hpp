@@ -908,6 +908,7 @@ public:
         double b = 0;
         for (const auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol, &p_.plastic_shear, &p_.c0, &p_.n_phi}) b += double(v->capacity()) * 8;
         b += double(p_.cell.capacity() + p_.id.capacity()) * 4 + double(p_.group.capacity()) * 2 + double(p_.yielded.capacity());
+        b += double(pdx_.capacity() + pdy_.capacity()) * 8 + double(pfrom_.capacity()) * 4;  // ADVECT POINTS only
         return b / n;
     }
 
