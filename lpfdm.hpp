@@ -373,11 +373,12 @@ inline MaterialConstants constants_of(const Material& m) {
 
 // Hooke's law for plane strain, eq. 6 for an elastic point: d_sig = D d_eps, d_sig_zz
 // from the in-plane volume change.
+inline Stress elastic_change(const MaterialConstants& k, const StrainIncrement& d) {
+    return {k.a1 * d.xx + k.a2 * d.yy, k.a2 * d.xx + k.a1 * d.yy, k.G * d.gamma(), k.a2 * (d.xx + d.yy)};
+}
 inline void elastic_increment(const MaterialConstants& k, const StrainIncrement& d, Stress& s) {
-    s.xx += k.a1 * d.xx + k.a2 * d.yy;
-    s.yy += k.a2 * d.xx + k.a1 * d.yy;
-    s.xy += k.G * d.gamma();
-    s.zz += k.a2 * (d.xx + d.yy);
+    const Stress ds = elastic_change(k, d);
+    s.xx += ds.xx; s.yy += ds.yy; s.xy += ds.xy; s.zz += ds.zz;
 }
 
 // The rotation of eq. 5f as an exact orthogonal matrix (Cayley form, no trigonometry):
@@ -1017,6 +1018,14 @@ private:
     void remove_departed();
     void clear_cells();
     template <bool Fused> void advance_points();
+    // What a range of points gives map_to_lattice's bookkeeping: the cells and columns
+    // they landed in, their mass, how many left the lattice.
+    struct Tally {
+        int cmin = std::numeric_limits<int>::max(), cmax = -1, imin = std::numeric_limits<int>::max(), imax = -1;
+        double mass = 0;
+        long departed = 0;
+    };
+    template <bool Fused> void advance_range(long k0, long k1, Tally& t);
     void carried_increments(const Range& nodes);
     // ADVECT POINTS: the increment field a point of mass m brings to cell c = (i, j), where
     // it now lies at (x, y): d + E (x' - x), with E the eq. 5 strain of the cell it left.
@@ -1293,37 +1302,130 @@ inline void Simulation::update_points() { advance_points<false>(); }
 template <bool Fused>
 inline void Simulation::advance_points() {
     if constexpr (Fused) clear_cells();
-    int cmin = mx_ * my_, cmax = -1, imin = mx_, imax = -1;
-    double mass = 0;
     const long n = long(p_.size());
-    const double X = mx_ * L_, Y = my_ * L_;
+    Tally t;
+    if constexpr (Fused) {
+        advance_range<true>(0, n, t);
+    } else {
+        long departed = 0;
+        // User models may not be thread-safe: they are consulted from one thread.
+        LPFDM_OMP(omp parallel reduction(+ : departed) if (n > 4096 && user_models_.empty()))
+        {
+#if defined(_OPENMP)
+            const long nt = omp_get_num_threads(), id = omp_get_thread_num();
+#else
+            const long nt = 1, id = 0;
+#endif
+            Tally mine;
+            advance_range<false>(n * id / nt, n * (id + 1) / nt, mine);
+            departed += mine.departed;
+        }
+        t.departed = departed;
+    }
+    departed_ = std::size_t(t.departed);
+    if (departed_) remove_departed();
+    if constexpr (Fused) {
+        mass_in_ = t.mass;
+        occupied_ = t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1};
+    }
+}
+
+// Points k0 .. k1-1. The points are stored cell by cell and mostly stay so (they are
+// created that way and cross a cell edge rarely), so the loop walks runs of points that
+// share a cell: the cell's strain, rotation, nodes and elastic stress increment are
+// read once per run. Fused: the sums of the run's cell are kept in registers while its
+// points stay in it and written back when the run ends; every sum still takes its terms
+// in point order, so the result is the same bit for bit as a plain loop over points.
+// Requires p_.cell[k] to be the cell holding (x[k], y[k]) (as after every step).
+template <bool Fused>
+inline void Simulation::advance_range(long k0, long k1, Tally& t) {
+    // Local pointers: stores through a double* may alias any double member, which would
+    // make the compiler reload every member after every store.
+    double* __restrict px = p_.x.data();
+    double* __restrict py = p_.y.data();
+    double* __restrict psxx = p_.sxx.data();
+    double* __restrict psyy = p_.syy.data();
+    double* __restrict psxy = p_.sxy.data();
+    double* __restrict pszz = p_.szz.data();
+    double* __restrict pvol = p_.vol.data();
+    std::int32_t* __restrict pcell = p_.cell.data();
+    const std::uint16_t* __restrict pgroup = p_.group.data();
+    double* __restrict cmass = cmass_.data();
+    double* __restrict cvol = cvol_.data();
+    double* __restrict sxx_v = svxx_.data();
+    double* __restrict syy_v = svyy_.data();
+    double* __restrict sxy_v = svxy_.data();
+    const double* dux = dux_.data();
+    const double* duy = duy_.data();
+    const int mx = mx_, my = my_;
+    const double L = L_, invL = invL_, X = mx * L, Y = my * L;
     const bool plastic = !p_.plastic_shear.empty(), scatter = !p_.c0.empty();
     const Motion motion = sc_.motion;
     const bool carry = !pdx_.empty();
-    long departed = 0;
-    // User models may not be thread-safe: they are consulted from one thread.
-    LPFDM_OMP(omp parallel for schedule(static) reduction(+ : departed) if (!Fused && n > 4096 && user_models_.empty()))
-    for (long k = 0; k < n; ++k) {
-        const int c = p_.cell[std::size_t(k)];
-        const StrainIncrement e{exx_[c], eyy_[c], exy_[c], eyx_[c]};
-        const MaterialConstants& mc = *group_consts_[p_.group[std::size_t(k)]];
+
+    // The run: its cell c = (ci, cj) and what the cell gives every point in it.
+    int c = -1, ci = 0, cj = 0, n1 = 0;
+    StrainIncrement e;
+    double rc = 1, rs = 0, xi = 0, yj = 0, uc0 = 0, uc1 = 0, vc0 = 0, vc1 = 0;
+    double ux1 = 0, uy1 = 0, ux2 = 0, uy2 = 0, ux3 = 0, uy3 = 0, ux4 = 0, uy4 = 0, umx = 0, umy = 0;
+    std::uint8_t fe = 0;
+    // The group (material, mass) of the last point, and the elastic increment of eq. 6
+    // for this cell and that material.
+    int g = -1;
+    const MaterialConstants* mc = nullptr;
+    double gm = 0, gv0 = 0;
+    Stress de;
+    // Fused: the sums of cell c while its points stay in it.
+    double am = 0, av = 0, axx = 0, ayy = 0, axy = 0;
+    bool stayed = false;
+    auto flush = [&]() {
+        if constexpr (Fused) {
+            if (!stayed) return;
+            cmass[c] = am; cvol[c] = av; sxx_v[c] = axx; syy_v[c] = ayy; sxy_v[c] = axy;
+            t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
+            t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
+            stayed = false;
+        }
+    };
+    for (long k = k0; k < k1; ++k) {
         const std::size_t q = std::size_t(k);
-        Stress s{p_.sxx[q], p_.syy[q], p_.sxy[q], p_.szz[q]};
-        rotate_stress(s, rc_[c], rs_[c]);  // Jaumann: the old stress turns with the material
-        switch (mc.model) {
+        if (pcell[q] != c) {  // a new run
+            flush();
+            c = pcell[q]; ci = c % mx; cj = c / mx; n1 = node(ci, cj);
+            e = StrainIncrement{exx_[c], eyy_[c], exy_[c], eyx_[c]};
+            rc = rc_[c]; rs = rs_[c];
+            fe = fixed_edges_[std::size_t(c)];
+            xi = ci * L; yj = cj * L;
+            uc0 = ci; uc1 = ci + 1; vc0 = cj; vc1 = cj + 1;
+            const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
+            ux1 = dux[n1]; uy1 = duy[n1];
+            if (motion != Motion::Paper) { ux2 = dux[n2]; uy2 = duy[n2]; ux3 = dux[n3]; uy3 = duy[n3]; ux4 = dux[n4]; uy4 = duy[n4]; }
+            umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4);
+            g = -1;
+            if constexpr (Fused) { am = cmass[c]; av = cvol[c]; axx = sxx_v[c]; ayy = syy_v[c]; axy = sxy_v[c]; }
+        }
+        if (pgroup[q] != g) {
+            g = pgroup[q];
+            mc = group_consts_[std::size_t(g)];
+            gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0;
+            de = elastic_change(*mc, e);  // eq. 6
+        }
+        Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+        rotate_stress(s, rc, rs);  // Jaumann: the old stress turns with the material
+        switch (mc->model) {
         case Model::Elastic:
-            elastic_increment(mc, e, s);  // eq. 6
+            s.xx += de.xx; s.yy += de.yy; s.xy += de.xy; s.zz += de.zz;  // eq. 6
             break;
         case Model::MohrCoulomb: {
-            elastic_increment(mc, e, s);  // eq. 6: elastic trial, then the plastic correction
+            s.xx += de.xx; s.yy += de.yy; s.xy += de.xy; s.zz += de.zz;  // eq. 6: elastic trial, then the plastic correction
             MohrStrength st;
-            const double c0 = scatter ? p_.c0[q] : mc.c;
-            st.c = p_.yielded[q] ? c0 * (1 - mc.soften) : c0;
-            st.n_phi = scatter ? p_.n_phi[q] : mc.n_phi;
-            st.n_psi = std::min(mc.n_psi, st.n_phi);
-            st.tension = mc.tension;
-            st.sqrt_n_phi = scatter ? 0.0 : mc.sqrt_n_phi;
-            const MohrResult r = mohr_coulomb_return(mc, st, s);
+            const double c0 = scatter ? p_.c0[q] : mc->c;
+            st.c = p_.yielded[q] ? c0 * (1 - mc->soften) : c0;
+            st.n_phi = scatter ? p_.n_phi[q] : mc->n_phi;
+            st.n_psi = std::min(mc->n_psi, st.n_phi);
+            st.tension = mc->tension;
+            st.sqrt_n_phi = scatter ? 0.0 : mc->sqrt_n_phi;
+            const MohrResult r = mohr_coulomb_return(*mc, st, s);
             if (r.mode != MohrResult::Elastic) {
                 p_.plastic_shear[q] += r.d_gamma_p;
                 p_.yielded[q] = 1;  // softening takes effect from the next consult
@@ -1332,82 +1434,83 @@ inline void Simulation::advance_points() {
         }
         case Model::User: {
             PointState ps{plastic ? p_.plastic_shear[q] : 0.0, plastic && p_.yielded[q]};
-            user_models_[std::size_t(mc.user)](e, s, ps);
+            user_models_[std::size_t(mc->user)](e, s, ps);
             if (plastic) { p_.plastic_shear[q] = ps.plastic_shear; p_.yielded[q] = ps.yielded; }
             break;
         }
         }
-        p_.sxx[q] = s.xx; p_.syy[q] = s.yy; p_.sxy[q] = s.xy; p_.szz[q] = s.zz;
-        p_.vol[q] *= 1 + e.xx + e.yy;
-        // eq. 7a/7b, about node [1] of the cell (found from the position as the cell was)
-        const double x0 = p_.x[q], y0 = p_.y[q];
-        const bool finite = x0 >= 0 && y0 >= 0;  // false only for a non-finite point the guard will name
-        const int i = finite ? std::min(mx_ - 1, int(x0 * invL_)) : c % mx_;
-        const int j = finite ? std::min(my_ - 1, int(y0 * invL_)) : c / mx_, n1 = node(i, j);
-        const double dx = x0 - i * L_, dy = y0 - j * L_;
+        psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+        pvol[q] *= 1 + e.xx + e.yy;
+        // eq. 7a/7b, about node [1] of the cell
+        const double x0 = px[q], y0 = py[q];
+        const double dx = x0 - xi, dy = y0 - yj;
         double x, y, ddx = 0, ddy = 0;  // ddx, ddy: the point's own increment (ADVECT POINTS only)
         if (motion == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
-            x = x0 + e.xx * dx + e.xy * dy + dux_[n1];
-            y = y0 + e.yy * dy + e.yx * dx + duy_[n1];
-        } else {
-            const int n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
-            if (motion == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
-                const double cx = dx - 0.5 * L_, cy = dy - 0.5 * L_;
-                const double mx = 0.25 * (dux_[n1] + dux_[n2] + dux_[n3] + dux_[n4]), my = 0.25 * (duy_[n1] + duy_[n2] + duy_[n3] + duy_[n4]);
-                x = x0 + e.xx * cx + e.xy * cy + mx;
-                y = y0 + e.yy * cy + e.yx * cx + my;
-                if (carry) { ddx = e.xx * cx + e.xy * cy + mx; ddy = e.yy * cy + e.yx * cx + my; }
-            } else {  // bilinear shape functions of the cell
-                const double u = dx * invL_, v = dy * invL_;
-                const double w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
-                x = x0 + w1 * dux_[n1] + w2 * dux_[n2] + w3 * dux_[n3] + w4 * dux_[n4];
-                y = y0 + w1 * duy_[n1] + w2 * duy_[n2] + w3 * duy_[n3] + w4 * duy_[n4];
-                if (carry) {
-                    ddx = w1 * dux_[n1] + w2 * dux_[n2] + w3 * dux_[n3] + w4 * dux_[n4];
-                    ddy = w1 * duy_[n1] + w2 * duy_[n2] + w3 * duy_[n3] + w4 * duy_[n4];
-                }
+            x = x0 + e.xx * dx + e.xy * dy + ux1;
+            y = y0 + e.yy * dy + e.yx * dx + uy1;
+        } else if (motion == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
+            const double cx = dx - 0.5 * L, cy = dy - 0.5 * L;
+            x = x0 + e.xx * cx + e.xy * cy + umx;
+            y = y0 + e.yy * cy + e.yx * cx + umy;
+            if (carry) { ddx = e.xx * cx + e.xy * cy + umx; ddy = e.yy * cy + e.yx * cx + umy; }
+        } else {  // bilinear shape functions of the cell
+            const double u = dx * invL, v = dy * invL;
+            const double w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
+            x = x0 + w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
+            y = y0 + w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
+            if (carry) {
+                ddx = w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
+                ddy = w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
             }
         }
-        if (const std::uint8_t fe = fixed_edges_[std::size_t(c)]) {
+        if (fe) {
             // A fixed edge is impermeable: eq. 7a/7b is an affine map of the whole cell and
             // moves a point on a fixed edge by d_eps_yx dx (or d_eps_xy dy) when the far
             // nodes move unequally; it stops on the edge, inside its cell.
-            if ((fe & kEdgeBottom) && y < j * L_) y = edge_above(j);
-            if ((fe & kEdgeTop) && y >= (j + 1) * L_) y = edge_below(j + 1);
-            if ((fe & kEdgeLeft) && x < i * L_) x = edge_above(i);
-            if ((fe & kEdgeRight) && x >= (i + 1) * L_) x = edge_below(i + 1);
+            if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
+            if ((fe & kEdgeTop) && y >= (cj + 1) * L) y = edge_below(cj + 1);
+            if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
+            if ((fe & kEdgeRight) && x >= (ci + 1) * L) x = edge_below(ci + 1);
         }
-        p_.x[q] = x; p_.y[q] = y;
+        px[q] = x; py[q] = y;
         if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
-            p_.cell[q] = -1;
-            ++departed;
+            pcell[q] = -1;
+            ++t.departed;
             continue;
         }
-        const int ni = std::min(mx_ - 1, int(x * invL_)), nj = std::min(my_ - 1, int(y * invL_)), cn = cell(ni, nj);
-        p_.cell[q] = cn;
+        // The new cell, min(m - 1, int(x / L)): the run's own cell in the usual case.
+        const double u = x * invL, v = y * invL;
+        int ni = ci, nj = cj, cn = c;
+        if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
+            ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
+            pcell[q] = cn;
+        }
         if (carry) {
-            if constexpr (Fused) carry_to(cn, ni, nj, groups_[p_.group[q]].mass, x, y, ddx, ddy, e);
+            if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
             else { pdx_[q] = ddx; pdy_[q] = ddy; pfrom_[q] = c; }
         }
         if constexpr (Fused) {
-            const Group& g = groups_[p_.group[q]];
-            const double m = g.mass, v = std::min(p_.vol[q], g.vol0);
-            cmass_[cn] += m;                // eq. 7
-            cvol_[cn] += v;
-            svxx_[cn] += v * s.xx;          // eq. 8
-            svyy_[cn] += v * s.yy;
-            svxy_[cn] += v * s.xy;
-            mass += m;
-            cmin = std::min(cmin, cn); cmax = std::max(cmax, cn);
-            imin = std::min(imin, ni); imax = std::max(imax, ni);
+            const double vk = std::min(pvol[q], gv0);
+            if (cn == c) {
+                am += gm;                  // eq. 7
+                av += vk;
+                axx += vk * s.xx;          // eq. 8
+                ayy += vk * s.yy;
+                axy += vk * s.xy;
+                stayed = true;
+            } else {
+                cmass[cn] += gm;           // eq. 7
+                cvol[cn] += vk;
+                sxx_v[cn] += vk * s.xx;    // eq. 8
+                syy_v[cn] += vk * s.yy;
+                sxy_v[cn] += vk * s.xy;
+                t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
+                t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
+            }
+            t.mass += gm;
         }
     }
-    departed_ = std::size_t(departed);
-    if (departed_) remove_departed();
-    if constexpr (Fused) {
-        mass_in_ = mass;
-        occupied_ = cmax < 0 ? Range{} : Range{imin, imax + 1, cmin / mx_, cmax / mx_ + 1};
-    }
+    flush();
 }
 
 // Points that left the lattice leave the cycle; their mass becomes outflow. The order
