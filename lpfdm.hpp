@@ -391,6 +391,18 @@ inline void jaumann_rotation(double d_theta, double& c2, double& s2) {
     s2 = 2 * si * co;
 }
 
+// eq. 5a-5d: the strain increments of the cell whose node [1] is n1 (nodes in rows of
+// `row`; h = 1 / 2L) from the nodal increments ux, uy.
+inline StrainIncrement cell_strain(const double* ux, const double* uy, int n1, int row, double h) {
+    const int n2 = n1 + 1, n3 = n1 + row, n4 = n3 + 1;
+    StrainIncrement e;
+    e.xx = (ux[n2] + ux[n4] - ux[n1] - ux[n3]) * h;  // eq. 5a
+    e.yy = (uy[n3] + uy[n4] - uy[n1] - uy[n2]) * h;  // eq. 5b
+    e.xy = (ux[n3] + ux[n4] - ux[n1] - ux[n2]) * h;  // eq. 5c
+    e.yx = (uy[n2] + uy[n4] - uy[n1] - uy[n3]) * h;  // eq. 5d
+    return e;
+}
+
 // Rotates the in-plane stress with the material (Jaumann); invariants are kept exactly.
 inline void rotate_stress(Stress& s, double c2, double s2) {
     const double pm = 0.5 * (s.xx + s.yy), a = 0.5 * (s.xx - s.yy), b = s.xy;
@@ -964,16 +976,7 @@ public:
     }
 
     // Strain increments of cell (i, j) from the nodal increments, eq. 5a-5d.
-    StrainIncrement strain_of_cell(int i, int j) const {
-        const int n1 = node(i, j), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
-        const double h = 0.5 * invL_;
-        StrainIncrement e;
-        e.xx = (dux_[n2] + dux_[n4] - dux_[n1] - dux_[n3]) * h;  // eq. 5a
-        e.yy = (duy_[n3] + duy_[n4] - duy_[n1] - duy_[n2]) * h;  // eq. 5b
-        e.xy = (dux_[n3] + dux_[n4] - dux_[n1] - dux_[n2]) * h;  // eq. 5c
-        e.yx = (duy_[n2] + duy_[n4] - duy_[n1] - duy_[n3]) * h;  // eq. 5d
-        return e;
-    }
+    StrainIncrement strain_of_cell(int i, int j) const { return cell_strain(dux_.data(), duy_.data(), node(i, j), mx_ + 1, 0.5 * invL_); }
 
     // The point a non-finite value was first seen at, or -1.
     long first_nonfinite_point() const {
@@ -1026,6 +1029,9 @@ private:
         long departed = 0;
     };
     template <bool Fused> void advance_range(long k0, long k1, Tally& t);
+    template <bool Fused, Motion M, bool Carry> void advance_run(long k0, long k1, Tally& t);
+    void plastic_correction(const MaterialConstants& mc, std::size_t q, Stress& s);
+    void user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s);
     void carried_increments(const Range& nodes);
     // ADVECT POINTS: the increment field a point of mass m brings to cell c = (i, j), where
     // it now lies at (x, y): d + E (x' - x), with E the eq. 5 strain of the cell it left.
@@ -1276,19 +1282,28 @@ inline void Simulation::create_points() {
 // rotation of eq. 5f as an exact orthogonal matrix (Cayley form: no trigonometry).
 inline void Simulation::cell_strains() {
     strained_ = occupied_.grow(2, mx_, my_);
-    LPFDM_OMP(omp parallel for schedule(static) if ((strained_.j1 - strained_.j0) * (strained_.i1 - strained_.i0) > 8192))
-    for (int j = strained_.j0; j < strained_.j1; ++j)
-        for (int i = strained_.i0; i < strained_.i1; ++i) {
-            const int c = cell(i, j);
+    const Range r = strained_;
+    const int mx = mx_;
+    const double h = 0.5 * invL_;
+    const double* ux = dux_.data();
+    const double* uy = duy_.data();
+    const double* cm = cmass_.data();
+    double *exx = exx_.data(), *eyy = eyy_.data(), *exy = exy_.data(), *eyx = eyx_.data(), *rc = rc_.data(), *rs = rs_.data();
+    double *hgx = hgx_.data(), *hgy = hgy_.data();
+    const bool hourglass = !hgx_.empty();
+    LPFDM_OMP(omp parallel for schedule(static) if ((r.j1 - r.j0) * (r.i1 - r.i0) > 8192))
+    for (int j = r.j0; j < r.j1; ++j)
+        for (int i = r.i0; i < r.i1; ++i) {
+            const int c = j * mx + i, n1 = j * (mx + 1) + i;
             // An empty cell holds no material to strain; its "increments" between moving
             // and resting nodes would make eq. 12 brake every node on a free surface.
-            const StrainIncrement e = cmass_[c] > 0 ? strain_of_cell(i, j) : StrainIncrement{};
-            exx_[c] = e.xx; eyy_[c] = e.yy; exy_[c] = e.xy; eyx_[c] = e.yx;
-            jaumann_rotation(e.theta(), rc_[c], rs_[c]);  // eq. 5f
-            if (!hgx_.empty()) {  // the checkerboard part h = (+1, -1, -1, +1)/4 that eq. 5 cannot see
-                const int n1 = node(i, j), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
-                hgx_[c] = cmass_[c] > 0 ? 0.25 * (dux_[n1] - dux_[n2] - dux_[n3] + dux_[n4]) : 0.0;
-                hgy_[c] = cmass_[c] > 0 ? 0.25 * (duy_[n1] - duy_[n2] - duy_[n3] + duy_[n4]) : 0.0;
+            const StrainIncrement e = cm[c] > 0 ? cell_strain(ux, uy, n1, mx + 1, h) : StrainIncrement{};  // eq. 5a-5d
+            exx[c] = e.xx; eyy[c] = e.yy; exy[c] = e.xy; eyx[c] = e.yx;
+            jaumann_rotation(e.theta(), rc[c], rs[c]);  // eq. 5f
+            if (hourglass) {  // the checkerboard part h = (+1, -1, -1, +1)/4 that eq. 5 cannot see
+                const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
+                hgx[c] = cm[c] > 0 ? 0.25 * (ux[n1] - ux[n2] - ux[n3] + ux[n4]) : 0.0;
+                hgy[c] = cm[c] > 0 ? 0.25 * (uy[n1] - uy[n2] - uy[n3] + uy[n4]) : 0.0;
             }
         }
 }
@@ -1337,8 +1352,45 @@ inline void Simulation::advance_points() {
 // points stay in it and written back when the run ends; every sum still takes its terms
 // in point order, so the result is the same bit for bit as a plain loop over points.
 // Requires p_.cell[k] to be the cell holding (x[k], y[k]) (as after every step).
+// One instantiation per motion rule and transfer, so the loop holds only what it uses.
 template <bool Fused>
 inline void Simulation::advance_range(long k0, long k1, Tally& t) {
+    const bool carry = !pdx_.empty();
+    switch (sc_.motion) {
+    case Motion::Paper: advance_run<Fused, Motion::Paper, false>(k0, k1, t); break;  // ADVECT POINTS refuses PAPER
+    case Motion::Centre: carry ? advance_run<Fused, Motion::Centre, true>(k0, k1, t) : advance_run<Fused, Motion::Centre, false>(k0, k1, t); break;
+    case Motion::Bilinear: carry ? advance_run<Fused, Motion::Bilinear, true>(k0, k1, t) : advance_run<Fused, Motion::Bilinear, false>(k0, k1, t); break;
+    }
+}
+
+// Mohr-Coulomb after the elastic trial of eq. 6: the return to the surface, with the
+// point's own strength (scatter, softening).
+inline void Simulation::plastic_correction(const MaterialConstants& mc, std::size_t q, Stress& s) {
+    const bool scatter = !p_.c0.empty();
+    MohrStrength st;
+    const double c0 = scatter ? p_.c0[q] : mc.c;
+    st.c = p_.yielded[q] ? c0 * (1 - mc.soften) : c0;
+    st.n_phi = scatter ? p_.n_phi[q] : mc.n_phi;
+    st.n_psi = std::min(mc.n_psi, st.n_phi);
+    st.tension = mc.tension;
+    st.sqrt_n_phi = scatter ? 0.0 : mc.sqrt_n_phi;
+    const MohrResult r = mohr_coulomb_return(mc, st, s);
+    if (r.mode != MohrResult::Elastic) {
+        p_.plastic_shear[q] += r.d_gamma_p;
+        p_.yielded[q] = 1;  // softening takes effect from the next consult
+    }
+}
+
+// eq. 6 by a model the embedding program gave (set_user_model).
+inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s) {
+    const bool plastic = !p_.plastic_shear.empty();
+    PointState ps{plastic ? p_.plastic_shear[q] : 0.0, plastic && p_.yielded[q]};
+    user_models_[std::size_t(mc.user)](e, s, ps);
+    if (plastic) { p_.plastic_shear[q] = ps.plastic_shear; p_.yielded[q] = ps.yielded; }
+}
+
+template <bool Fused, Motion M, bool Carry>
+inline void Simulation::advance_run(long k0, long k1, Tally& t) {
     // Local pointers: stores through a double* may alias any double member, which would
     // make the compiler reload every member after every store.
     double* __restrict px = p_.x.data();
@@ -1350,167 +1402,138 @@ inline void Simulation::advance_range(long k0, long k1, Tally& t) {
     double* __restrict pvol = p_.vol.data();
     std::int32_t* __restrict pcell = p_.cell.data();
     const std::uint16_t* __restrict pgroup = p_.group.data();
-    double* __restrict cmass = cmass_.data();
-    double* __restrict cvol = cvol_.data();
-    double* __restrict sxx_v = svxx_.data();
-    double* __restrict syy_v = svyy_.data();
-    double* __restrict sxy_v = svxy_.data();
-    const double* dux = dux_.data();
-    const double* duy = duy_.data();
     const int mx = mx_, my = my_;
     const double L = L_, invL = invL_, X = mx * L, Y = my * L;
-    const bool plastic = !p_.plastic_shear.empty(), scatter = !p_.c0.empty();
-    const Motion motion = sc_.motion;
-    const bool carry = !pdx_.empty();
+    long k = k0;
+    while (k < k1) {
+        // The run: points k .. kend-1, all in cell c = (ci, cj).
+        const int c = pcell[k], ci = c % mx, cj = c / mx, n1 = node(ci, cj);
+        long kend = k + 1;
+        while (kend < k1 && pcell[kend] == c) ++kend;
+        const StrainIncrement e{exx_[c], eyy_[c], exy_[c], eyx_[c]};
 
-    // The run: its cell c = (ci, cj) and what the cell gives every point in it.
-    int c = -1, ci = 0, cj = 0, n1 = 0;
-    StrainIncrement e;
-    double rc = 1, rs = 0, xi = 0, yj = 0, uc0 = 0, uc1 = 0, vc0 = 0, vc1 = 0;
-    double ux1 = 0, uy1 = 0, ux2 = 0, uy2 = 0, ux3 = 0, uy3 = 0, ux4 = 0, uy4 = 0, umx = 0, umy = 0;
-    std::uint8_t fe = 0;
-    // The group (material, mass) of the last point, and the elastic increment of eq. 6
-    // for this cell and that material.
-    int g = -1;
-    const MaterialConstants* mc = nullptr;
-    double gm = 0, gv0 = 0;
-    Stress de;
-    // Fused: the sums of cell c while its points stay in it.
-    double am = 0, av = 0, axx = 0, ayy = 0, axy = 0;
-    bool stayed = false;
-    auto flush = [&]() {
-        if constexpr (Fused) {
-            if (!stayed) return;
-            cmass[c] = am; cvol[c] = av; sxx_v[c] = axx; syy_v[c] = ayy; sxy_v[c] = axy;
+        // eq. 6 with the Jaumann rotation of eq. 5f, then the volume change. The elastic
+        // increment depends on the cell and the material only: once per run and group.
+        {
+            const double rc = rc_[c], rs = rs_[c], dv = 1 + e.xx + e.yy;
+            int g = -1;
+            const MaterialConstants* mc = nullptr;
+            Stress de;
+            for (long q = k; q < kend; ++q) {
+                if (pgroup[q] != g) {
+                    g = pgroup[q];
+                    mc = group_consts_[std::size_t(g)];
+                    de = elastic_change(*mc, e);  // eq. 6
+                }
+                Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                rotate_stress(s, rc, rs);  // Jaumann: the old stress turns with the material
+                if (mc->model != Model::User) {
+                    s.xx += de.xx; s.yy += de.yy; s.xy += de.xy; s.zz += de.zz;  // eq. 6 (the elastic trial for Mohr-Coulomb)
+                    if (mc->model == Model::MohrCoulomb) plastic_correction(*mc, std::size_t(q), s);
+                } else {
+                    user_consult(*mc, std::size_t(q), e, s);
+                }
+                psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+                pvol[q] *= dv;
+            }
+        }
+
+        // eq. 7a/7b, about node [1] of the cell; then eq. 7 and 8 into the cell each point
+        // lands in. Fused: the sums of cell c stay in registers while its points stay in it.
+        const std::uint8_t fe = fixed_edges_[std::size_t(c)];
+        const double xi = ci * L, yj = cj * L;
+        // A point of a cell in the last column or row takes the full test below: x < X
+        // does not follow from x / L < m there.
+        const double uc0 = ci, uc1 = ci + 1 < mx ? ci + 1 : -1, vc0 = cj, vc1 = cj + 1 < my ? cj + 1 : -1;
+        const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
+        const double ux1 = dux_[n1], uy1 = duy_[n1];
+        double ux2 = 0, uy2 = 0, ux3 = 0, uy3 = 0, ux4 = 0, uy4 = 0, umx = 0, umy = 0;
+        if constexpr (M != Motion::Paper) { ux2 = dux_[n2]; uy2 = duy_[n2]; ux3 = dux_[n3]; uy3 = duy_[n3]; ux4 = dux_[n4]; uy4 = duy_[n4]; }
+        if constexpr (M == Motion::Centre) { umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4); }
+        double am = 0, av = 0, axx = 0, ayy = 0, axy = 0;
+        if constexpr (Fused) { am = cmass_[c]; av = cvol_[c]; axx = svxx_[c]; ayy = svyy_[c]; axy = svxy_[c]; }
+        bool stayed = false;
+        int g = -1;
+        double gm = 0, gv0 = 0;
+        for (long q = k; q < kend; ++q) {
+            const double x0 = px[q], y0 = py[q];
+            const double dx = x0 - xi, dy = y0 - yj;
+            double x, y, ddx = 0, ddy = 0;  // ddx, ddy: the point's own increment (ADVECT POINTS only)
+            if constexpr (M == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
+                x = x0 + e.xx * dx + e.xy * dy + ux1;
+                y = y0 + e.yy * dy + e.yx * dx + uy1;
+            } else if constexpr (M == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
+                const double cx = dx - 0.5 * L, cy = dy - 0.5 * L;
+                x = x0 + e.xx * cx + e.xy * cy + umx;
+                y = y0 + e.yy * cy + e.yx * cx + umy;
+                if constexpr (Carry) { ddx = e.xx * cx + e.xy * cy + umx; ddy = e.yy * cy + e.yx * cx + umy; }
+            } else {  // bilinear shape functions of the cell
+                const double u = dx * invL, v = dy * invL;
+                const double w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
+                x = x0 + w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
+                y = y0 + w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
+                if constexpr (Carry) {
+                    ddx = w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
+                    ddy = w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
+                }
+            }
+            if (fe) {
+                // A fixed edge is impermeable: eq. 7a/7b is an affine map of the whole cell and
+                // moves a point on a fixed edge by d_eps_yx dx (or d_eps_xy dy) when the far
+                // nodes move unequally; it stops on the edge, inside its cell.
+                if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
+                if ((fe & kEdgeTop) && y >= (cj + 1) * L) y = edge_below(cj + 1);
+                if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
+                if ((fe & kEdgeRight) && x >= (ci + 1) * L) x = edge_below(ci + 1);
+            }
+            px[q] = x; py[q] = y;
+            // The new cell, min(m - 1, int(x / L)): the run's own cell in the usual case.
+            const double u = x * invL, v = y * invL;
+            int ni = ci, nj = cj, cn = c;
+            if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
+                if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
+                    pcell[q] = -1;
+                    ++t.departed;
+                    continue;
+                }
+                ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
+                pcell[q] = cn;
+            }
+            if (Carry || Fused) {
+                if (pgroup[q] != g) { g = pgroup[q]; gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0; }
+            }
+            if constexpr (Carry) {
+                if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
+                else { pdx_[std::size_t(q)] = ddx; pdy_[std::size_t(q)] = ddy; pfrom_[std::size_t(q)] = c; }
+            }
+            if constexpr (Fused) {
+                const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
+                if (cn == c) {
+                    am += gm;                  // eq. 7
+                    av += vk;
+                    axx += vk * sxx;           // eq. 8
+                    ayy += vk * syy;
+                    axy += vk * sxy;
+                    stayed = true;
+                } else {
+                    cmass_[std::size_t(cn)] += gm;  // eq. 7
+                    cvol_[std::size_t(cn)] += vk;
+                    svxx_[std::size_t(cn)] += vk * sxx;  // eq. 8
+                    svyy_[std::size_t(cn)] += vk * syy;
+                    svxy_[std::size_t(cn)] += vk * sxy;
+                    t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
+                    t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
+                }
+                t.mass += gm;
+            }
+        }
+        if (Fused && stayed) {
+            cmass_[std::size_t(c)] = am; cvol_[std::size_t(c)] = av; svxx_[std::size_t(c)] = axx; svyy_[std::size_t(c)] = ayy; svxy_[std::size_t(c)] = axy;
             t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
             t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
-            stayed = false;
         }
-    };
-    for (long k = k0; k < k1; ++k) {
-        const std::size_t q = std::size_t(k);
-        if (pcell[q] != c) {  // a new run
-            flush();
-            c = pcell[q]; ci = c % mx; cj = c / mx; n1 = node(ci, cj);
-            e = StrainIncrement{exx_[c], eyy_[c], exy_[c], eyx_[c]};
-            rc = rc_[c]; rs = rs_[c];
-            fe = fixed_edges_[std::size_t(c)];
-            xi = ci * L; yj = cj * L;
-            uc0 = ci; uc1 = ci + 1; vc0 = cj; vc1 = cj + 1;
-            const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
-            ux1 = dux[n1]; uy1 = duy[n1];
-            if (motion != Motion::Paper) { ux2 = dux[n2]; uy2 = duy[n2]; ux3 = dux[n3]; uy3 = duy[n3]; ux4 = dux[n4]; uy4 = duy[n4]; }
-            umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4);
-            g = -1;
-            if constexpr (Fused) { am = cmass[c]; av = cvol[c]; axx = sxx_v[c]; ayy = syy_v[c]; axy = sxy_v[c]; }
-        }
-        if (pgroup[q] != g) {
-            g = pgroup[q];
-            mc = group_consts_[std::size_t(g)];
-            gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0;
-            de = elastic_change(*mc, e);  // eq. 6
-        }
-        Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
-        rotate_stress(s, rc, rs);  // Jaumann: the old stress turns with the material
-        switch (mc->model) {
-        case Model::Elastic:
-            s.xx += de.xx; s.yy += de.yy; s.xy += de.xy; s.zz += de.zz;  // eq. 6
-            break;
-        case Model::MohrCoulomb: {
-            s.xx += de.xx; s.yy += de.yy; s.xy += de.xy; s.zz += de.zz;  // eq. 6: elastic trial, then the plastic correction
-            MohrStrength st;
-            const double c0 = scatter ? p_.c0[q] : mc->c;
-            st.c = p_.yielded[q] ? c0 * (1 - mc->soften) : c0;
-            st.n_phi = scatter ? p_.n_phi[q] : mc->n_phi;
-            st.n_psi = std::min(mc->n_psi, st.n_phi);
-            st.tension = mc->tension;
-            st.sqrt_n_phi = scatter ? 0.0 : mc->sqrt_n_phi;
-            const MohrResult r = mohr_coulomb_return(*mc, st, s);
-            if (r.mode != MohrResult::Elastic) {
-                p_.plastic_shear[q] += r.d_gamma_p;
-                p_.yielded[q] = 1;  // softening takes effect from the next consult
-            }
-            break;
-        }
-        case Model::User: {
-            PointState ps{plastic ? p_.plastic_shear[q] : 0.0, plastic && p_.yielded[q]};
-            user_models_[std::size_t(mc->user)](e, s, ps);
-            if (plastic) { p_.plastic_shear[q] = ps.plastic_shear; p_.yielded[q] = ps.yielded; }
-            break;
-        }
-        }
-        psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
-        pvol[q] *= 1 + e.xx + e.yy;
-        // eq. 7a/7b, about node [1] of the cell
-        const double x0 = px[q], y0 = py[q];
-        const double dx = x0 - xi, dy = y0 - yj;
-        double x, y, ddx = 0, ddy = 0;  // ddx, ddy: the point's own increment (ADVECT POINTS only)
-        if (motion == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
-            x = x0 + e.xx * dx + e.xy * dy + ux1;
-            y = y0 + e.yy * dy + e.yx * dx + uy1;
-        } else if (motion == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
-            const double cx = dx - 0.5 * L, cy = dy - 0.5 * L;
-            x = x0 + e.xx * cx + e.xy * cy + umx;
-            y = y0 + e.yy * cy + e.yx * cx + umy;
-            if (carry) { ddx = e.xx * cx + e.xy * cy + umx; ddy = e.yy * cy + e.yx * cx + umy; }
-        } else {  // bilinear shape functions of the cell
-            const double u = dx * invL, v = dy * invL;
-            const double w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
-            x = x0 + w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
-            y = y0 + w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
-            if (carry) {
-                ddx = w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
-                ddy = w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
-            }
-        }
-        if (fe) {
-            // A fixed edge is impermeable: eq. 7a/7b is an affine map of the whole cell and
-            // moves a point on a fixed edge by d_eps_yx dx (or d_eps_xy dy) when the far
-            // nodes move unequally; it stops on the edge, inside its cell.
-            if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
-            if ((fe & kEdgeTop) && y >= (cj + 1) * L) y = edge_below(cj + 1);
-            if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
-            if ((fe & kEdgeRight) && x >= (ci + 1) * L) x = edge_below(ci + 1);
-        }
-        px[q] = x; py[q] = y;
-        if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
-            pcell[q] = -1;
-            ++t.departed;
-            continue;
-        }
-        // The new cell, min(m - 1, int(x / L)): the run's own cell in the usual case.
-        const double u = x * invL, v = y * invL;
-        int ni = ci, nj = cj, cn = c;
-        if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
-            ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
-            pcell[q] = cn;
-        }
-        if (carry) {
-            if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
-            else { pdx_[q] = ddx; pdy_[q] = ddy; pfrom_[q] = c; }
-        }
-        if constexpr (Fused) {
-            const double vk = std::min(pvol[q], gv0);
-            if (cn == c) {
-                am += gm;                  // eq. 7
-                av += vk;
-                axx += vk * s.xx;          // eq. 8
-                ayy += vk * s.yy;
-                axy += vk * s.xy;
-                stayed = true;
-            } else {
-                cmass[cn] += gm;           // eq. 7
-                cvol[cn] += vk;
-                sxx_v[cn] += vk * s.xx;    // eq. 8
-                syy_v[cn] += vk * s.yy;
-                sxy_v[cn] += vk * s.xy;
-                t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
-                t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
-            }
-            t.mass += gm;
-        }
+        k = kend;
     }
-    flush();
 }
 
 // Points that left the lattice leave the cycle; their mass becomes outflow. The order
@@ -1589,16 +1612,25 @@ inline void Simulation::nodal_forces() {
     const double inv2L = 0.5 * invL_, L2 = L_ * L_;
     const Range keep = nr.grow(1, mx_ + 1, my_ + 1);  // compensate() asks which nodes are new
     [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = keep.j0; j < keep.j1; ++j)
-        for (int i = keep.i0; i < keep.i1; ++i) nmass_prev_[node(i, j)] = nmass_[node(i, j)];
+    const int mx = mx_, my = my_;
+    double *sxx = svxx_.data(), *syy = svyy_.data(), *sxy = svxy_.data();
+    const double* cm = cmass_.data();
+    const double* cv = cvol_.data();
+    double *nm = nmass_.data(), *nm_prev = nmass_prev_.data(), *fxn = fx_.data(), *fyn = fy_.data();
+    const double gx = sc_.gravity_x, gy = sc_.gravity_y;
+    if (carried_.empty()) {  // only eq. 12 reads the previous masses
+        LPFDM_OMP(omp parallel for schedule(static) if (par))
+        for (int j = keep.j0; j < keep.j1; ++j)
+            for (int i = keep.i0; i < keep.i1; ++i) nm_prev[j * (mx + 1) + i] = nm[j * (mx + 1) + i];
+    }
     // eq. 8 with the fill capped at one, applied once per cell (map_to_lattice clears it).
+    const Range oc = occupied_;
     LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = occupied_.j0; j < occupied_.j1; ++j)
-        for (int i = occupied_.i0; i < occupied_.i1; ++i) {
-            const int c = cell(i, j);
-            const double w = inv2L * (cvol_[c] > L2 ? L2 / cvol_[c] : 1.0);
-            svxx_[c] *= w; svyy_[c] *= w; svxy_[c] *= w;
+    for (int j = oc.j0; j < oc.j1; ++j)
+        for (int i = oc.i0; i < oc.i1; ++i) {
+            const int c = j * mx + i;
+            const double w = inv2L * (cv[c] > L2 ? L2 / cv[c] : 1.0);
+            sxx[c] *= w; syy[c] *= w; sxy[c] *= w;
         }
     LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = nr.j0; j < nr.j1; ++j)
@@ -1608,11 +1640,12 @@ inline void Simulation::nodal_forces() {
             // signs below (X, Y, S = sum V sigma_xx, _yy, _xy, already divided by 2L).
             // Cells outside the lattice count as empty; empty cells hold zeros.
             double fx = 0, fy = 0, m = 0;
-            const bool left = i > 0, right = i < mx_, below = j > 0, above = j < my_;
-            if (right && above) { const int c = cell(i, j); fx += svxx_[c] + svxy_[c]; fy += svxy_[c] + svyy_[c]; m += cmass_[c]; }
-            if (left && above) { const int c = cell(i - 1, j); fx += svxy_[c] - svxx_[c]; fy += svyy_[c] - svxy_[c]; m += cmass_[c]; }
-            if (right && below) { const int c = cell(i, j - 1); fx += svxx_[c] - svxy_[c]; fy += svxy_[c] - svyy_[c]; m += cmass_[c]; }
-            if (left && below) { const int c = cell(i - 1, j - 1); fx -= svxx_[c] + svxy_[c]; fy -= svxy_[c] + svyy_[c]; m += cmass_[c]; }
+            const bool left = i > 0, right = i < mx, below = j > 0, above = j < my;
+            const int c = j * mx + i;  // cell (i, j)
+            if (right && above) { fx += sxx[c] + sxy[c]; fy += sxy[c] + syy[c]; m += cm[c]; }
+            if (left && above) { const int a = c - 1; fx += sxy[a] - sxx[a]; fy += syy[a] - sxy[a]; m += cm[a]; }
+            if (right && below) { const int a = c - mx; fx += sxx[a] - sxy[a]; fy += sxy[a] - syy[a]; m += cm[a]; }
+            if (left && below) { const int a = c - mx - 1; fx -= sxx[a] + sxy[a]; fy -= sxy[a] + syy[a]; m += cm[a]; }
             if (!hgx_.empty()) {
                 // HOURGLASS: a viscous force on the zero-energy mode only, F[a] = -kappa
                 // (M_J / 4) q_J h[a] / dt^2. It is orthogonal to every affine increment
@@ -1629,10 +1662,11 @@ inline void Simulation::nodal_forces() {
                 if (right && below) hg(i, j - 1, -1);
                 if (left && below) hg(i - 1, j - 1, 1);
             }
-            const int n = node(i, j);
-            nmass_[n] = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
-            fx_[n] = fx + sc_.gravity_x * nmass_[n];
-            fy_[n] = fy + sc_.gravity_y * nmass_[n];
+            const int n = j * (mx + 1) + i;
+            const double mn = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
+            nm[n] = mn;
+            fxn[n] = fx + gx * mn;
+            fyn[n] = fy + gy * mn;
         }
 }
 
@@ -1644,51 +1678,59 @@ inline void Simulation::compensate() {
     // Nodes that gained mass this step take the mean increment of their neighbours that
     // had mass (read before those are compensated, so the order does not matter).
     [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
+    const int mx = mx_, my = my_;
+    const double invL = invL_;
+    const Range st = strained_;
+    double *ux_n = dux_.data(), *uy_n = duy_.data();
+    const double* nm = nmass_.data();
+    const double* nm_prev = nmass_prev_.data();
+    const double *exx_c = exx_.data(), *eyy_c = eyy_.data(), *exy_c = exy_.data(), *eyx_c = eyx_.data();
     LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = nr.j0; j < nr.j1; ++j)
         for (int i = nr.i0; i < nr.i1; ++i) {
-            const int n = node(i, j);
-            if (nmass_prev_[n] > 0 || nmass_[n] == 0) continue;
-            double mx = 0, my = 0, msum = 0;
-            for (int qj = std::max(0, j - 1); qj <= std::min(my_, j + 1); ++qj)
-                for (int qi = std::max(0, i - 1); qi <= std::min(mx_, i + 1); ++qi) {
-                    const int q = node(qi, qj);
-                    const double mq = nmass_prev_[q];
-                    if (mq > 0) { mx += mq * dux_[q]; my += mq * duy_[q]; msum += mq; }
+            const int n = j * (mx + 1) + i;
+            if (nm_prev[n] > 0 || nm[n] == 0) continue;
+            double sx = 0, sy = 0, msum = 0;
+            for (int qj = std::max(0, j - 1); qj <= std::min(my, j + 1); ++qj)
+                for (int qi = std::max(0, i - 1); qi <= std::min(mx, i + 1); ++qi) {
+                    const int q = qj * (mx + 1) + qi;
+                    const double mq = nm_prev[q];
+                    if (mq > 0) { sx += mq * ux_n[q]; sy += mq * uy_n[q]; msum += mq; }
                 }
-            if (msum > 0) { dux_[n] = mx / msum; duy_[n] = my / msum; }
+            if (msum > 0) { ux_n[n] = sx / msum; uy_n[n] = sy / msum; }
         }
     LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = nr.j0; j < nr.j1; ++j)
         for (int i = nr.i0; i < nr.i1; ++i) {
-            const int n = node(i, j);
-            const double ux = dux_[n], uy = duy_[n];
-            if ((ux == 0 && uy == 0) || nmass_prev_[n] == 0) continue;
+            const int n = j * (mx + 1) + i;
+            const double ux = ux_n[n], uy = uy_n[n];
+            if ((ux == 0 && uy == 0) || nm_prev[n] == 0) continue;
             // The cell holding x_node - du_node; where that point lies exactly on a cell
             // edge (a zero component of du), the cells on both sides share the lookup,
             // so that a mirror-symmetric motion stays symmetric.
-            const double fxs = i - ux * invL_, fys = j - uy * invL_;
+            const double fxs = i - ux * invL, fys = j - uy * invL;
             int ci = int(fxs), cj = int(fys);  // floor without a library call (|du| < L/2)
             ci -= fxs < ci; cj -= fys < cj;
             const int ci0 = fxs == ci ? ci - 1 : ci, cj0 = fys == cj ? cj - 1 : cj;
+            double exx, eyy, exy, eyx;
             if (ci0 == ci && cj0 == cj) {  // the usual case: one cell
-                if (ci < strained_.i0 || cj < strained_.j0 || ci >= strained_.i1 || cj >= strained_.j1) continue;
-                const int c = cell(ci, cj);
-                dux_[n] = ux * (1 - exx_[c]) - uy * exy_[c];  // eq. 12a
-                duy_[n] = uy * (1 - eyy_[c]) - ux * eyx_[c];  // eq. 12b
-                continue;
+                if (ci < st.i0 || cj < st.j0 || ci >= st.i1 || cj >= st.j1) continue;
+                const int c = cj * mx + ci;
+                exx = exx_c[c]; eyy = eyy_c[c]; exy = exy_c[c]; eyx = eyx_c[c];
+            } else {
+                exx = eyy = exy = eyx = 0;
+                double w = 0;
+                for (int b = cj0; b <= cj; ++b)
+                    for (int a = ci0; a <= ci; ++a) {
+                        if (a < st.i0 || b < st.j0 || a >= st.i1 || b >= st.j1) continue;
+                        const int c = b * mx + a;
+                        exx += exx_c[c]; eyy += eyy_c[c]; exy += exy_c[c]; eyx += eyx_c[c]; w += 1;
+                    }
+                if (w == 0) continue;
+                if (w > 1) { exx /= w; eyy /= w; exy /= w; eyx /= w; }
             }
-            double exx = 0, eyy = 0, exy = 0, eyx = 0, w = 0;
-            for (int b = cj0; b <= cj; ++b)
-                for (int a = ci0; a <= ci; ++a) {
-                    if (a < strained_.i0 || b < strained_.j0 || a >= strained_.i1 || b >= strained_.j1) continue;
-                    const int c = cell(a, b);
-                    exx += exx_[c]; eyy += eyy_[c]; exy += exy_[c]; eyx += eyx_[c]; w += 1;
-                }
-            if (w == 0) continue;
-            if (w > 1) { exx /= w; eyy /= w; exy /= w; eyx /= w; }
-            dux_[n] = ux * (1 - exx) - uy * exy;  // eq. 12a
-            duy_[n] = uy * (1 - eyy) - ux * eyx;  // eq. 12b
+            ux_n[n] = ux * (1 - exx) - uy * exy;  // eq. 12a
+            uy_n[n] = uy * (1 - eyy) - ux * eyx;  // eq. 12b
         }
 }
 
@@ -1733,29 +1775,36 @@ inline void Simulation::integrate() {
     double ke = 0, fmax = 0, fgross = 0, maxdu = 0;
     long counted = 0;
     [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
+    const int mx = mx_;
+    const double gx = sc_.gravity_x, gy = sc_.gravity_y;
+    double *ux_n = dux_.data(), *uy_n = duy_.data(), *nm = nmass_.data(), *fxn = fx_.data(), *fyn = fy_.data();
+    const std::uint8_t* fixed = fixed_.data();
+    double* row_gross_of = row_sum_b_.data();
     // Sums are kept per node row and added in row order: the same with any thread count.
     LPFDM_OMP(omp parallel for schedule(static) reduction(max : fmax) reduction(+ : counted) if (par))
     for (int j = nr.j0; j < nr.j1; ++j) {
         double row_gross = 0;
+        const bool row_inside = j >= nodes_now.j0 && j < nodes_now.j1;
         for (int i = nr.i0; i < nr.i1; ++i) {
-            const int n = node(i, j);
-            const bool inside = i >= nodes_now.i0 && i < nodes_now.i1 && j >= nodes_now.j0 && j < nodes_now.j1;
-            const double m = inside ? nmass_[n] : 0.0;
-            if (!inside) { nmass_[n] = 0; fx_[n] = fy_[n] = 0; }
-            if (m == 0) { dux_[n] = duy_[n] = 0; continue; }  // no mass, no motion
-            const double fx = fx_[n], fy = fy_[n];
-            const double ux = dux_[n] + dt2 / m * (fx - alpha * std::fabs(fx) * sgn(dux_[n]));  // eq. 13, 14
-            const double uy = duy_[n] + dt2 / m * (fy - alpha * std::fabs(fy) * sgn(duy_[n]));
-            dux_[n] = ux; duy_[n] = uy;
-            if (fixed_[n] != (kFixX | kFixY)) {
-                const double fxf = (fixed_[n] & kFixX) ? 0.0 : fx, fyf = (fixed_[n] & kFixY) ? 0.0 : fy;
+            const int n = j * (mx + 1) + i;
+            const bool inside = row_inside && i >= nodes_now.i0 && i < nodes_now.i1;
+            const double m = inside ? nm[n] : 0.0;
+            if (!inside) { nm[n] = 0; fxn[n] = fyn[n] = 0; }
+            if (m == 0) { ux_n[n] = uy_n[n] = 0; continue; }  // no mass, no motion
+            const double fx = fxn[n], fy = fyn[n], ux0 = ux_n[n], uy0 = uy_n[n];
+            const double ux = ux0 + dt2 / m * (fx - alpha * std::fabs(fx) * sgn(ux0));  // eq. 13, 14
+            const double uy = uy0 + dt2 / m * (fy - alpha * std::fabs(fy) * sgn(uy0));
+            ux_n[n] = ux; uy_n[n] = uy;
+            const std::uint8_t fix = fixed[n];
+            if (fix != (kFixX | kFixY)) {
+                const double fxf = (fix & kFixX) ? 0.0 : fx, fyf = (fix & kFixY) ? 0.0 : fy;
                 fmax = std::max(fmax, std::sqrt(fxf * fxf + fyf * fyf));
-                const double sx = fx - sc_.gravity_x * m, sy = fy - sc_.gravity_y * m;
+                const double sx = fx - gx * m, sy = fy - gy * m;
                 row_gross += std::sqrt(sx * sx + sy * sy) + m * g;
                 ++counted;
             }
         }
-        row_sum_b_[std::size_t(j)] = row_gross;
+        row_gross_of[j] = row_gross;
     }
     for (int j = nr.j0; j < nr.j1; ++j) fgross += row_sum_b_[std::size_t(j)];
     rx_ = ry_ = 0;
@@ -1781,16 +1830,18 @@ inline void Simulation::integrate() {
         ws.shift_i = int(std::trunc(ws.dx * invL_ * (1 + 1e-12)));
         ws.shift_j = int(std::trunc(ws.dy * invL_ * (1 + 1e-12)));
     }
+    double* row_ke_of = row_sum_a_.data();
     LPFDM_OMP(omp parallel for schedule(static) reduction(max : maxdu) if (par))
     for (int j = nr.j0; j < nr.j1; ++j) {
         double row_ke = 0;
         for (int i = nr.i0; i < nr.i1; ++i) {
-            const int n = node(i, j);
-            if (nmass_[n] == 0) continue;
-            row_ke += 0.5 * nmass_[n] * (dux_[n] * dux_[n] + duy_[n] * duy_[n]);
-            maxdu = std::max(maxdu, std::max(std::fabs(dux_[n]), std::fabs(duy_[n])));
+            const int n = j * (mx + 1) + i;
+            const double m = nm[n], ux = ux_n[n], uy = uy_n[n];
+            if (m == 0) continue;
+            row_ke += 0.5 * m * (ux * ux + uy * uy);
+            maxdu = std::max(maxdu, std::max(std::fabs(ux), std::fabs(uy)));
         }
-        row_sum_a_[std::size_t(j)] = row_ke;
+        row_ke_of[j] = row_ke;
     }
     for (int j = nr.j0; j < nr.j1; ++j) ke += row_sum_a_[std::size_t(j)];
     ke_ = ke / dt2;
