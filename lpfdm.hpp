@@ -624,7 +624,7 @@ using UserModel = std::function<void(const StrainIncrement&, Stress&, PointState
 // Points as a structure of arrays, sized once per scene.
 struct Points {
     std::vector<double> x, y, sxx, syy, sxy, szz, vol;
-    std::vector<std::int32_t> cell, id;
+    std::vector<std::int32_t> cell, id;     // cell: the cell holding (x, y); a program that moves a point sets both
     std::vector<std::uint16_t> group;       // index into Simulation::groups(): material and mass
     // Only when some material is Mohr-Coulomb:
     std::vector<double> plastic_shear;
@@ -922,6 +922,7 @@ public:
         for (const auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol, &p_.plastic_shear, &p_.c0, &p_.n_phi}) b += double(v->capacity()) * 8;
         b += double(p_.cell.capacity() + p_.id.capacity()) * 4 + double(p_.group.capacity()) * 2 + double(p_.yielded.capacity());
         b += double(pdx_.capacity() + pdy_.capacity()) * 8 + double(pfrom_.capacity()) * 4;  // ADVECT POINTS only
+        b += double(deferred_.capacity()) * 4;  // with threads only
         return b / n;
     }
 
@@ -1027,9 +1028,11 @@ private:
         int cmin = std::numeric_limits<int>::max(), cmax = -1, imin = std::numeric_limits<int>::max(), imax = -1;
         double mass = 0;
         long departed = 0;
+        long listed = 0;  // threaded map_to_lattice: points whose sums wait for lower chunks
     };
     template <bool Fused> void advance_range(long k0, long k1, Tally& t);
     template <bool Fused, Motion M, bool Carry> void advance_run(long k0, long k1, Tally& t);
+    void map_point(std::size_t k);
     void plastic_correction(const MaterialConstants& mc, std::size_t q, Stress& s);
     void user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s);
     void carried_increments(const Range& nodes);
@@ -1110,6 +1113,10 @@ private:
     std::vector<Carried> carried_;
     std::vector<double> pdx_, pdy_;
     std::vector<std::int32_t> pfrom_;
+    // Threaded map_to_lattice only: per thread its chunk's cells, mass and list length,
+    // and per point room for the lists.
+    std::vector<Tally> map_tally_;
+    std::vector<std::int32_t> deferred_;
     Range occupied_;   // cells holding points after the last mapping
     Range strained_;   // cells whose strains are current
     Range live_nodes_; // nodes that may hold a non-zero du
@@ -1187,6 +1194,12 @@ inline void Simulation::setup() {
         pfrom_.assign(p_.cell.begin(), p_.cell.end());
     }
     for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
+#if defined(_OPENMP)
+    if (omp_get_max_threads() > 1 && p_.size() > 4096) {  // the threaded map_to_lattice's room
+        map_tally_.resize(std::size_t(omp_get_max_threads()));
+        deferred_.assign(p_.size(), 0);
+    }
+#endif
     row_sum_a_.assign(std::size_t(my_ + 1), 0.0);
     row_sum_b_.assign(std::size_t(my_ + 1), 0.0);
     map_to_lattice();
@@ -1577,31 +1590,77 @@ inline void Simulation::clear_cells() {
         }
 }
 
+// eq. 7 and 8 for point k, into the cell it lies in; with ADVECT POINTS also the
+// increment field it brings there.
+inline void Simulation::map_point(std::size_t k) {
+    const int c = p_.cell[k];
+    const Group& g = groups_[p_.group[k]];
+    const double m = g.mass, v = std::min(p_.vol[k], g.vol0);
+    cmass_[c] += m;                 // eq. 7
+    cvol_[c] += v;
+    svxx_[c] += v * p_.sxx[k];      // eq. 8
+    svyy_[c] += v * p_.syy[k];
+    svxy_[c] += v * p_.sxy[k];
+    if (!pdx_.empty()) {
+        const int f = pfrom_[k];
+        carry_to(c, c % mx_, c / mx_, m, p_.x[k], p_.y[k], pdx_[k], pdy_[k], {exx_[f], eyy_[f], exy_[f], eyx_[f]});
+    }
+}
+
+// Every cell sum takes its terms in point order, whatever the number of threads. With
+// threads, thread t takes a contiguous chunk of points and adds directly to every cell
+// that no lower chunk can touch (outside the lowest..highest cell of each lower chunk);
+// the other points it lists, and the lists are added afterwards, in chunk order. The
+// points are stored nearly cell by cell, so the lists hold the few points about the
+// chunk edges. (Masses are quantised, so the mass total is exact in any order.)
 inline void Simulation::map_to_lattice() {
     clear_cells();
-    // One pass in point order: the sums are the same whatever the number of threads.
-    int cmin = mx_ * my_, cmax = -1, imin = mx_, imax = -1;
-    double mass = 0;
-    for (std::size_t k = 0; k < p_.size(); ++k) {
+    const long n = long(p_.size());
+    auto tally = [&](std::size_t k, Tally& a) {
         const int c = p_.cell[k];
-        const Group& g = groups_[p_.group[k]];
-        const double m = g.mass, v = std::min(p_.vol[k], g.vol0);
-        cmass_[c] += m;                 // eq. 7
-        cvol_[c] += v;
-        svxx_[c] += v * p_.sxx[k];      // eq. 8
-        svyy_[c] += v * p_.syy[k];
-        svxy_[c] += v * p_.sxy[k];
-        mass += m;
-        cmin = std::min(cmin, c); cmax = std::max(cmax, c);
+        a.mass += groups_[p_.group[k]].mass;
+        a.cmin = std::min(a.cmin, c); a.cmax = std::max(a.cmax, c);
         const int i = p_.x[k] >= 0 ? std::min(mx_ - 1, int(p_.x[k] * invL_)) : c % mx_;
-        imin = std::min(imin, i); imax = std::max(imax, i);
-        if (!pdx_.empty()) {
-            const int f = pfrom_[k];
-            carry_to(c, c % mx_, c / mx_, m, p_.x[k], p_.y[k], pdx_[k], pdy_[k], {exx_[f], eyy_[f], exy_[f], eyx_[f]});
+        a.imin = std::min(a.imin, i); a.imax = std::max(a.imax, i);
+    };
+    Tally t;
+    int team = 1;
+#if defined(_OPENMP)
+    const int want = omp_get_max_threads();
+    if (n > 4096 && want > 1 && want <= int(map_tally_.size())) {
+        LPFDM_OMP(omp parallel num_threads(want))
+        {
+            const int nt = omp_get_num_threads(), id = omp_get_thread_num();
+            const long k0 = n * id / nt, k1 = n * (id + 1) / nt;
+            Tally& a = map_tally_[std::size_t(id)];
+            a = Tally{};
+            for (long k = k0; k < k1; ++k) tally(std::size_t(k), a);
+            LPFDM_OMP(omp barrier)
+            long listed = 0;  // the list of chunk id is kept in deferred_[k0 ..]
+            for (long k = k0; k < k1; ++k) {
+                const int c = p_.cell[std::size_t(k)];
+                bool shared = false;
+                for (int u = 0; u < id; ++u) shared |= c >= map_tally_[std::size_t(u)].cmin && c <= map_tally_[std::size_t(u)].cmax;
+                if (shared) deferred_[std::size_t(k0 + listed++)] = std::int32_t(k);
+                else map_point(std::size_t(k));
+            }
+            a.listed = listed;
+            if (id == 0) team = nt;
+        }
+        for (int u = 0; u < team; ++u) {
+            const Tally& a = map_tally_[std::size_t(u)];
+            const long k0 = n * u / team;
+            for (long d = 0; d < a.listed; ++d) map_point(std::size_t(deferred_[std::size_t(k0 + d)]));
+            t.mass += a.mass;
+            t.cmin = std::min(t.cmin, a.cmin); t.cmax = std::max(t.cmax, a.cmax);
+            t.imin = std::min(t.imin, a.imin); t.imax = std::max(t.imax, a.imax);
         }
     }
-    mass_in_ = mass;
-    occupied_ = cmax < 0 ? Range{} : Range{imin, imax + 1, cmin / mx_, cmax / mx_ + 1};
+#endif
+    if (team == 1)
+        for (long k = 0; k < n; ++k) { map_point(std::size_t(k)); tally(std::size_t(k), t); }
+    mass_in_ = t.mass;
+    occupied_ = t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1};
 }
 
 // Net nodal force: each node gathers from its (up to) four cells, eq. 9 replaced by
