@@ -115,7 +115,13 @@
 
 // Loops over points, cells and node rows run in parallel when compiled with OpenMP
 // (-fopenmp). Every sum that reaches a result is taken in one fixed order, so the
-// output is the same, byte for byte, with any number of threads.
+// output is the same, byte for byte, with any number of threads: the cell sums of eq. 7
+// and 8 take their terms in point order (a thread's points that land in another
+// thread's cells are added afterwards, in order), node sums in row order.
+// The points are stored cell by cell (as created; they leave that order only as they
+// cross cell edges, and are not re-sorted, since a sort would change the order of the
+// sums), so the point phase walks runs of points sharing a cell and reads the cell's
+// strain, rotation and nodes once per run.
 #if defined(_OPENMP)
 #include <omp.h>
 #define LPFDM_STR_(...) #__VA_ARGS__
