@@ -449,24 +449,37 @@ struct MohrTrial {
     double a, r;                 // in-plane (sxx - syy) / 2 and radius of Mohr's circle
     double sig[3];               // p - r, p + r, sig_zz
 };
-inline MohrResult mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, const MohrTrial& t, Stress& s);
-}  // namespace detail
-
-// The elastic test, inline in the point loop: the trial stress inside every plane is
-// left as it is; only a point that yields calls the correction.
-inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStrength& st, Stress& s) {
-    detail::MohrTrial t;
-    t.np = st.n_phi;
-    t.two_c_sq = 2 * st.c * (st.sqrt_n_phi > 0 ? st.sqrt_n_phi : std::sqrt(t.np));
-    t.sig_t = std::numeric_limits<double>::infinity();
-    if (t.np > 1) t.sig_t = t.two_c_sq / (t.np - 1);  // apex: c / tan(phi)
-    if (st.tension >= 0) t.sig_t = std::min(t.sig_t, st.tension);
+// The tension limit: the apex c / tan(phi), or the cut-off if lower.
+inline double tension_limit(double np, double two_c_sq, double tension) {
+    double sig_t = std::numeric_limits<double>::infinity();
+    if (np > 1) sig_t = two_c_sq / (np - 1);
+    if (tension >= 0) sig_t = std::min(sig_t, tension);
+    return sig_t;
+}
+// The elastic test, given t.np and t.two_c_sq: fills the principal part of t and returns
+// true when s is inside every plane. With c >= 0 the tension limit is never negative, so
+// a stress with no tensile principal value passes the tension planes without computing
+// it (one division per point saved); t.sig_t is set whenever the test fails.
+inline bool mohr_inside(MohrTrial& t, double tension, const Stress& s) {
     const double p = 0.5 * (s.xx + s.yy);
     t.a = 0.5 * (s.xx - s.yy);
     t.r = std::sqrt(t.a * t.a + s.xy * s.xy);
     t.sig[0] = p - t.r; t.sig[1] = p + t.r; t.sig[2] = s.zz;
     const double lo = std::min(t.sig[0], t.sig[2]), hi = std::max(t.sig[1], t.sig[2]);
-    if (lo - hi * t.np + t.two_c_sq >= 0 && t.sig_t - hi >= 0) return {};
+    const bool shear_ok = lo - hi * t.np + t.two_c_sq >= 0;
+    if (shear_ok && hi <= 0 && t.two_c_sq >= 0) return true;
+    t.sig_t = tension_limit(t.np, t.two_c_sq, tension);
+    return shear_ok && t.sig_t - hi >= 0;
+}
+inline MohrResult mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, const MohrTrial& t, Stress& s);
+}  // namespace detail
+
+// The elastic test, then the correction of a point that yields.
+inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStrength& st, Stress& s) {
+    detail::MohrTrial t;
+    t.np = st.n_phi;
+    t.two_c_sq = 2 * st.c * (st.sqrt_n_phi > 0 ? st.sqrt_n_phi : std::sqrt(t.np));
+    if (detail::mohr_inside(t, st.tension, s)) return {};
     return detail::mohr_coulomb_correct(k, st, t, s);
 }
 
@@ -536,21 +549,29 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
                 q.kk = sig_t;
             }
     };
-    build();
-    auto Dm = [&](const Plane& q, double out[3]) {  // D m in principal space
-        const double tr = q.m[0] + q.m[1] + q.m[2];
-        for (int t = 0; t < 3; ++t) out[t] = a2 * tr + (a1 - a2) * q.m[t];
-    };
     auto f_at = [&](const Plane& q, const double sg[3]) { return q.n[0] * sg[0] + q.n[1] * sg[1] + q.n[2] * sg[2] + q.kk; };
+    // Per plane, once per flow rule: D m in principal space and f at the trial stress.
+    double dmp[9][3], ftrial[9];
+    auto prepare = [&]() {
+        build();
+        for (int a = 0; a < npl; ++a) {
+            const Plane& q = pl[a];
+            const double tr = q.m[0] + q.m[1] + q.m[2];
+            for (int t = 0; t < 3; ++t) dmp[a][t] = a2 * tr + (a1 - a2) * q.m[t];
+            ftrial[a] = f_at(q, trial);
+        }
+    };
+    prepare();
 
     // Solves the active set act[0..na) and checks the result; true if admissible.
     double best[3] = {0, 0, 0}, best_mu[3] = {0, 0, 0};
     int best_act[3] = {-1, -1, -1}, best_na = 0;
     auto try_set = [&](const int* act, int na) {
         double A[3][3], b[3], dm[3][3], mu[3] = {0, 0, 0};
-        for (int u = 0; u < na; ++u) Dm(pl[act[u]], dm[u]);
+        for (int u = 0; u < na; ++u)
+            for (int t = 0; t < 3; ++t) dm[u][t] = dmp[act[u]][t];
         for (int u = 0; u < na; ++u) {
-            b[u] = -f_at(pl[act[u]], trial);
+            b[u] = -ftrial[act[u]];
             for (int v = 0; v < na; ++v) A[u][v] = pl[act[u]].n[0] * dm[v][0] + pl[act[u]].n[1] * dm[v][1] + pl[act[u]].n[2] * dm[v][2];
         }
         // Gaussian elimination with partial pivoting on at most 3 x 3.
@@ -590,7 +611,7 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // regions they span near an edge, where no non-associated return exists; there the
     // associated one (a projection on a convex set, which always exists) is used.
     for (int pass = 0; pass < 2 && !found; ++pass) {
-        if (pass == 1) { ns = np; build(); }
+        if (pass == 1) { ns = np; prepare(); }
         int act[3];
         for (act[0] = 0; act[0] < npl && !found; ++act[0]) {
             if (found = try_set(act, 1), found) { res.mode = act[0] < 6 ? MohrResult::Shear : MohrResult::Tension; break; }
@@ -635,8 +656,9 @@ struct Points {
     // Only when some material is Mohr-Coulomb:
     std::vector<double> plastic_shear;
     std::vector<std::uint8_t> yielded;
-    // Only when some material scatters: intact cohesion and N_phi of each point.
-    std::vector<double> c0, n_phi;
+    // Only when some material scatters: intact cohesion, N_phi and sqrt(N_phi) of each
+    // point (the root taken once, not per step).
+    std::vector<double> c0, n_phi, sqrt_n_phi;
     std::size_t size() const { return x.size(); }
 };
 
@@ -925,7 +947,7 @@ public:
     double bytes_per_point() const {
         const double n = double(std::max<std::size_t>(1, p_.size()));
         double b = 0;
-        for (const auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol, &p_.plastic_shear, &p_.c0, &p_.n_phi}) b += double(v->capacity()) * 8;
+        for (const auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol, &p_.plastic_shear, &p_.c0, &p_.n_phi, &p_.sqrt_n_phi}) b += double(v->capacity()) * 8;
         b += double(p_.cell.capacity() + p_.id.capacity()) * 4 + double(p_.group.capacity()) * 2 + double(p_.yielded.capacity());
         b += double(pdx_.capacity() + pdy_.capacity()) * 8 + double(pfrom_.capacity()) * 4;  // ADVECT POINTS only
         b += double(deferred_.capacity()) * 4;  // with threads only
@@ -1039,7 +1061,7 @@ private:
     template <bool Fused> void advance_range(long k0, long k1, Tally& t);
     template <bool Fused, Motion M, bool Carry> void advance_run(long k0, long k1, Tally& t);
     void map_point(std::size_t k);
-    void plastic_correction(const MaterialConstants& mc, std::size_t q, Stress& s);
+    void plastic_correction(const MaterialConstants& mc, std::size_t q, const detail::MohrTrial& t, Stress& s);
     void user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s);
     void carried_increments(const Range& nodes);
     // ADVECT POINTS: the increment field a point of mass m brings to cell c = (i, j), where
@@ -1108,7 +1130,10 @@ private:
     std::vector<std::uint8_t> fixed_edges_;  // per cell: which of its edges are fixed across
     // cells
     std::vector<double> cmass_, cvol_, svxx_, svyy_, svxy_;
-    std::vector<double> exx_, eyy_, exy_, eyx_, rc_, rs_;  // strain and rotation per cell
+    // Strain increments of eq. 5a-5d and the rotation of eq. 5f per cell, one record per
+    // cell: the point loop reads all six together (six arrays were six memory streams).
+    struct CellStrain { double xx = 0, yy = 0, xy = 0, yx = 0, rc = 1, rs = 0; };
+    std::vector<CellStrain> strain_;
     std::vector<double> hgx_, hgy_;                        // hourglass increment per cell (HOURGLASS only)
     // ADVECT POINTS only: per cell, sum m (d - E r) and sum m E of the points that landed in
     // it (r from the cell centre); per point, its increment d and the cell it came from.
@@ -1159,8 +1184,8 @@ inline void Simulation::setup() {
     const std::size_t nodes = std::size_t(mx_ + 1) * (my_ + 1), cells = std::size_t(mx_) * my_;
     for (auto* v : {&dux_, &duy_, &fx_, &fy_, &nmass_, &nmass_prev_}) v->assign(nodes, 0.0);
     fixed_.assign(nodes, 0);
-    for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &exx_, &eyy_, &exy_, &eyx_, &rs_}) v->assign(cells, 0.0);
-    rc_.assign(cells, 1.0);
+    for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) v->assign(cells, 0.0);
+    strain_.assign(cells, CellStrain{});
     if (sc_.hourglass > 0) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
     if (sc_.advect == Advect::Points)
         carried_.assign(cells, Carried{});
@@ -1259,7 +1284,7 @@ inline void Simulation::create_points() {
     for (auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol}) v->reserve(npoints);
     p_.cell.reserve(npoints); p_.id.reserve(npoints); p_.group.reserve(npoints);
     if (plastic) { p_.plastic_shear.reserve(npoints); p_.yielded.reserve(npoints); }
-    if (scatter) { p_.c0.reserve(npoints); p_.n_phi.reserve(npoints); }
+    if (scatter) { p_.c0.reserve(npoints); p_.n_phi.reserve(npoints); p_.sqrt_n_phi.reserve(npoints); }
 
     Random rng(sc_.seed);
     for (int j = 0; j < my_; ++j)
@@ -1291,6 +1316,7 @@ inline void Simulation::create_points() {
                         p_.c0.push_back(consts_[std::size_t(mi)].c);
                         p_.n_phi.push_back(consts_[std::size_t(mi)].n_phi);
                     }
+                    p_.sqrt_n_phi.push_back(std::sqrt(p_.n_phi.back()));
                 }
         }
     mass0_ = 0;
@@ -1307,7 +1333,7 @@ inline void Simulation::cell_strains() {
     const double* ux = dux_.data();
     const double* uy = duy_.data();
     const double* cm = cmass_.data();
-    double *exx = exx_.data(), *eyy = eyy_.data(), *exy = exy_.data(), *eyx = eyx_.data(), *rc = rc_.data(), *rs = rs_.data();
+    CellStrain* cs = strain_.data();
     double *hgx = hgx_.data(), *hgy = hgy_.data();
     const bool hourglass = !hgx_.empty();
     LPFDM_OMP(omp parallel for schedule(static) if ((r.j1 - r.j0) * (r.i1 - r.i0) > 8192))
@@ -1317,8 +1343,9 @@ inline void Simulation::cell_strains() {
             // An empty cell holds no material to strain; its "increments" between moving
             // and resting nodes would make eq. 12 brake every node on a free surface.
             const StrainIncrement e = cm[c] > 0 ? cell_strain(ux, uy, n1, mx + 1, h) : StrainIncrement{};  // eq. 5a-5d
-            exx[c] = e.xx; eyy[c] = e.yy; exy[c] = e.xy; eyx[c] = e.yx;
-            jaumann_rotation(e.theta(), rc[c], rs[c]);  // eq. 5f
+            CellStrain& r = cs[c];
+            r.xx = e.xx; r.yy = e.yy; r.xy = e.xy; r.yx = e.yx;
+            jaumann_rotation(e.theta(), r.rc, r.rs);  // eq. 5f
             if (hourglass) {  // the checkerboard part h = (+1, -1, -1, +1)/4 that eq. 5 cannot see
                 const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
                 hgx[c] = cm[c] > 0 ? 0.25 * (ux[n1] - ux[n2] - ux[n3] + ux[n4]) : 0.0;
@@ -1382,18 +1409,14 @@ inline void Simulation::advance_range(long k0, long k1, Tally& t) {
     }
 }
 
-// Mohr-Coulomb after the elastic trial of eq. 6: the return to the surface, with the
-// point's own strength (scatter, softening).
-inline void Simulation::plastic_correction(const MaterialConstants& mc, std::size_t q, Stress& s) {
-    const bool scatter = !p_.c0.empty();
+// Mohr-Coulomb after the elastic trial of eq. 6 left point q outside the surface (t
+// from detail::mohr_inside): the return, with the point's own strength.
+inline void Simulation::plastic_correction(const MaterialConstants& mc, std::size_t q, const detail::MohrTrial& t, Stress& s) {
     MohrStrength st;
-    const double c0 = scatter ? p_.c0[q] : mc.c;
-    st.c = p_.yielded[q] ? c0 * (1 - mc.soften) : c0;
-    st.n_phi = scatter ? p_.n_phi[q] : mc.n_phi;
-    st.n_psi = std::min(mc.n_psi, st.n_phi);
+    st.n_phi = t.np;
+    st.n_psi = std::min(mc.n_psi, t.np);
     st.tension = mc.tension;
-    st.sqrt_n_phi = scatter ? 0.0 : mc.sqrt_n_phi;
-    const MohrResult r = mohr_coulomb_return(mc, st, s);
+    const MohrResult r = detail::mohr_coulomb_correct(mc, st, t, s);
     if (r.mode != MohrResult::Elastic) {
         p_.plastic_shear[q] += r.d_gamma_p;
         p_.yielded[q] = 1;  // softening takes effect from the next consult
@@ -1409,7 +1432,8 @@ inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q,
 }
 
 template <bool Fused, Motion M, bool Carry>
-inline void Simulation::advance_run(long k0, long k1, Tally& t) {
+inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
+    Tally t = tally;  // a local: kept in registers (stores through the cell arrays could alias a reference)
     // Local pointers: stores through a double* may alias any double member, which would
     // make the compiler reload every member after every store.
     double* __restrict px = p_.x.data();
@@ -1424,36 +1448,62 @@ inline void Simulation::advance_run(long k0, long k1, Tally& t) {
     const int mx = mx_, my = my_;
     const double L = L_, invL = invL_, X = mx * L, Y = my * L;
     long k = k0;
+    int cprev = -2, iprev = -2, jprev = -2;
     while (k < k1) {
-        // The run: points k .. kend-1, all in cell c = (ci, cj).
-        const int c = pcell[k], ci = c % mx, cj = c / mx, n1 = node(ci, cj);
+        // The run: points k .. kend-1, all in cell c = (ci, cj). The next run is usually
+        // the next cell of the row: no integer division then.
+        const int c = pcell[k];
+        const bool next = c == cprev + 1 && iprev + 1 < mx;
+        const int ci = next ? iprev + 1 : c % mx, cj = next ? jprev : c / mx, n1 = node(ci, cj);
+        cprev = c; iprev = ci; jprev = cj;
         long kend = k + 1;
         while (kend < k1 && pcell[kend] == c) ++kend;
-        const StrainIncrement e{exx_[c], eyy_[c], exy_[c], eyx_[c]};
+        const CellStrain& ce = strain_[std::size_t(c)];
+        const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
 
         // eq. 6 with the Jaumann rotation of eq. 5f, then the volume change. The elastic
         // increment depends on the cell and the material only: once per run and group.
-        {
-            const double rc = rc_[c], rs = rs_[c], dv = 1 + e.xx + e.yy;
-            int g = -1;
-            const MaterialConstants* mc = nullptr;
-            Stress de;
-            for (long q = k; q < kend; ++q) {
-                if (pgroup[q] != g) {
-                    g = pgroup[q];
-                    mc = group_consts_[std::size_t(g)];
-                    de = elastic_change(*mc, e);  // eq. 6
+        const double rc = ce.rc, rs = ce.rs, dv = 1 + e.xx + e.yy;
+        for (long q = k; q < kend;) {
+            const int g = pgroup[q];
+            long qend = q + 1;
+            while (qend < kend && pgroup[qend] == g) ++qend;
+            const MaterialConstants& mc = *group_consts_[std::size_t(g)];
+            const Stress de = elastic_change(mc, e);  // eq. 6
+            if (mc.model == Model::Elastic) {
+                for (; q < qend; ++q) {
+                    Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                    rotate_stress(s, rc, rs);  // Jaumann: the old stress turns with the material
+                    psxx[q] = s.xx + de.xx; psyy[q] = s.yy + de.yy; psxy[q] = s.xy + de.xy; pszz[q] = s.zz + de.zz;  // eq. 6
+                    pvol[q] *= dv;
                 }
-                Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
-                rotate_stress(s, rc, rs);  // Jaumann: the old stress turns with the material
-                if (mc->model != Model::User) {
-                    s.xx += de.xx; s.yy += de.yy; s.xy += de.xy; s.zz += de.zz;  // eq. 6 (the elastic trial for Mohr-Coulomb)
-                    if (mc->model == Model::MohrCoulomb) plastic_correction(*mc, std::size_t(q), s);
-                } else {
-                    user_consult(*mc, std::size_t(q), e, s);
+            } else if (mc.model == Model::MohrCoulomb) {
+                // The point's strength: its own (scatter) or the material's, softened once
+                // it has yielded; the elastic test inline, the return out of line.
+                const double* pc0 = p_.c0.empty() ? nullptr : p_.c0.data();
+                const double* pnp = p_.n_phi.data();
+                const double* psq = p_.sqrt_n_phi.data();
+                const std::uint8_t* pyield = p_.yielded.data();
+                for (; q < qend; ++q) {
+                    Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                    rotate_stress(s, rc, rs);
+                    s.xx += de.xx; s.yy += de.yy; s.xy += de.xy; s.zz += de.zz;  // eq. 6, the elastic trial
+                    const double c0 = pc0 ? pc0[q] : mc.c;
+                    detail::MohrTrial tr;
+                    tr.np = pc0 ? pnp[q] : mc.n_phi;
+                    tr.two_c_sq = 2 * (pyield[q] ? c0 * (1 - mc.soften) : c0) * (pc0 ? psq[q] : mc.sqrt_n_phi);
+                    if (!detail::mohr_inside(tr, mc.tension, s)) plastic_correction(mc, std::size_t(q), tr, s);
+                    psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+                    pvol[q] *= dv;
                 }
-                psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
-                pvol[q] *= dv;
+            } else {
+                for (; q < qend; ++q) {
+                    Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                    rotate_stress(s, rc, rs);
+                    user_consult(mc, std::size_t(q), e, s);  // eq. 6 by the user's model
+                    psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+                    pvol[q] *= dv;
+                }
             }
         }
 
@@ -1553,6 +1603,7 @@ inline void Simulation::advance_run(long k0, long k1, Tally& t) {
         }
         k = kend;
     }
+    tally = t;
 }
 
 // Points that left the lattice leave the cycle; their mass becomes outflow. The order
@@ -1571,7 +1622,7 @@ inline void Simulation::remove_departed() {
             for (auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol}) (*v)[w] = (*v)[k];
             p_.cell[w] = p_.cell[k]; p_.id[w] = p_.id[k]; p_.group[w] = p_.group[k];
             if (plastic) { p_.plastic_shear[w] = p_.plastic_shear[k]; p_.yielded[w] = p_.yielded[k]; }
-            if (scatter) { p_.c0[w] = p_.c0[k]; p_.n_phi[w] = p_.n_phi[k]; }
+            if (scatter) { p_.c0[w] = p_.c0[k]; p_.n_phi[w] = p_.n_phi[k]; p_.sqrt_n_phi[w] = p_.sqrt_n_phi[k]; }
             if (!pdx_.empty()) { pdx_[w] = pdx_[k]; pdy_[w] = pdy_[k]; pfrom_[w] = pfrom_[k]; }
         }
         ++w;
@@ -1580,7 +1631,7 @@ inline void Simulation::remove_departed() {
     for (auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol}) v->resize(w);
     p_.cell.resize(w); p_.id.resize(w); p_.group.resize(w);
     if (plastic) { p_.plastic_shear.resize(w); p_.yielded.resize(w); }
-    if (scatter) { p_.c0.resize(w); p_.n_phi.resize(w); }
+    if (scatter) { p_.c0.resize(w); p_.n_phi.resize(w); p_.sqrt_n_phi.resize(w); }
     if (!pdx_.empty()) { pdx_.resize(w); pdy_.resize(w); pfrom_.resize(w); }
     departed_ = 0;
 }
@@ -1609,7 +1660,7 @@ inline void Simulation::map_point(std::size_t k) {
     svxy_[c] += v * p_.sxy[k];
     if (!pdx_.empty()) {
         const int f = pfrom_[k];
-        carry_to(c, c % mx_, c / mx_, m, p_.x[k], p_.y[k], pdx_[k], pdy_[k], {exx_[f], eyy_[f], exy_[f], eyx_[f]});
+        carry_to(c, c % mx_, c / mx_, m, p_.x[k], p_.y[k], pdx_[k], pdy_[k], {strain_[f].xx, strain_[f].yy, strain_[f].xy, strain_[f].yx});
     }
 }
 
@@ -1749,7 +1800,7 @@ inline void Simulation::compensate() {
     double *ux_n = dux_.data(), *uy_n = duy_.data();
     const double* nm = nmass_.data();
     const double* nm_prev = nmass_prev_.data();
-    const double *exx_c = exx_.data(), *eyy_c = eyy_.data(), *exy_c = exy_.data(), *eyx_c = eyx_.data();
+    const CellStrain* cs = strain_.data();
     LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = nr.j0; j < nr.j1; ++j)
         for (int i = nr.i0; i < nr.i1; ++i) {
@@ -1781,16 +1832,18 @@ inline void Simulation::compensate() {
             if (ci0 == ci && cj0 == cj) {  // the usual case: one cell
                 if (ci < st.i0 || cj < st.j0 || ci >= st.i1 || cj >= st.j1) continue;
                 const int c = cj * mx + ci;
-                exx = exx_c[c]; eyy = eyy_c[c]; exy = exy_c[c]; eyx = eyx_c[c];
-            } else {
+                exx = cs[c].xx; eyy = cs[c].yy; exy = cs[c].xy; eyx = cs[c].yx;
+            } else {  // two or four cells, in row order
                 exx = eyy = exy = eyx = 0;
                 double w = 0;
-                for (int b = cj0; b <= cj; ++b)
-                    for (int a = ci0; a <= ci; ++a) {
-                        if (a < st.i0 || b < st.j0 || a >= st.i1 || b >= st.j1) continue;
-                        const int c = b * mx + a;
-                        exx += exx_c[c]; eyy += eyy_c[c]; exy += exy_c[c]; eyx += eyx_c[c]; w += 1;
-                    }
+                auto add = [&](int a, int b) {
+                    if (a < st.i0 || b < st.j0 || a >= st.i1 || b >= st.j1) return;
+                    const CellStrain& e = cs[b * mx + a];
+                    exx += e.xx; eyy += e.yy; exy += e.xy; eyx += e.yx; w += 1;
+                };
+                add(ci0, cj0);
+                if (ci0 != ci) add(ci, cj0);
+                if (cj0 != cj) { add(ci0, cj); if (ci0 != ci) add(ci, cj); }
                 if (w == 0) continue;
                 if (w > 1) { exx /= w; eyy /= w; exy /= w; eyx /= w; }
             }
