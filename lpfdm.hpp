@@ -966,7 +966,7 @@ public:
     double mass_inside() const { return mass_in_; }                   // [kg/m]
     double mass_outflow() const { return mass_out_; }                 // of the points that left [kg/m]
     double mass_initial() const { return mass0_; }                    // inside + outflow, exactly
-    double unbalanced_ratio() const { return unbal_; }                // max unbalanced / mean gross nodal force
+    double unbalanced_ratio() const;                                  // max unbalanced / mean gross nodal force
     double reaction_x() const { return rx_; }                         // sum of fixed-node reactions [N/m]
     double reaction_y() const { return ry_; }
     int mx() const { return mx_; }                                    // cells in x
@@ -1119,7 +1119,7 @@ private:
     std::vector<MaterialConstants> consts_;
     std::vector<Group> groups_;
     std::vector<const MaterialConstants*> group_consts_;  // per group, for the point loop
-    std::vector<double> row_sum_a_, row_sum_b_;            // per node row: fixed-order reductions
+    std::vector<double> row_ke_;                        // per node row: a fixed-order reduction
     std::vector<UserModel> user_models_;
     Points p_;
     // nodes
@@ -1154,7 +1154,8 @@ private:
     std::vector<WallState> walls_;
     long step_ = 0;
     std::size_t departed_ = 0;
-    double ke_ = 0, mass_in_ = 0, mass_out_ = 0, mass0_ = 0, unbal_ = 0, rx_ = 0, ry_ = 0, max_du_ = 0;
+    double ke_ = 0, mass_in_ = 0, mass_out_ = 0, mass0_ = 0, rx_ = 0, ry_ = 0, max_du_ = 0;
+    Range integrated_; // the nodes the last integrate() visited (unbalanced_ratio reads them)
 };
 
 inline double count_points(const Scene& s) {
@@ -1231,8 +1232,7 @@ inline void Simulation::setup() {
         deferred_.assign(p_.size(), 0);
     }
 #endif
-    row_sum_a_.assign(std::size_t(my_ + 1), 0.0);
-    row_sum_b_.assign(std::size_t(my_ + 1), 0.0);
+    row_ke_.assign(std::size_t(my_ + 1), 0.0);
     map_to_lattice();
     strained_ = occupied_.grow(2, mx_, my_);
     live_nodes_ = {};
@@ -1748,42 +1748,62 @@ inline void Simulation::nodal_forces() {
             const double w = inv2L * (cv[c] > L2 ? L2 / cv[c] : 1.0);
             sxx[c] *= w; syy[c] *= w; sxy[c] *= w;
         }
+    const bool hourglass = !hgx_.empty();
+    const double khg = hourglass ? sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s) : 0.0;
+    // The node is corner [1] of cell (i, j), [2] of (i-1, j), [3] of (i, j-1) and [4] of
+    // (i-1, j-1); with b = (+-1, +-1)/2L the transpose of eq. 5 gives the signs below (X,
+    // Y, S = sum V sigma_xx, _yy, _xy, already divided by 2L). Cells outside the lattice
+    // count as empty; empty cells hold zeros.
+    auto node_force = [&](int i, int j) {
+        double fx = 0, fy = 0, m = 0;
+        const bool left = i > 0, right = i < mx, below = j > 0, above = j < my;
+        const int c = j * mx + i;  // cell (i, j)
+        if (right && above) { fx += sxx[c] + sxy[c]; fy += sxy[c] + syy[c]; m += cm[c]; }
+        if (left && above) { const int a = c - 1; fx += sxy[a] - sxx[a]; fy += syy[a] - sxy[a]; m += cm[a]; }
+        if (right && below) { const int a = c - mx; fx += sxx[a] - sxy[a]; fy += sxy[a] - syy[a]; m += cm[a]; }
+        if (left && below) { const int a = c - mx - 1; fx -= sxx[a] + sxy[a]; fy -= sxy[a] + syy[a]; m += cm[a]; }
+        if (hourglass) {
+            // HOURGLASS: a viscous force on the zero-energy mode only, F[a] = -kappa
+            // (M_J / 4) q_J h[a] / dt^2. It is orthogonal to every affine increment
+            // field (sum h = sum h x = sum h y = 0), so uniform strain and rigid motion
+            // feel nothing, and it only ever takes energy out.
+            auto hg = [&](int a, double h) {
+                fx -= khg * cm[a] * hgx_[std::size_t(a)] * h;
+                fy -= khg * cm[a] * hgy_[std::size_t(a)] * h;
+            };
+            if (right && above) hg(c, 1);
+            if (left && above) hg(c - 1, -1);
+            if (right && below) hg(c - mx, -1);
+            if (left && below) hg(c - mx - 1, 1);
+        }
+        const int n = j * (mx + 1) + i;
+        const double mn = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
+        nm[n] = mn;
+        fxn[n] = fx + gx * mn;
+        fyn[n] = fy + gy * mn;
+    };
     LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = nr.j0; j < nr.j1; ++j)
-        for (int i = nr.i0; i < nr.i1; ++i) {
-            // The node is corner [1] of cell (i, j), [2] of (i-1, j), [3] of (i, j-1) and
-            // [4] of (i-1, j-1); with b = (+-1, +-1)/2L the transpose of eq. 5 gives the
-            // signs below (X, Y, S = sum V sigma_xx, _yy, _xy, already divided by 2L).
-            // Cells outside the lattice count as empty; empty cells hold zeros.
+    for (int j = nr.j0; j < nr.j1; ++j) {
+        // Nodes with four cells (no hourglass): the same sums in the same order, without
+        // the tests; the rest through node_force.
+        const bool inner_row = j > 0 && j < my && !hourglass;
+        const int ia = inner_row ? std::min(std::max(nr.i0, 1), nr.i1) : nr.i1, ib = inner_row ? std::max(ia, std::min(nr.i1, mx)) : nr.i1;
+        for (int i = nr.i0; i < ia; ++i) node_force(i, j);
+        for (int i = ia; i < ib; ++i) {
+            const int c = j * mx + i, b = c - mx;
             double fx = 0, fy = 0, m = 0;
-            const bool left = i > 0, right = i < mx, below = j > 0, above = j < my;
-            const int c = j * mx + i;  // cell (i, j)
-            if (right && above) { fx += sxx[c] + sxy[c]; fy += sxy[c] + syy[c]; m += cm[c]; }
-            if (left && above) { const int a = c - 1; fx += sxy[a] - sxx[a]; fy += syy[a] - sxy[a]; m += cm[a]; }
-            if (right && below) { const int a = c - mx; fx += sxx[a] - sxy[a]; fy += sxy[a] - syy[a]; m += cm[a]; }
-            if (left && below) { const int a = c - mx - 1; fx -= sxx[a] + sxy[a]; fy -= sxy[a] + syy[a]; m += cm[a]; }
-            if (!hgx_.empty()) {
-                // HOURGLASS: a viscous force on the zero-energy mode only, F[a] = -kappa
-                // (M_J / 4) q_J h[a] / dt^2. It is orthogonal to every affine increment
-                // field (sum h = sum h x = sum h y = 0), so uniform strain and rigid motion
-                // feel nothing, and it only ever takes energy out.
-                const double k = sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s);
-                auto hg = [&](int ci, int cj, double h) {
-                    const int c = cell(ci, cj);
-                    fx -= k * cmass_[c] * hgx_[c] * h;
-                    fy -= k * cmass_[c] * hgy_[c] * h;
-                };
-                if (right && above) hg(i, j, 1);
-                if (left && above) hg(i - 1, j, -1);
-                if (right && below) hg(i, j - 1, -1);
-                if (left && below) hg(i - 1, j - 1, 1);
-            }
+            fx += sxx[c] + sxy[c]; fy += sxy[c] + syy[c]; m += cm[c];
+            fx += sxy[c - 1] - sxx[c - 1]; fy += syy[c - 1] - sxy[c - 1]; m += cm[c - 1];
+            fx += sxx[b] - sxy[b]; fy += sxy[b] - syy[b]; m += cm[b];
+            fx -= sxx[b - 1] + sxy[b - 1]; fy -= sxy[b - 1] + syy[b - 1]; m += cm[b - 1];
             const int n = j * (mx + 1) + i;
-            const double mn = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
+            const double mn = 0.25 * m;  // eq. 10
             nm[n] = mn;
             fxn[n] = fx + gx * mn;
             fyn[n] = fy + gy * mn;
         }
+        for (int i = ib; i < nr.i1; ++i) node_force(i, j);
+    }
 }
 
 // eq. 12: the increment carried by node k belonged to the material now at x_k - du_k;
@@ -1888,20 +1908,13 @@ inline void Simulation::integrate() {
     const Range nodes_now{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     const Range nr = nodes_now.unite(live_nodes_);
     const double dt2 = sc_.dt_s * sc_.dt_s, alpha = sc_.damping;
-    const double g = std::hypot(sc_.gravity_x, sc_.gravity_y);
     auto sgn = [](double v) { return double((v > 0) - (v < 0)); };
-    double ke = 0, fmax = 0, fgross = 0, maxdu = 0;
-    long counted = 0;
+    double ke = 0, maxdu = 0;
     [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
     const int mx = mx_;
-    const double gx = sc_.gravity_x, gy = sc_.gravity_y;
     double *ux_n = dux_.data(), *uy_n = duy_.data(), *nm = nmass_.data(), *fxn = fx_.data(), *fyn = fy_.data();
-    const std::uint8_t* fixed = fixed_.data();
-    double* row_gross_of = row_sum_b_.data();
-    // Sums are kept per node row and added in row order: the same with any thread count.
-    LPFDM_OMP(omp parallel for schedule(static) reduction(max : fmax) reduction(+ : counted) if (par))
+    LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = nr.j0; j < nr.j1; ++j) {
-        double row_gross = 0;
         const bool row_inside = j >= nodes_now.j0 && j < nodes_now.j1;
         for (int i = nr.i0; i < nr.i1; ++i) {
             const int n = j * (mx + 1) + i;
@@ -1913,18 +1926,9 @@ inline void Simulation::integrate() {
             const double ux = ux0 + dt2 / m * (fx - alpha * std::fabs(fx) * sgn(ux0));  // eq. 13, 14
             const double uy = uy0 + dt2 / m * (fy - alpha * std::fabs(fy) * sgn(uy0));
             ux_n[n] = ux; uy_n[n] = uy;
-            const std::uint8_t fix = fixed[n];
-            if (fix != (kFixX | kFixY)) {
-                const double fxf = (fix & kFixX) ? 0.0 : fx, fyf = (fix & kFixY) ? 0.0 : fy;
-                fmax = std::max(fmax, std::sqrt(fxf * fxf + fyf * fyf));
-                const double sx = fx - gx * m, sy = fy - gy * m;
-                row_gross += std::sqrt(sx * sx + sy * sy) + m * g;
-                ++counted;
-            }
         }
-        row_gross_of[j] = row_gross;
     }
-    for (int j = nr.j0; j < nr.j1; ++j) fgross += row_sum_b_[std::size_t(j)];
+    integrated_ = nr;
     rx_ = ry_ = 0;
     for (const std::int32_t n : fixed_nodes_) {
         if (fixed_[n] & kFixX) { dux_[n] = 0; rx_ -= fx_[n]; }
@@ -1948,7 +1952,7 @@ inline void Simulation::integrate() {
         ws.shift_i = int(std::trunc(ws.dx * invL_ * (1 + 1e-12)));
         ws.shift_j = int(std::trunc(ws.dy * invL_ * (1 + 1e-12)));
     }
-    double* row_ke_of = row_sum_a_.data();
+    double* row_ke_of = row_ke_.data();
     LPFDM_OMP(omp parallel for schedule(static) reduction(max : maxdu) if (par))
     for (int j = nr.j0; j < nr.j1; ++j) {
         double row_ke = 0;
@@ -1961,11 +1965,38 @@ inline void Simulation::integrate() {
         }
         row_ke_of[j] = row_ke;
     }
-    for (int j = nr.j0; j < nr.j1; ++j) ke += row_sum_a_[std::size_t(j)];
+    for (int j = nr.j0; j < nr.j1; ++j) ke += row_ke_[std::size_t(j)];
     ke_ = ke / dt2;
     max_du_ = maxdu;
-    unbal_ = counted && fgross > 0 ? fmax / (fgross / counted) : 0.0;
     live_nodes_ = nodes_now.unite(wall_nodes);
+}
+
+// The largest unbalanced force (free directions) over the mean gross force of the nodes
+// with mass, after the last step. Taken when asked, from the forces and masses the step
+// left (integrate() changes neither): two square roots per node that a step without a
+// history row does not pay. Rows are summed in row order, as a step would.
+inline double Simulation::unbalanced_ratio() const {
+    const Range nr = integrated_;
+    const double g = std::hypot(sc_.gravity_x, sc_.gravity_y), gx = sc_.gravity_x, gy = sc_.gravity_y;
+    double fmax = 0, fgross = 0;
+    long counted = 0;
+    for (int j = nr.j0; j < nr.j1; ++j) {
+        double row_gross = 0;
+        for (int i = nr.i0; i < nr.i1; ++i) {
+            const int n = node(i, j);
+            const double m = nmass_[std::size_t(n)];
+            const std::uint8_t fix = fixed_[std::size_t(n)];
+            if (m == 0 || fix == (kFixX | kFixY)) continue;
+            const double fx = fx_[std::size_t(n)], fy = fy_[std::size_t(n)];
+            const double fxf = (fix & kFixX) ? 0.0 : fx, fyf = (fix & kFixY) ? 0.0 : fy;
+            fmax = std::max(fmax, std::sqrt(fxf * fxf + fyf * fyf));
+            const double sx = fx - gx * m, sy = fy - gy * m;
+            row_gross += std::sqrt(sx * sx + sy * sy) + m * g;
+            ++counted;
+        }
+        fgross += row_gross;
+    }
+    return counted && fgross > 0 ? fmax / (fgross / counted) : 0.0;
 }
 
 #ifndef LPFDM_NO_IO
