@@ -102,6 +102,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #ifndef LPFDM_NO_IO
@@ -128,6 +129,11 @@
 #define LPFDM_OMP(...) _Pragma(LPFDM_STR_(__VA_ARGS__))
 #else
 #define LPFDM_OMP(...)
+#endif
+#if defined(__GNUC__)
+#define LPFDM_INLINE __attribute__((always_inline))
+#else
+#define LPFDM_INLINE
 #endif
 
 namespace lpfdm {
@@ -503,9 +509,12 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     };
     // FLAC's closed form: shear on (sig1, sig3) or tension on sig3, chosen by h. Most
     // corrections end here; the result is admissible when no plane is violated.
-    const double alpha_p = std::sqrt(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
-    const double h = trial[i3] - sig_t + alpha_p * (trial[i1] - sig_p);
-    const bool shear_first = fs < 0 && (ft >= 0 || !(h > 0));
+    // h is needed only when both planes are violated (its square root is not paid otherwise).
+    auto h_fn = [&]() {
+        const double alpha_p = std::sqrt(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
+        return trial[i3] - sig_t + alpha_p * (trial[i1] - sig_p);
+    };
+    const bool shear_first = fs < 0 && (ft >= 0 || !(h_fn() > 0));
     {
         double sg[3] = {trial[0], trial[1], trial[2]}, e1 = 0, e3 = 0;
         if (shear_first) {  // mu D (e1 - N_psi e3), mu = -fs / (n . D m)
@@ -519,7 +528,7 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
             sg[i1] -= mu * a2; sg[i2] -= mu * a2; sg[i3] -= mu * a1;
             e3 = mu;
         }
-        const double lo = std::min({sg[0], sg[1], sg[2]}), hi = std::max({sg[0], sg[1], sg[2]});
+        const double lo = std::min(std::min(sg[0], sg[1]), sg[2]), hi = std::max(std::max(sg[0], sg[1]), sg[2]);
         if (lo - np * hi + two_c_sq >= -tol && sig_t - hi >= -tol) {
             res.mode = shear_first ? MohrResult::Shear : MohrResult::Tension;
             res.d_gamma_p = std::fabs(e1 - e3);
@@ -533,19 +542,20 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     struct Plane { double n[3], kk, m[3]; };
     Plane pl[9];
     int npl = 0;
+    static constexpr double I[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};  // e_i
     auto build = [&]() {
         npl = 0;
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) {
                 if (i == j) continue;
                 Plane& q = pl[npl++];
-                for (int t = 0; t < 3; ++t) { q.n[t] = (t == i) - np * (t == j); q.m[t] = (t == i) - ns * (t == j); }
+                for (int t = 0; t < 3; ++t) { q.n[t] = I[i][t] - np * I[j][t]; q.m[t] = I[i][t] - ns * I[j][t]; }
                 q.kk = two_c_sq;
             }
         if (std::isfinite(sig_t))
             for (int i = 0; i < 3; ++i) {
                 Plane& q = pl[npl++];
-                for (int t = 0; t < 3; ++t) q.n[t] = q.m[t] = -double(t == i);
+                for (int t = 0; t < 3; ++t) q.n[t] = q.m[t] = -I[i][t];
                 q.kk = sig_t;
             }
     };
@@ -566,21 +576,24 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // Solves the active set act[0..na) and checks the result; true if admissible.
     double best[3] = {0, 0, 0}, best_mu[3] = {0, 0, 0};
     int best_act[3] = {-1, -1, -1}, best_na = 0;
-    auto try_set = [&](const int* act, int na) {
-        double A[3][3], b[3], dm[3][3], mu[3] = {0, 0, 0};
-        for (int u = 0; u < na; ++u)
-            for (int t = 0; t < 3; ++t) dm[u][t] = dmp[act[u]][t];
+    const double mu_min = -tol / (a1 + 1);
+    // NA is a compile-time constant (std::integral_constant), so that the 1x1 and 2x2
+    // systems tried most often run without loop overhead; the arithmetic is the same.
+    auto try_set = [&](const int* act, auto NA) {
+        constexpr int na = decltype(NA)::value;
+        double A[3][3], b[3], mu[3] = {0, 0, 0};
+        const double* dm[3];
+        for (int u = 0; u < na; ++u) dm[u] = dmp[act[u]];
         for (int u = 0; u < na; ++u) {
             b[u] = -ftrial[act[u]];
             for (int v = 0; v < na; ++v) A[u][v] = pl[act[u]].n[0] * dm[v][0] + pl[act[u]].n[1] * dm[v][1] + pl[act[u]].n[2] * dm[v][2];
         }
         // Gaussian elimination with partial pivoting on at most 3 x 3.
-        int perm[3] = {0, 1, 2};
         for (int col = 0; col < na; ++col) {
             int piv = col;
             for (int row = col + 1; row < na; ++row) if (std::fabs(A[row][col]) > std::fabs(A[piv][col])) piv = row;
             if (std::fabs(A[piv][col]) < 1e-300) return false;
-            std::swap(A[piv], A[col]); std::swap(b[piv], b[col]); std::swap(perm[piv], perm[col]);
+            std::swap(A[piv], A[col]); std::swap(b[piv], b[col]);
             for (int row = col + 1; row < na; ++row) {
                 const double f = A[row][col] / A[col][col];
                 for (int v = col; v < na; ++v) A[row][v] -= f * A[col][v];
@@ -594,7 +607,7 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
         }
         double sg[3] = {trial[0], trial[1], trial[2]};
         for (int u = 0; u < na; ++u) {
-            if (mu[u] < -tol / (a1 + 1)) return false;
+            if (mu[u] < mu_min) return false;
             for (int t = 0; t < 3; ++t) sg[t] += mu[u] * dm[u][t];
         }
         for (int q = 0; q < npl; ++q) if (f_at(pl[q], sg) < -tol) return false;
@@ -612,15 +625,18 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // associated one (a projection on a convex set, which always exists) is used.
     for (int pass = 0; pass < 2 && !found; ++pass) {
         if (pass == 1) { ns = np; prepare(); }
+        using One = std::integral_constant<int, 1>;
+        using Two = std::integral_constant<int, 2>;
+        using Three = std::integral_constant<int, 3>;
         int act[3];
         for (act[0] = 0; act[0] < npl && !found; ++act[0]) {
-            if (found = try_set(act, 1), found) { res.mode = act[0] < 6 ? MohrResult::Shear : MohrResult::Tension; break; }
+            if (found = try_set(act, One{}), found) { res.mode = act[0] < 6 ? MohrResult::Shear : MohrResult::Tension; break; }
         }
         for (int na = 2; na <= 3 && !found; ++na) {
             for (act[0] = 0; act[0] < npl && !found; ++act[0])
                 for (act[1] = act[0] + 1; act[1] < npl && !found; ++act[1]) {
-                    if (na == 2) { found = try_set(act, 2); continue; }
-                    for (act[2] = act[1] + 1; act[2] < npl && !found; ++act[2]) found = try_set(act, 3);
+                    if (na == 2) { found = try_set(act, Two{}); continue; }
+                    for (act[2] = act[1] + 1; act[2] < npl && !found; ++act[2]) found = try_set(act, Three{});
                 }
             if (found) res.mode = MohrResult::Edge;
         }
@@ -630,7 +646,7 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     double ep[3] = {0, 0, 0};
     for (int u = 0; u < best_na; ++u)
         for (int t = 0; t < 3; ++t) ep[t] -= best_mu[u] * pl[best_act[u]].m[t];
-    res.d_gamma_p = std::max({ep[0], ep[1], ep[2]}) - std::min({ep[0], ep[1], ep[2]});
+    res.d_gamma_p = std::max(std::max(ep[0], ep[1]), ep[2]) - std::min(std::min(ep[0], ep[1]), ep[2]);
     res.d_vol_p = ep[0] + ep[1] + ep[2];
 
     to_xy(best);
@@ -657,7 +673,7 @@ struct Points {
     std::vector<double> plastic_shear;
     std::vector<std::uint8_t> yielded;
     // Only when some material scatters: intact cohesion, N_phi and sqrt(N_phi) of each
-    // point (the root taken once, not per step).
+    // point (the root taken once, not per step; a program that changes n_phi sets both).
     std::vector<double> c0, n_phi, sqrt_n_phi;
     std::size_t size() const { return x.size(); }
 };
@@ -1464,38 +1480,48 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
         // eq. 6 with the Jaumann rotation of eq. 5f, then the volume change. The elastic
         // increment depends on the cell and the material only: once per run and group.
         const double rc = ce.rc, rs = ce.rs, dv = 1 + e.xx + e.yy;
+        bool one_group = true;
         for (long q = k; q < kend;) {
             const int g = pgroup[q];
             long qend = q + 1;
             while (qend < kend && pgroup[qend] == g) ++qend;
+            one_group = one_group && qend == kend;
             const MaterialConstants& mc = *group_consts_[std::size_t(g)];
             const Stress de = elastic_change(mc, e);  // eq. 6
             if (mc.model == Model::Elastic) {
-                for (; q < qend; ++q) {
-                    Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                const long q0 = q;
+                q = qend;
+                LPFDM_OMP(omp simd)  // independent points: two (or four) per instruction, the same results
+                for (long r = q0; r < qend; ++r) {
+                    Stress s{psxx[r], psyy[r], psxy[r], pszz[r]};
                     rotate_stress(s, rc, rs);  // Jaumann: the old stress turns with the material
-                    psxx[q] = s.xx + de.xx; psyy[q] = s.yy + de.yy; psxy[q] = s.xy + de.xy; pszz[q] = s.zz + de.zz;  // eq. 6
-                    pvol[q] *= dv;
+                    psxx[r] = s.xx + de.xx; psyy[r] = s.yy + de.yy; psxy[r] = s.xy + de.xy; pszz[r] = s.zz + de.zz;  // eq. 6
+                    pvol[r] *= dv;
                 }
             } else if (mc.model == Model::MohrCoulomb) {
                 // The point's strength: its own (scatter) or the material's, softened once
                 // it has yielded; the elastic test inline, the return out of line.
-                const double* pc0 = p_.c0.empty() ? nullptr : p_.c0.data();
+                const double* pc0 = p_.c0.data();
                 const double* pnp = p_.n_phi.data();
                 const double* psq = p_.sqrt_n_phi.data();
                 const std::uint8_t* pyield = p_.yielded.data();
-                for (; q < qend; ++q) {
-                    Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
-                    rotate_stress(s, rc, rs);
-                    s.xx += de.xx; s.yy += de.yy; s.xy += de.xy; s.zz += de.zz;  // eq. 6, the elastic trial
-                    const double c0 = pc0 ? pc0[q] : mc.c;
-                    detail::MohrTrial tr;
-                    tr.np = pc0 ? pnp[q] : mc.n_phi;
-                    tr.two_c_sq = 2 * (pyield[q] ? c0 * (1 - mc.soften) : c0) * (pc0 ? psq[q] : mc.sqrt_n_phi);
-                    if (!detail::mohr_inside(tr, mc.tension, s)) plastic_correction(mc, std::size_t(q), tr, s);
-                    psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
-                    pvol[q] *= dv;
-                }
+                auto consult = [&](auto scatter) LPFDM_INLINE {
+                    constexpr bool own = decltype(scatter)::value;
+                    for (; q < qend; ++q) {
+                        Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                        rotate_stress(s, rc, rs);
+                        s.xx += de.xx; s.yy += de.yy; s.xy += de.xy; s.zz += de.zz;  // eq. 6, the elastic trial
+                        const double c0 = own ? pc0[q] : mc.c;
+                        detail::MohrTrial tr;
+                        tr.np = own ? pnp[q] : mc.n_phi;
+                        tr.two_c_sq = 2 * (pyield[q] ? c0 * (1 - mc.soften) : c0) * (own ? psq[q] : mc.sqrt_n_phi);
+                        if (!detail::mohr_inside(tr, mc.tension, s)) plastic_correction(mc, std::size_t(q), tr, s);
+                        psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+                        pvol[q] *= dv;
+                    }
+                };
+                if (!p_.c0.empty()) consult(std::true_type{});  // scatter: each point's own strength
+                else consult(std::false_type{});
             } else {
                 for (; q < qend; ++q) {
                     Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
@@ -1522,80 +1548,85 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
         double am = 0, av = 0, axx = 0, ayy = 0, axy = 0;
         if constexpr (Fused) { am = cmass_[c]; av = cvol_[c]; axx = svxx_[c]; ayy = svyy_[c]; axy = svxy_[c]; }
         bool stayed = false;
-        int g = -1;
-        double gm = 0, gv0 = 0;
-        for (long q = k; q < kend; ++q) {
-            const double x0 = px[q], y0 = py[q];
-            const double dx = x0 - xi, dy = y0 - yj;
-            double x, y, ddx = 0, ddy = 0;  // ddx, ddy: the point's own increment (ADVECT POINTS only)
-            if constexpr (M == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
-                x = x0 + e.xx * dx + e.xy * dy + ux1;
-                y = y0 + e.yy * dy + e.yx * dx + uy1;
-            } else if constexpr (M == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
-                const double cx = dx - 0.5 * L, cy = dy - 0.5 * L;
-                x = x0 + e.xx * cx + e.xy * cy + umx;
-                y = y0 + e.yy * cy + e.yx * cx + umy;
-                if constexpr (Carry) { ddx = e.xx * cx + e.xy * cy + umx; ddy = e.yy * cy + e.yx * cx + umy; }
-            } else {  // bilinear shape functions of the cell
-                const double u = dx * invL, v = dy * invL;
-                const double w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
-                x = x0 + w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
-                y = y0 + w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
+        int g = one_group ? pgroup[k] : -1;
+        double gm = one_group ? groups_[std::size_t(g)].mass : 0, gv0 = one_group ? groups_[std::size_t(g)].vol0 : 0;
+        // The loop in four versions: with or without fixed edges, one group or several.
+        auto motion = [&](auto edges, auto one) LPFDM_INLINE {
+            for (long q = k; q < kend; ++q) {
+                const double x0 = px[q], y0 = py[q];
+                const double dx = x0 - xi, dy = y0 - yj;
+                double x, y, ddx = 0, ddy = 0;  // ddx, ddy: the point's own increment (ADVECT POINTS only)
+                if constexpr (M == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
+                    x = x0 + e.xx * dx + e.xy * dy + ux1;
+                    y = y0 + e.yy * dy + e.yx * dx + uy1;
+                } else if constexpr (M == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
+                    const double cx = dx - 0.5 * L, cy = dy - 0.5 * L;
+                    x = x0 + e.xx * cx + e.xy * cy + umx;
+                    y = y0 + e.yy * cy + e.yx * cx + umy;
+                    if constexpr (Carry) { ddx = e.xx * cx + e.xy * cy + umx; ddy = e.yy * cy + e.yx * cx + umy; }
+                } else {  // bilinear shape functions of the cell
+                    const double u = dx * invL, v = dy * invL;
+                    const double w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
+                    x = x0 + w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
+                    y = y0 + w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
+                    if constexpr (Carry) {
+                        ddx = w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
+                        ddy = w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
+                    }
+                }
+                if constexpr (decltype(edges)::value) {
+                    // A fixed edge is impermeable: eq. 7a/7b is an affine map of the whole cell and
+                    // moves a point on a fixed edge by d_eps_yx dx (or d_eps_xy dy) when the far
+                    // nodes move unequally; it stops on the edge, inside its cell.
+                    if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
+                    if ((fe & kEdgeTop) && y >= (cj + 1) * L) y = edge_below(cj + 1);
+                    if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
+                    if ((fe & kEdgeRight) && x >= (ci + 1) * L) x = edge_below(ci + 1);
+                }
+                px[q] = x; py[q] = y;
+                // The new cell, min(m - 1, int(x / L)): the run's own cell in the usual case.
+                const double u = x * invL, v = y * invL;
+                int ni = ci, nj = cj, cn = c;
+                if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
+                    if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
+                        pcell[q] = -1;
+                        ++t.departed;
+                        continue;
+                    }
+                    ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
+                    pcell[q] = cn;
+                }
+                if constexpr ((Carry || Fused) && !decltype(one)::value) {
+                    if (pgroup[q] != g) { g = pgroup[q]; gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0; }
+                }
                 if constexpr (Carry) {
-                    ddx = w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
-                    ddy = w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
+                    if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
+                    else { pdx_[std::size_t(q)] = ddx; pdy_[std::size_t(q)] = ddy; pfrom_[std::size_t(q)] = c; }
+                }
+                if constexpr (Fused) {
+                    const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
+                    if (cn == c) {
+                        am += gm;                  // eq. 7
+                        av += vk;
+                        axx += vk * sxx;           // eq. 8
+                        ayy += vk * syy;
+                        axy += vk * sxy;
+                        stayed = true;
+                    } else {
+                        cmass_[std::size_t(cn)] += gm;  // eq. 7
+                        cvol_[std::size_t(cn)] += vk;
+                        svxx_[std::size_t(cn)] += vk * sxx;  // eq. 8
+                        svyy_[std::size_t(cn)] += vk * syy;
+                        svxy_[std::size_t(cn)] += vk * sxy;
+                        t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
+                        t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
+                    }
+                    t.mass += gm;
                 }
             }
-            if (fe) {
-                // A fixed edge is impermeable: eq. 7a/7b is an affine map of the whole cell and
-                // moves a point on a fixed edge by d_eps_yx dx (or d_eps_xy dy) when the far
-                // nodes move unequally; it stops on the edge, inside its cell.
-                if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
-                if ((fe & kEdgeTop) && y >= (cj + 1) * L) y = edge_below(cj + 1);
-                if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
-                if ((fe & kEdgeRight) && x >= (ci + 1) * L) x = edge_below(ci + 1);
-            }
-            px[q] = x; py[q] = y;
-            // The new cell, min(m - 1, int(x / L)): the run's own cell in the usual case.
-            const double u = x * invL, v = y * invL;
-            int ni = ci, nj = cj, cn = c;
-            if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
-                if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
-                    pcell[q] = -1;
-                    ++t.departed;
-                    continue;
-                }
-                ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
-                pcell[q] = cn;
-            }
-            if (Carry || Fused) {
-                if (pgroup[q] != g) { g = pgroup[q]; gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0; }
-            }
-            if constexpr (Carry) {
-                if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
-                else { pdx_[std::size_t(q)] = ddx; pdy_[std::size_t(q)] = ddy; pfrom_[std::size_t(q)] = c; }
-            }
-            if constexpr (Fused) {
-                const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
-                if (cn == c) {
-                    am += gm;                  // eq. 7
-                    av += vk;
-                    axx += vk * sxx;           // eq. 8
-                    ayy += vk * syy;
-                    axy += vk * sxy;
-                    stayed = true;
-                } else {
-                    cmass_[std::size_t(cn)] += gm;  // eq. 7
-                    cvol_[std::size_t(cn)] += vk;
-                    svxx_[std::size_t(cn)] += vk * sxx;  // eq. 8
-                    svyy_[std::size_t(cn)] += vk * syy;
-                    svxy_[std::size_t(cn)] += vk * sxy;
-                    t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
-                    t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
-                }
-                t.mass += gm;
-            }
-        }
+        };
+        if (fe) one_group ? motion(std::true_type{}, std::true_type{}) : motion(std::true_type{}, std::false_type{});
+        else one_group ? motion(std::false_type{}, std::true_type{}) : motion(std::false_type{}, std::false_type{});
         if (Fused && stayed) {
             cmass_[std::size_t(c)] = am; cvol_[std::size_t(c)] = av; svxx_[std::size_t(c)] = axx; svyy_[std::size_t(c)] = ayy; svxy_[std::size_t(c)] = axy;
             t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
