@@ -185,6 +185,41 @@ TEST_CASE("tension cut-off: sigma3 never exceeds the limit, the apex c/tan(phi) 
     }
 }
 
+TEST_CASE("elastic test: leaving out the tension limit for a stress without tension never changes the decision") {
+    // detail::mohr_inside skips the tension planes (and their division) when no principal
+    // stress is tensile: exact only because the limit is never negative for c >= 0. Here
+    // every decision is compared with the full test (the limit always taken) and, away
+    // from the surface, with the independent eigen-solver's yield functions.
+    Random r(11);
+    long elastic = 0, yielding = 0, skipped = 0;
+    for (int k = 0; k < 200000; ++k) {
+        const double c = k % 7 == 0 ? 0.0 : 2e4 * r.uniform();
+        const double phi = k % 11 == 0 ? 0.0 : 45 * r.uniform();
+        const double tens = k % 3 == 0 ? -1.0 : (k % 3 == 1 ? 0.0 : 1e4 * r.uniform());
+        const double scale = std::ldexp(1.0, int(r.uniform() * 20) - 4) * 1e3;
+        const Stress s{scale * (r.uniform() - 0.8), scale * (r.uniform() - 0.8), scale * (r.uniform() - 0.5), scale * (r.uniform() - 0.8)};
+        const double np = detail::flow_number(phi);
+        detail::MohrTrial t;
+        t.np = np;
+        t.two_c_sq = 2 * c * std::sqrt(np);
+        const bool inside = detail::mohr_inside(t, tens, s);
+        // The full test, as written before the shortcut.
+        const double lo = std::min(t.sig[0], t.sig[2]), hi = std::max(t.sig[1], t.sig[2]);
+        const double sig_t = detail::tension_limit(np, t.two_c_sq, tens);
+        const bool full = lo - hi * np + t.two_c_sq >= 0 && sig_t - hi >= 0;
+        REQUIRE(inside == full);
+        if (!inside) CHECK(t.sig_t == sig_t);  // the correction reads it
+        skipped += hi <= 0 && inside;
+        const Yield y = yield_functions(s, c, phi, tens);
+        const double margin = 1e-9 * (scale + c);
+        if (y.fs > margin && y.ft > margin) { CHECK(inside); ++elastic; }
+        if (y.fs < -margin || y.ft < -margin) { CHECK(!inside); ++yielding; }
+    }
+    CHECK(skipped > 20000);  // the shortcut was taken
+    CHECK(elastic > 20000);
+    CHECK(yielding > 20000);
+}
+
 TEST_CASE("Jaumann, eq. 5f: a stressed point turned 360 degrees in small rigid steps keeps its invariants") {
     OnePoint op(Material::mohr(1, 5e7, 0.3, 1700, 30, 9800));
     Points& p = op.sim.points();
