@@ -1168,6 +1168,7 @@ private:
     // and per point room for the lists.
     std::vector<Tally> map_tally_;
     std::vector<std::int32_t> deferred_;
+    int tallied_team_ = 0;  // > 0: update_points left map_tally_ for that many chunks
     Range occupied_;   // cells holding points after the last mapping
     Range strained_;   // cells whose strains are current
     Range live_nodes_; // nodes that may hold a non-zero du
@@ -1386,6 +1387,7 @@ inline void Simulation::update_points() { advance_points<false>(); }
 // runs: one read of the points instead of two; the sums are taken in the same order).
 template <bool Fused>
 inline void Simulation::advance_points() {
+    tallied_team_ = 0;
     if constexpr (Fused) clear_cells();
     const long n = long(p_.size());
     Tally t;
@@ -1393,6 +1395,7 @@ inline void Simulation::advance_points() {
         advance_range<true>(0, n, t);
     } else {
         long departed = 0;
+        int team = 1;
         // User models may not be thread-safe: they are consulted from one thread.
         LPFDM_OMP(omp parallel reduction(+ : departed) if (n > 4096 && user_models_.empty()))
         {
@@ -1404,8 +1407,13 @@ inline void Simulation::advance_points() {
             Tally mine;
             advance_range<false>(n * id / nt, n * (id + 1) / nt, mine);
             departed += mine.departed;
+            if (id < long(map_tally_.size())) map_tally_[std::size_t(id)] = mine;
+            if (id == 0) team = int(nt);
         }
         t.departed = departed;
+        // map_to_lattice may take each chunk's cells from here, unless points were removed
+        // (the chunks then cover other points).
+        tallied_team_ = departed == 0 && team > 1 && team <= int(map_tally_.size()) ? team : 0;
     }
     departed_ = std::size_t(t.departed);
     if (departed_) remove_departed();
@@ -1611,6 +1619,10 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
                     if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
                     else { pdx_[std::size_t(q)] = ddx; pdy_[std::size_t(q)] = ddy; pfrom_[std::size_t(q)] = c; }
                 }
+                if constexpr (!Fused) {  // the cells this chunk's points landed in (map_to_lattice)
+                    if (cn == c) stayed = true;
+                    else { t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn); t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni); }
+                }
                 if constexpr (Fused) {
                     const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
                     if (cn == c) {
@@ -1635,8 +1647,8 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
         };
         if (fe) one_group ? motion(std::true_type{}, std::true_type{}) : motion(std::true_type{}, std::false_type{});
         else one_group ? motion(std::false_type{}, std::true_type{}) : motion(std::false_type{}, std::false_type{});
-        if (Fused && stayed) {
-            cmass_[std::size_t(c)] = am; cvol_[std::size_t(c)] = av; svxx_[std::size_t(c)] = axx; svyy_[std::size_t(c)] = ayy; svxy_[std::size_t(c)] = axy;
+        if (stayed) {
+            if constexpr (Fused) { cmass_[std::size_t(c)] = am; cvol_[std::size_t(c)] = av; svxx_[std::size_t(c)] = axx; svyy_[std::size_t(c)] = ayy; svxy_[std::size_t(c)] = axy; }
             t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
             t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
         }
@@ -1709,7 +1721,9 @@ inline void Simulation::map_point(std::size_t k) {
 // that no lower chunk can touch (outside the lowest..highest cell of each lower chunk);
 // the other points it lists, and the lists are added afterwards, in chunk order. The
 // points are stored nearly cell by cell, so the lists hold the few points about the
-// chunk edges. (Masses are quantised, so the mass total is exact in any order.)
+// chunk edges. (Masses are quantised, so the mass total is exact in any order.) Each
+// chunk's lowest..highest cell comes from update_points when it ran on the same chunks
+// and no point left (else a pass over the chunk finds it).
 inline void Simulation::map_to_lattice() {
     clear_cells();
     const long n = long(p_.size());
@@ -1730,17 +1744,47 @@ inline void Simulation::map_to_lattice() {
             const int nt = omp_get_num_threads(), id = omp_get_thread_num();
             const long k0 = n * id / nt, k1 = n * (id + 1) / nt;
             Tally& a = map_tally_[std::size_t(id)];
-            a = Tally{};
-            for (long k = k0; k < k1; ++k) tally(std::size_t(k), a);
+            if (tallied_team_ != nt) {  // the chunks' cells are not known from update_points
+                a = Tally{};
+                for (long k = k0; k < k1; ++k) tally(std::size_t(k), a);
+            }
             LPFDM_OMP(omp barrier)
+            // Runs of points sharing a cell; an unshared run's sums are kept in registers
+            // and written once, each still taken in point order.
+            const std::int32_t* pcell = p_.cell.data();
+            const bool carry = !pdx_.empty();
             long listed = 0;  // the list of chunk id is kept in deferred_[k0 ..]
-            for (long k = k0; k < k1; ++k) {
-                const int c = p_.cell[std::size_t(k)];
+            double mass = 0;
+            for (long k = k0; k < k1;) {
+                const int c = pcell[k];
+                long kend = k + 1;
+                while (kend < k1 && pcell[kend] == c) ++kend;
                 bool shared = false;
                 for (int u = 0; u < id; ++u) shared |= c >= map_tally_[std::size_t(u)].cmin && c <= map_tally_[std::size_t(u)].cmax;
-                if (shared) deferred_[std::size_t(k0 + listed++)] = std::int32_t(k);
-                else map_point(std::size_t(k));
+                if (shared || carry) {
+                    for (long q = k; q < kend; ++q) {
+                        mass += groups_[p_.group[std::size_t(q)]].mass;
+                        if (shared) deferred_[std::size_t(k0 + listed++)] = std::int32_t(q);
+                        else map_point(std::size_t(q));
+                    }
+                } else {
+                    const std::size_t cc = std::size_t(c);
+                    double am = cmass_[cc], av = cvol_[cc], axx = svxx_[cc], ayy = svyy_[cc], axy = svxy_[cc];
+                    for (long q = k; q < kend; ++q) {
+                        const Group& g = groups_[p_.group[std::size_t(q)]];
+                        const double v = std::min(p_.vol[std::size_t(q)], g.vol0);
+                        am += g.mass;                       // eq. 7
+                        av += v;
+                        axx += v * p_.sxx[std::size_t(q)];  // eq. 8
+                        ayy += v * p_.syy[std::size_t(q)];
+                        axy += v * p_.sxy[std::size_t(q)];
+                        mass += g.mass;
+                    }
+                    cmass_[cc] = am; cvol_[cc] = av; svxx_[cc] = axx; svyy_[cc] = ayy; svxy_[cc] = axy;
+                }
+                k = kend;
             }
+            a.mass = mass;
             a.listed = listed;
             if (id == 0) team = nt;
         }
@@ -1756,6 +1800,7 @@ inline void Simulation::map_to_lattice() {
 #endif
     if (team == 1)
         for (long k = 0; k < n; ++k) { map_point(std::size_t(k)); tally(std::size_t(k), t); }
+    tallied_team_ = 0;  // used once
     mass_in_ = t.mass;
     occupied_ = t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1};
 }

@@ -6,7 +6,8 @@ exe=${1:-./lpfdm}
 cd "$(dirname "$0")/.."
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 passed=0 failed=0
-for run in threads_mohr:threads_points:threads_history threads_advect:threads_advect_points:threads_advect_history; do
+for run in threads_mohr:threads_points:threads_history threads_advect:threads_advect_points:threads_advect_history \
+           threads_outflow:threads_outflow_points:threads_outflow_history; do
   IFS=: read -r deck points history <<<"$run"
   for t in 1 2; do
     if ! timeout 300 "$exe" -q --threads "$t" -o "$tmp/$deck.$t" "tests/decks/$deck.deck"; then
