@@ -467,9 +467,10 @@ inline double tension_limit(double np, double two_c_sq, double tension) {
     return sig_t;
 }
 // The elastic test, given t.np and t.two_c_sq: fills the principal part of t and returns
-// true when s is inside every plane. With c >= 0 the tension limit is never negative, so
-// a stress with no tensile principal value passes the tension planes without computing
-// it (one division per point saved); t.sig_t is set whenever the test fails.
+// true when s is inside every plane. With c >= 0 and a finite N_phi the tension limit is
+// never negative (nor NaN), so a stress with no tensile principal value passes the
+// tension planes without computing it (one division per point saved); t.sig_t is set
+// whenever the test fails.
 inline bool mohr_inside(MohrTrial& t, double tension, const Stress& s) {
     const double p = 0.5 * (s.xx + s.yy);
     t.a = 0.5 * (s.xx - s.yy);
@@ -477,7 +478,7 @@ inline bool mohr_inside(MohrTrial& t, double tension, const Stress& s) {
     t.sig[0] = p - t.r; t.sig[1] = p + t.r; t.sig[2] = s.zz;
     const double lo = std::min(t.sig[0], t.sig[2]), hi = std::max(t.sig[1], t.sig[2]);
     const bool shear_ok = lo - hi * t.np + t.two_c_sq >= 0;
-    if (shear_ok && hi <= 0 && t.two_c_sq >= 0) return true;
+    if (shear_ok && hi <= 0 && t.two_c_sq >= 0 && t.np < std::numeric_limits<double>::infinity()) return true;
     t.sig_t = tension_limit(t.np, t.two_c_sq, tension);
     return shear_ok && t.sig_t - hi >= 0;
 }
@@ -678,6 +679,7 @@ struct Points {
     std::vector<std::uint8_t> yielded;
     // Only when some material scatters: intact cohesion, N_phi and sqrt(N_phi) of each
     // point (the root taken once, not per step; a program that changes n_phi sets both).
+    // Every array in use has one entry per point.
     std::vector<double> c0, n_phi, sqrt_n_phi;
     std::size_t size() const { return x.size(); }
 };
@@ -947,7 +949,7 @@ public:
             advance_points<true>();  // update_points and map_to_lattice in one pass
         } else {
             update_points();   // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b
-            map_to_lattice();  // eq. 7, 8 (the lattice is back at its original position)
+            map_points(true);  // map_to_lattice: eq. 7, 8 (the lattice is back at its original position)
         }
         nodal_forces();    // virtual work transpose of eq. 5, gravity eq. 10
         compensate();      // eq. 12
@@ -986,7 +988,7 @@ public:
     double mass_inside() const { return mass_in_; }                   // [kg/m]
     double mass_outflow() const { return mass_out_; }                 // of the points that left [kg/m]
     double mass_initial() const { return mass0_; }                    // inside + outflow, exactly
-    double unbalanced_ratio() const;                                  // max unbalanced / mean gross nodal force
+    double unbalanced_ratio() const;                                  // max unbalanced / mean gross nodal force (after step() or integrate())
     double reaction_x() const { return rx_; }                         // sum of fixed-node reactions [N/m]
     double reaction_y() const { return ry_; }
     int mx() const { return mx_; }                                    // cells in x
@@ -1059,7 +1061,7 @@ public:
     // through one cycle. Normal use calls step().
     void cell_strains();
     void update_points();
-    void map_to_lattice();
+    void map_to_lattice() { map_points(false); }
     void nodal_forces();
     void compensate();
     void integrate();
@@ -1081,6 +1083,9 @@ private:
     template <bool Fused> void advance_range(long k0, long k1, Tally& t);
     template <bool Fused, Motion M, bool Carry> void advance_run(long k0, long k1, Tally& t);
     void map_point(std::size_t k);
+    // map_to_lattice; after_update: called by step() right after update_points, so the
+    // chunks' cell ranges that update_points found still hold (nothing changed the points).
+    void map_points(bool after_update);
     void plastic_correction(const MaterialConstants& mc, std::size_t q, const detail::MohrTrial& t, Stress& s);
     void user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s);
     void carried_increments(const Range& nodes);
@@ -1121,7 +1126,7 @@ private:
             switch (k) {
             case 0: cell_strains(); break;
             case 1: update_points(); break;
-            case 2: map_to_lattice(); break;
+            case 2: map_points(true); break;
             case 3: nodal_forces(); break;
             case 4: compensate(); break;
             default: integrate(); break;
@@ -1722,9 +1727,9 @@ inline void Simulation::map_point(std::size_t k) {
 // the other points it lists, and the lists are added afterwards, in chunk order. The
 // points are stored nearly cell by cell, so the lists hold the few points about the
 // chunk edges. (Masses are quantised, so the mass total is exact in any order.) Each
-// chunk's lowest..highest cell comes from update_points when it ran on the same chunks
-// and no point left (else a pass over the chunk finds it).
-inline void Simulation::map_to_lattice() {
+// chunk's lowest..highest cell comes from update_points when step() calls both in a row,
+// on the same chunks, and no point left (else a pass over the chunk finds it).
+inline void Simulation::map_points([[maybe_unused]] bool after_update) {
     clear_cells();
     const long n = long(p_.size());
     auto tally = [&](std::size_t k, Tally& a) {
@@ -1744,7 +1749,7 @@ inline void Simulation::map_to_lattice() {
             const int nt = omp_get_num_threads(), id = omp_get_thread_num();
             const long k0 = n * id / nt, k1 = n * (id + 1) / nt;
             Tally& a = map_tally_[std::size_t(id)];
-            if (tallied_team_ != nt) {  // the chunks' cells are not known from update_points
+            if (!after_update || tallied_team_ != nt) {  // the chunks' cells are not known from update_points
                 a = Tally{};
                 for (long k = k0; k < k1; ++k) tally(std::size_t(k), a);
             }

@@ -5,6 +5,10 @@
 #include <cmath>
 #include <vector>
 
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
 #include "../lpfdm.hpp"
 
 using namespace lpfdm;
@@ -396,4 +400,38 @@ TEST_CASE("HOURGLASS leaves an affine field alone: the damped column's answer do
     }
     MESSAGE("column with and without HOURGLASS 0.1: largest sigma_yy difference " << diff / scale << " of the largest stress");
     CHECK(diff < 1e-3 * scale);
+}
+
+TEST_CASE("phases one by one with two threads: a point moved between update_points and map_to_lattice is mapped where it now is") {
+    // step() lets map_to_lattice take each thread's cell range from update_points; a
+    // program stepping the phases itself may move points in between (setting x, y and
+    // cell), and the mapping must then see them where they are, as with one thread.
+    auto run = [](int threads) {
+#if defined(_OPENMP)
+        const int before = omp_get_max_threads();
+        omp_set_num_threads(threads);
+#endif
+        Scene s = block_scene(64, 32, 0.125, {0, 0, 8, 2}, 3);  // 9 216 points: threads map them
+        s.gravity_y = -9.81;
+        Simulation sim(s);
+        sim.step();
+        sim.cell_strains();
+        sim.update_points();
+        Points& p = sim.points();
+        p.x[0] = 7.01; p.y[0] = 3.51;  // far from every other point: cell (56, 28)
+        p.cell[0] = sim.cell(56, 28);
+        sim.map_to_lattice();
+        sim.nodal_forces();
+        sim.compensate();
+        sim.integrate();
+        sim.step();
+#if defined(_OPENMP)
+        omp_set_num_threads(before);
+#endif
+        CHECK(p.size() > 4096);
+        return std::make_pair(sim.cell_mass(), sim.point_mass(0));
+    };
+    const auto one = run(1), two = run(2);
+    CHECK(one.first[std::size_t(56 + 28 * 64)] == one.second);  // the moved point, alone in its cell
+    CHECK(two.first == one.first);
 }

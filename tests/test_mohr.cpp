@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "../lpfdm.hpp"
@@ -214,6 +215,18 @@ TEST_CASE("elastic test: leaving out the tension limit for a stress without tens
         const double margin = 1e-9 * (scale + c);
         if (y.fs > margin && y.ft > margin) { CHECK(inside); ++elastic; }
         if (y.fs < -margin || y.ft < -margin) { CHECK(!inside); ++yielding; }
+    }
+    // An infinite N_phi (not reachable from a deck, PHI < 90) makes the limit inf / inf:
+    // the shortcut must not be taken there.
+    for (double c : {0.0, 1e3}) {
+        const double np = std::numeric_limits<double>::infinity();
+        detail::MohrTrial t;
+        t.np = np;
+        t.two_c_sq = 2 * c * std::sqrt(np);
+        const Stress s{-2e3, -1e3, 0, -1.5e3};
+        const bool inside = detail::mohr_inside(t, -1, s);
+        const double lo = std::min(t.sig[0], t.sig[2]), hi = std::max(t.sig[1], t.sig[2]);
+        CHECK(inside == (lo - hi * np + t.two_c_sq >= 0 && detail::tension_limit(np, t.two_c_sq, -1) - hi >= 0));
     }
     CHECK(skipped > 20000);  // the shortcut was taken
     CHECK(elastic > 20000);
