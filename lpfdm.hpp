@@ -1949,7 +1949,18 @@ inline void Simulation::compensate() {
                 if (ci < st.i0 || cj < st.j0 || ci >= st.i1 || cj >= st.j1) continue;
                 const int c = cj * mx + ci;
                 exx = cs[c].xx; eyy = cs[c].yy; exy = cs[c].xy; eyx = cs[c].yx;
-            } else {  // two or four cells, in row order
+            } else if (ci0 >= st.i0 && cj0 >= st.j0 && ci < st.i1 && cj < st.j1) {  // two or four cells, all strained
+                const CellStrain* a = cs + (cj0 * mx + ci0);
+                exx = 0 + a->xx; eyy = 0 + a->yy; exy = 0 + a->xy; eyx = 0 + a->yx;  // the same sums as below
+                if (ci0 != ci) { exx += a[1].xx; eyy += a[1].yy; exy += a[1].xy; eyx += a[1].yx; }
+                if (cj0 != cj) {
+                    const CellStrain* b = a + mx;
+                    exx += b->xx; eyy += b->yy; exy += b->xy; eyx += b->yx;
+                    if (ci0 != ci) { exx += b[1].xx; eyy += b[1].yy; exy += b[1].xy; eyx += b[1].yx; }
+                }
+                const double iw = ci0 != ci && cj0 != cj ? 0.25 : 0.5;
+                exx *= iw; eyy *= iw; exy *= iw; eyx *= iw;
+            } else {  // two or four cells, in row order, some outside the strained box
                 exx = eyy = exy = eyx = 0;
                 double w = 0;
                 auto add = [&](int a, int b) {

@@ -163,6 +163,60 @@ TEST_CASE("eq. 12 on a linear field: the compensated increment is the field at x
     CHECK(sim.du_y()[std::size_t(sim.node(3, 3))] == -0.02);
 }
 
+TEST_CASE("eq. 12 where x_node - du_node lies on a cell edge: the mean strain of the cells on both sides") {
+    // Zero components of du put x_node - du_node on a cell edge (a nonzero du far below
+    // the node's coordinate's last digit too); eq. 12 then takes the mean of the two or
+    // four cells there that are strained, in row order (on the lattice border, of those
+    // inside). Expected values by the same sums, from strain_of_cell: equal to the bit.
+    Scene s = block_scene(6, 6, 1.0, {0, 0, 6, 6});
+    Simulation sim(s);
+    sim.step();
+    auto fx = [](int i, int j) { return 1e-3 * i * (i - 3) * (1 + 0.1 * j * j) / 3; };   // zero on columns 0 and 3
+    auto fy = [](int i, int j) { return 1e-3 * (j - 2) * (j - 6) * (1 + 0.05 * i * i) / 4; };  // zero on rows 2 and 6
+    for (int j = 0; j <= 6; ++j)
+        for (int i = 0; i <= 6; ++i) {
+            sim.du_x()[std::size_t(sim.node(i, j))] = fx(i, j);
+            sim.du_y()[std::size_t(sim.node(i, j))] = fy(i, j);
+        }
+    sim.du_x()[std::size_t(sim.node(4, 4))] = 1e-19;  // 4 - 1e-19 == 4: four cells
+    sim.du_y()[std::size_t(sim.node(4, 4))] = -1e-19;
+    sim.cell_strains();
+    struct Want { int n; double x, y; };
+    std::vector<Want> want;
+    int cells_seen[5] = {0, 0, 0, 0, 0};
+    for (int j = 0; j <= 6; ++j)
+        for (int i = 0; i <= 6; ++i) {
+            const double ux = sim.du_x()[std::size_t(sim.node(i, j))], uy = sim.du_y()[std::size_t(sim.node(i, j))];
+            if (ux == 0 && uy == 0) continue;
+            const double xs = i - ux, ys = j - uy;  // L = 1
+            const int ci = int(std::floor(xs)), cj = int(std::floor(ys));
+            std::vector<int> is{ci}, js{cj};
+            if (xs == ci) is = {ci - 1, ci};
+            if (ys == cj) js = {cj - 1, cj};
+            double exx = 0, eyy = 0, exy = 0, eyx = 0;
+            int w = 0;
+            for (int b : js)
+                for (int a : is) {
+                    if (a < 0 || b < 0 || a >= 6 || b >= 6) continue;
+                    const StrainIncrement e = sim.strain_of_cell(a, b);
+                    exx += e.xx; eyy += e.yy; exy += e.xy; eyx += e.yx; ++w;
+                }
+            if (w == 0) continue;
+            exx /= w; eyy /= w; exy /= w; eyx /= w;
+            if (is.size() * js.size() > 1) ++cells_seen[w];
+            want.push_back({sim.node(i, j), ux * (1 - exx) - uy * exy, uy * (1 - eyy) - ux * eyx});
+        }
+    CHECK(cells_seen[1] > 0);  // on the border: one of the two cells is outside
+    CHECK(cells_seen[2] > 0);
+    CHECK(cells_seen[4] == 1);
+    sim.nodal_forces();
+    sim.compensate();
+    for (const Want& w : want) {
+        CHECK(sim.du_x()[std::size_t(w.n)] == w.x);
+        CHECK(sim.du_y()[std::size_t(w.n)] == w.y);
+    }
+}
+
 TEST_CASE("eq. 13-14: a free block falls at g undamped and at (1 - alpha) g with local damping; so with ADVECT POINTS") {
     struct Mode { Advect advect; Motion motion; };
     for (const Mode mode : {Mode{Advect::Eq12, Motion::Paper}, Mode{Advect::Points, Motion::Centre}, Mode{Advect::Points, Motion::Bilinear}})
