@@ -1083,13 +1083,26 @@ private:
     template <bool Fused> void advance_range(long k0, long k1, Tally& t);
     template <bool Fused, Motion M, bool Carry> void advance_run(long k0, long k1, Tally& t);
     void map_point(std::size_t k);
-    // eq. 7 and 8 for one point of mass m, volume v and stress (sxx, syy, sxy), into cell c.
+    // The sums of eq. 7 and 8 of one cell: mass, volume and V sigma. A run of points that
+    // stay in one cell adds to a local copy (kept in registers) and stores it once.
+    struct CellSums {
+        double m, v, xx, yy, xy;
+        // One point of mass pm, volume pv and stress (sxx, syy, sxy).
+        void add(double pm, double pv, double sxx, double syy, double sxy) {
+            m += pm;          // eq. 7
+            v += pv;
+            xx += pv * sxx;   // eq. 8
+            yy += pv * syy;
+            xy += pv * sxy;
+        }
+    };
+    CellSums cell_sums(std::size_t c) const { return {cmass_[c], cvol_[c], svxx_[c], svyy_[c], svxy_[c]}; }
+    void store_sums(std::size_t c, const CellSums& a) { cmass_[c] = a.m; cvol_[c] = a.v; svxx_[c] = a.xx; svyy_[c] = a.yy; svxy_[c] = a.xy; }
+    // eq. 7 and 8 for one point into cell c.
     void add_to_cell(std::size_t c, double m, double v, double sxx, double syy, double sxy) {
-        cmass_[c] += m;        // eq. 7
-        cvol_[c] += v;
-        svxx_[c] += v * sxx;   // eq. 8
-        svyy_[c] += v * syy;
-        svxy_[c] += v * sxy;
+        CellSums a = cell_sums(c);
+        a.add(m, v, sxx, syy, sxy);
+        store_sums(c, a);
     }
     // map_to_lattice; after_update: called by step() right after update_points, so the
     // chunks' cell ranges that update_points found still hold (nothing changed the points).
@@ -1574,8 +1587,8 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
         double ux2 = 0, uy2 = 0, ux3 = 0, uy3 = 0, ux4 = 0, uy4 = 0, umx = 0, umy = 0;
         if constexpr (M != Motion::Paper) { ux2 = dux_[n2]; uy2 = duy_[n2]; ux3 = dux_[n3]; uy3 = duy_[n3]; ux4 = dux_[n4]; uy4 = duy_[n4]; }
         if constexpr (M == Motion::Centre) { umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4); }
-        double am = 0, av = 0, axx = 0, ayy = 0, axy = 0;
-        if constexpr (Fused) { am = cmass_[c]; av = cvol_[c]; axx = svxx_[c]; ayy = svyy_[c]; axy = svxy_[c]; }
+        CellSums sums{0, 0, 0, 0, 0};
+        if constexpr (Fused) sums = cell_sums(std::size_t(c));
         bool stayed = false;
         int g = one_group ? pgroup[k] : -1;
         double gm = one_group ? groups_[std::size_t(g)].mass : 0, gv0 = one_group ? groups_[std::size_t(g)].vol0 : 0;
@@ -1639,11 +1652,7 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
                 if constexpr (Fused) {
                     const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
                     if (cn == c) {
-                        am += gm;                  // eq. 7
-                        av += vk;
-                        axx += vk * sxx;           // eq. 8
-                        ayy += vk * syy;
-                        axy += vk * sxy;
+                        sums.add(gm, vk, sxx, syy, sxy);  // eq. 7, 8
                         stayed = true;
                     } else {
                         add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
@@ -1657,7 +1666,7 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
         if (fe) one_group ? motion(std::true_type{}, std::true_type{}) : motion(std::true_type{}, std::false_type{});
         else one_group ? motion(std::false_type{}, std::true_type{}) : motion(std::false_type{}, std::false_type{});
         if (stayed) {
-            if constexpr (Fused) { cmass_[std::size_t(c)] = am; cvol_[std::size_t(c)] = av; svxx_[std::size_t(c)] = axx; svyy_[std::size_t(c)] = ayy; svxy_[std::size_t(c)] = axy; }
+            if constexpr (Fused) store_sums(std::size_t(c), sums);
             t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
             t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
         }
@@ -1776,18 +1785,14 @@ inline void Simulation::map_points([[maybe_unused]] bool after_update) {
                     }
                 } else {
                     const std::size_t cc = std::size_t(c);
-                    double am = cmass_[cc], av = cvol_[cc], axx = svxx_[cc], ayy = svyy_[cc], axy = svxy_[cc];
+                    CellSums sums = cell_sums(cc);
                     for (long q = k; q < kend; ++q) {
-                        const Group& g = groups_[p_.group[std::size_t(q)]];
-                        const double v = std::min(p_.vol[std::size_t(q)], g.vol0);
-                        am += g.mass;                       // eq. 7
-                        av += v;
-                        axx += v * p_.sxx[std::size_t(q)];  // eq. 8
-                        ayy += v * p_.syy[std::size_t(q)];
-                        axy += v * p_.sxy[std::size_t(q)];
+                        const std::size_t r = std::size_t(q);
+                        const Group& g = groups_[p_.group[r]];
+                        sums.add(g.mass, std::min(p_.vol[r], g.vol0), p_.sxx[r], p_.syy[r], p_.sxy[r]);  // eq. 7, 8
                         mass += g.mass;
                     }
-                    cmass_[cc] = am; cvol_[cc] = av; svxx_[cc] = axx; svyy_[cc] = ayy; svxy_[cc] = axy;
+                    store_sums(cc, sums);
                 }
                 k = kend;
             }
