@@ -1505,6 +1505,7 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
     const std::uint16_t* __restrict pgroup = p_.group.data();
     const int mx = mx_, my = my_;
     const double L = L_, invL = invL_, X = mx * L, Y = my * L;
+    const bool single = groups_.size() == 1;
     long k = k0;
     int cprev = -2, iprev = -2, jprev = -2;
     while (k < k1) {
@@ -1525,7 +1526,7 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
         bool one_group = true;
         for (long q = k; q < kend;) {
             const int g = pgroup[q];
-            long qend = q + 1;
+            long qend = single ? kend : q + 1;  // one group in the scene: the whole run
             while (qend < kend && pgroup[qend] == g) ++qend;
             one_group = one_group && qend == kend;
             const MaterialConstants& mc = *group_consts_[std::size_t(g)];
