@@ -122,20 +122,38 @@ ringing_case() {  # NAME DECK POINTS_FILE E
     done
 }
 
-# Plane-strain compression: mean deviator stress on the yield plateau (wall travel
-# from 0.15 mm to 0.3 mm, axial strain 0.075 % to 0.15 %) against 2 c tan(45 + phi/2).
-psc_case() {
-    local r p dir m ref
-    ref=$(awk 'BEGIN { print 2 * 9800 * sin((45 + 28.648 / 2) * atan2(1, 1) / 45) / cos((45 + 28.648 / 2) * atan2(1, 1) / 45) }')
+# A rigid wall pressed into Mohr-Coulomb soil: the wall's mean pressure from the deck's
+# history (verify_wall.awk with the awk variables given) against a closed-form limit,
+# at --refine 1, 2, 4 and 1, 2, 4 points per cell (--refine 4 with 2 only).
+#   wall_case NAME DECK CELLS_AT_REFINE_1 "CLUSTER IDS" REFERENCE AWK_OPTIONS...
+wall_case() {
+    local name=$1 deck=$2 cells=$3 clusters=$4 ref=$5 r p k dir m sets
+    shift 5
     for r in 1 2 4; do
         for p in 1 2 4; do
             [ $r = 4 ] && [ $p != 2 ] && continue
-            dir=$work/psc-r$r-p$p
-            run "$dir" "$decks/verify_psc.deck" --refine $r --set CLUSTER1.PPC=$p || continue
-            m=$(awk -v wall=1 -v width=0.1 -v from=0.00015 -f "$here/verify_wall.awk" "$dir/verify_psc_history.txt")
-            row psc_q $((5 * r)) $p "$STEPS" "$WALL" "$PSTEPS" "${m%% *}" "$ref"
+            dir=$work/${name%%_*}-r$r-p$p
+            sets=()
+            for k in $clusters; do sets+=(--set "CLUSTER$k.PPC=$p"); done
+            run "$dir" "$deck" --refine $r "${sets[@]}" || continue
+            m=$(awk "$@" -f "$here/verify_wall.awk" "$dir/$(basename "$deck" .deck)_history.txt")
+            row "$name" $((cells * r)) $p "$STEPS" "$WALL" "$PSTEPS" "${m%% *}" "$ref"
         done
     done
+}
+
+# Plane-strain compression: mean deviator stress on the yield plateau (wall travel
+# from 0.15 mm to 0.3 mm, axial strain 0.075 % to 0.15 %) against 2 c tan(45 + phi/2).
+psc_case() {
+    wall_case psc_q "$decks/verify_psc.deck" 5 1 \
+        "$(awk 'BEGIN { print 2 * 9800 * sin((45 + 28.648 / 2) * atan2(1, 1) / 45) / cos((45 + 28.648 / 2) * atan2(1, 1) / 45) }')" \
+        -v wall=1 -v width=0.1 -v from=0.00015
+}
+
+# Strip footing: q / c at 1.4 cm of settlement against 2 + pi.
+footing_case() {
+    wall_case footing_q_over_c "$decks/verify_footing.deck" 4 "1 2" "$(awk 'BEGIN { print 2 + 4 * atan2(1, 1) }')" \
+        -v wall=1 -v width=1 -v scale=20000 -v at=0.014
 }
 
 # Vertical cut: bisection on gravity between 0.85 and 1.25 times the reference's
@@ -163,21 +181,6 @@ cut_case() {
             m=$(awk -v a="$lo" -v b="$hi" 'BEGIN { printf "%.6g", 1700 * (a + b) / 2 * 4 / 9800 }')
             [ $failed = 1 ] && m=nan
             CPU=$cpu row cut_gammaHc_over_c $((8 * r)) $p "$steps" "$wall" "$ps" "$m" "$ref"
-        done
-    done
-}
-
-# Strip footing: q / c at 1.4 cm of settlement against 2 + pi.
-footing_case() {
-    local r p dir m ref
-    ref=$(awk 'BEGIN { print 2 + 4 * atan2(1, 1) }')
-    for r in 1 2 4; do
-        for p in 1 2 4; do
-            [ $r = 4 ] && [ $p != 2 ] && continue
-            dir=$work/footing-r$r-p$p
-            run "$dir" "$decks/verify_footing.deck" --refine $r --set CLUSTER1.PPC=$p --set CLUSTER2.PPC=$p || continue
-            m=$(awk -v wall=1 -v width=1 -v scale=20000 -v at=0.014 -f "$here/verify_wall.awk" "$dir/verify_footing_history.txt")
-            row footing_q_over_c $((4 * r)) $p "$STEPS" "$WALL" "$PSTEPS" "${m%% *}" "$ref"
         done
     done
 }
