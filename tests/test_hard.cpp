@@ -115,16 +115,14 @@ void set_increments(Simulation& sim, F f) {
         }
 }
 
-struct Noise {
-    Random r{2024};
-    double operator()() { return 2 * r.uniform() - 1; }
-};
-
 // Random nodal increments of up to 5e-7 m per direction (the same sequence every time):
 // they excite every mode the lattice has, the fastest included.
 void shake(Simulation& sim) {
-    Noise rnd;
-    set_increments(sim, [&](int, int, double, double, double& ux, double& uy) { ux = 5e-7 * rnd(); uy = 5e-7 * rnd(); });
+    Random r{2024};
+    set_increments(sim, [&](int, int, double, double, double& ux, double& uy) {
+        ux = 5e-7 * (2 * r.uniform() - 1);
+        uy = 5e-7 * (2 * r.uniform() - 1);
+    });
 }
 
 // Mass-weighted centroid of the points.
