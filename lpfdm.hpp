@@ -543,24 +543,29 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
         }
     }
 
-    // The nine planes: f = n . sig + kk >= 0, flow m.
+    // The nine planes: f = n . sig + kk >= 0, flow m. Shear plane (i, j): n = e_i - N_phi
+    // e_j, m = e_i - N_psi e_j; tension plane i: n = m = -e_i. The components are the
+    // values e_i - N e_j takes (1 - N 0, 0 - N 1, 0 - N 0), written out once per flow rule
+    // instead of looped over an identity table (a search pays this once or twice).
     struct Plane { double n[3], kk, m[3]; };
     Plane pl[9];
     int npl = 0;
-    static constexpr double I[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};  // e_i
+    static constexpr int kShear[6][2] = {{0, 1}, {0, 2}, {1, 0}, {1, 2}, {2, 0}, {2, 1}};  // (i, j), i the compressive side
     auto build = [&]() {
-        npl = 0;
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) {
-                if (i == j) continue;
-                Plane& q = pl[npl++];
-                for (int t = 0; t < 3; ++t) { q.n[t] = I[i][t] - np * I[j][t]; q.m[t] = I[i][t] - ns * I[j][t]; }
-                q.kk = two_c_sq;
-            }
+        const double n_one = 1.0 - np * 0.0, n_neg = 0.0 - np * 1.0, n_zero = 0.0 - np * 0.0;
+        const double m_one = 1.0 - ns * 0.0, m_neg = 0.0 - ns * 1.0, m_zero = 0.0 - ns * 0.0;
+        for (npl = 0; npl < 6; ++npl) {
+            Plane& q = pl[npl];
+            const int i = kShear[npl][0], j = kShear[npl][1];
+            q.n[0] = q.n[1] = q.n[2] = n_zero; q.n[i] = n_one; q.n[j] = n_neg;
+            q.m[0] = q.m[1] = q.m[2] = m_zero; q.m[i] = m_one; q.m[j] = m_neg;
+            q.kk = two_c_sq;
+        }
         if (std::isfinite(sig_t))
             for (int i = 0; i < 3; ++i) {
                 Plane& q = pl[npl++];
-                for (int t = 0; t < 3; ++t) q.n[t] = q.m[t] = -I[i][t];
+                q.n[0] = q.n[1] = q.n[2] = q.m[0] = q.m[1] = q.m[2] = -0.0;
+                q.n[i] = q.m[i] = -1.0;
                 q.kk = sig_t;
             }
     };
@@ -569,10 +574,11 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     double dmp[9][3], ftrial[9];
     auto prepare = [&]() {
         build();
+        const double d12 = a1 - a2;
         for (int a = 0; a < npl; ++a) {
             const Plane& q = pl[a];
-            const double tr = q.m[0] + q.m[1] + q.m[2];
-            for (int t = 0; t < 3; ++t) dmp[a][t] = a2 * tr + (a1 - a2) * q.m[t];
+            const double tr = a2 * (q.m[0] + q.m[1] + q.m[2]);
+            dmp[a][0] = tr + d12 * q.m[0]; dmp[a][1] = tr + d12 * q.m[1]; dmp[a][2] = tr + d12 * q.m[2];
             ftrial[a] = f_at(q, trial);
         }
     };
