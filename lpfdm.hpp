@@ -577,8 +577,8 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
         const double d12 = a1 - a2;
         for (int a = 0; a < npl; ++a) {
             const Plane& q = pl[a];
-            const double tr = a2 * (q.m[0] + q.m[1] + q.m[2]);
-            dmp[a][0] = tr + d12 * q.m[0]; dmp[a][1] = tr + d12 * q.m[1]; dmp[a][2] = tr + d12 * q.m[2];
+            const double a2_tr = a2 * (q.m[0] + q.m[1] + q.m[2]);  // a2 trace(m)
+            dmp[a][0] = a2_tr + d12 * q.m[0]; dmp[a][1] = a2_tr + d12 * q.m[1]; dmp[a][2] = a2_tr + d12 * q.m[2];
             ftrial[a] = f_at(q, trial);
         }
     };
