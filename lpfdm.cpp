@@ -34,6 +34,8 @@ const char* kUsage =
     "                their order in the deck from 1); may be given several times\n"
     "  --threads N   use N threads (default 1, or OMP_NUM_THREADS; the output is the same for any N)\n"
     "  --profile     print the time of each phase of the cycle, peak memory and bytes per point\n"
+    "  --no-avx2     run the points one at a time, not four per AVX2 register (the same output;\n"
+    "                for speed comparisons)\n"
     "  -q            quiet: no progress line and no summary\n"
     "  --help        this text\n"
     "  --version     the version\n"
@@ -44,7 +46,7 @@ struct Options {
     std::string deck, outdir = ".";
     long refine = 1, steps = 0;
     long long seed = -1;
-    bool quiet = false, profile = false;
+    bool quiet = false, profile = false, no_avx2 = false;
     long threads = 0;
     std::vector<std::pair<std::string, double>> settings;
 };
@@ -100,6 +102,7 @@ int main(int argc, char** argv) {
         if (s == "--version") { std::printf("lpfdm %s\n", lpfdm::kVersion); return 0; }
         if (s == "-q") { opt.quiet = true; continue; }
         if (s == "--profile") { opt.profile = true; continue; }
+        if (s == "--no-avx2") { opt.no_avx2 = true; continue; }
         if (s == "-o") {
             const char* d = value();
             if (!d) return usage_error("-o needs a directory");
@@ -186,6 +189,7 @@ int main(int argc, char** argv) {
 #endif
     lpfdm::Simulation sim(scene);
     sim.set_profiling(opt.profile);
+    if (opt.no_avx2) sim.set_wide(false);
     std::vector<OutFile> outs;
     for (const auto& o : sim.scene().outputs) {
         OutFile of;
@@ -297,8 +301,8 @@ int main(int argc, char** argv) {
         getrusage(RUSAGE_SELF, &ru);
         double total = 0;
         for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
-        std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays\n", nthreads, double(ru.ru_maxrss) / 1024.0,
-                    sim.bytes_per_point());
+        std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, points %s\n", nthreads,
+                    double(ru.ru_maxrss) / 1024.0, sim.bytes_per_point(), sim.wide() ? "four per AVX2 register" : "one at a time");
         for (int k = 0; k < lpfdm::Simulation::kPhases; ++k)
             std::printf("profile: %-15s %8.3f s  %5.1f %%\n", lpfdm::Simulation::phase_name(k), sim.phase_seconds()[k],
                         total > 0 ? 100 * sim.phase_seconds()[k] / total : 0.0);

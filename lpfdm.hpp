@@ -139,6 +139,15 @@
 #else
 #define LPFDM_INLINE
 #endif
+// LPFDM_WIDE: on x86-64 with GCC or Clang, the point loop (with the paper's motion rule)
+// has a second version built for AVX2, taken when the processor has it: four points per
+// register instead of one or two, the same numbers bit for bit. Define LPFDM_NO_WIDE to
+// leave it out.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(LPFDM_NO_WIDE)
+#define LPFDM_WIDE 1
+#else
+#define LPFDM_WIDE 0
+#endif
 
 namespace lpfdm {
 
@@ -420,11 +429,14 @@ inline StrainIncrement cell_strain(const double* ux, const double* uy, int n1, i
 }
 
 // Rotates the in-plane stress with the material (Jaumann); invariants are kept exactly.
-inline void rotate_stress(Stress& s, double c2, double s2) {
-    const double pm = 0.5 * (s.xx + s.yy), a = 0.5 * (s.xx - s.yy), b = s.xy;
-    const double ar = a * c2 - b * s2, br = a * s2 + b * c2;
-    s.xx = pm + ar; s.yy = pm - ar; s.xy = br;
+// T: one value, or the lanes of a vector (the same operations in every lane).
+template <class T>
+LPFDM_INLINE inline void rotate_stress(T& xx, T& yy, T& xy, double c2, double s2) {
+    const T pm = 0.5 * (xx + yy), a = 0.5 * (xx - yy), b = xy;
+    const T ar = a * c2 - b * s2, br = a * s2 + b * c2;
+    xx = pm + ar; yy = pm - ar; xy = br;
 }
+inline void rotate_stress(Stress& s, double c2, double s2) { rotate_stress(s.xx, s.yy, s.xy, c2, s2); }
 
 // Strength of one Mohr-Coulomb point at this moment.
 struct MohrStrength {
@@ -720,6 +732,15 @@ struct Range {  // half-open index box
 
 namespace detail {
 
+#if LPFDM_WIDE
+// Four doubles (and four lane masks) as GCC/Clang vectors: AVX2 registers inside a
+// function built for AVX2.
+typedef double v4d __attribute__((vector_size(32)));
+typedef long long v4m __attribute__((vector_size(32)));
+// True when every lane of a comparison's mask is set.
+LPFDM_INLINE inline bool all_lanes(const v4m& m) { return (m[0] & m[1] & m[2] & m[3]) != 0; }
+#endif
+
 // Boxes select cells by their centres and nodes by their positions, with a tolerance of a
 // thousandth of a cell, so a degenerate box selects a line. The index span [lo, hi] is
 // clipped to the lattice (lo > hi: nothing); edges far outside are clamped before any
@@ -970,6 +991,18 @@ public:
         return names[k];
     }
     void set_profiling(bool on) { profiling_ = on; }                 // time each phase from now on
+    // The point loop's AVX2 version: used when built in (LPFDM_WIDE), the processor has
+    // AVX2 and the motion rule is the paper's; set_wide(false) takes the one-point loop
+    // (the same numbers, bit for bit).
+    static bool have_wide() {
+#if LPFDM_WIDE
+        return __builtin_cpu_supports("avx2");
+#else
+        return false;
+#endif
+    }
+    void set_wide(bool on) { wide_ = on && have_wide(); }
+    bool wide() const { return wide_; }
     const double* phase_seconds() const { return phase_s_; }          // kPhases entries, in step order
     // Bytes the point arrays hold per point (capacity, all arrays).
     double bytes_per_point() const {
@@ -1088,6 +1121,10 @@ private:
     };
     template <bool Fused> void advance_range(long k0, long k1, Tally& t);
     template <bool Fused, Motion M, bool Carry> void advance_run(long k0, long k1, Tally& t);
+    template <bool Fused, Motion M, bool Carry, bool Wide> LPFDM_INLINE void run_points(long k0, long k1, Tally& t);
+#if LPFDM_WIDE
+    template <bool Fused> __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Tally& t);
+#endif
     void map_point(std::size_t k);
     // The sums of eq. 7 and 8 of one cell: mass, volume and V sigma. A run of points that
     // stay in one cell adds to a local copy (kept in registers) and stores it once.
@@ -1164,6 +1201,7 @@ private:
     }
     bool profiling_ = false;
     double phase_s_[kPhases] = {0, 0, 0, 0, 0, 0};
+    bool wide_ = have_wide();  // the point loop's AVX2 version (LPFDM_WIDE)
 
     Scene sc_;
     int mx_ = 0, my_ = 0;
@@ -1466,6 +1504,11 @@ inline void Simulation::advance_points() {
 template <bool Fused>
 inline void Simulation::advance_range(long k0, long k1, Tally& t) {
     const bool carry = !pdx_.empty();
+#if LPFDM_WIDE
+    // The AVX2 version for the paper's motion rule only (the default, and every shipped
+    // deck's): each version of this loop adds a fifth to the build time of the tests.
+    if (wide_ && sc_.motion == Motion::Paper) { advance_run_wide<Fused>(k0, k1, t); return; }
+#endif
     switch (sc_.motion) {
     case Motion::Paper: advance_run<Fused, Motion::Paper, false>(k0, k1, t); break;  // ADVECT POINTS refuses PAPER
     case Motion::Centre: carry ? advance_run<Fused, Motion::Centre, true>(k0, k1, t) : advance_run<Fused, Motion::Centre, false>(k0, k1, t); break;
@@ -1496,7 +1539,14 @@ inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q,
 }
 
 template <bool Fused, Motion M, bool Carry>
-inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
+inline void Simulation::advance_run(long k0, long k1, Tally& tally) { run_points<Fused, M, Carry, false>(k0, k1, tally); }
+#if LPFDM_WIDE
+template <bool Fused>
+__attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Tally& tally) { run_points<Fused, Motion::Paper, false, true>(k0, k1, tally); }
+#endif
+
+template <bool Fused, Motion M, bool Carry, bool Wide>
+LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) {
     Tally t = tally;  // a local: kept in registers (stores through the cell arrays could alias a reference)
     // Local pointers: stores through a double* may alias any double member, which would
     // make the compiler reload every member after every store.
@@ -1530,6 +1580,7 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
         // increment depends on the cell and the material only: once per run and group.
         const double rc = ce.rc, rs = ce.rs, dv = 1 + e.xx + e.yy;
         bool one_group = true;
+        [[maybe_unused]] bool lanes_stored = false;  // the run's stresses were stored four at a time
         for (long q = k; q < kend;) {
             const int g = pgroup[q];
             long qend = single ? kend : q + 1;  // one group in the scene: the whole run
@@ -1537,15 +1588,39 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
             one_group = one_group && qend == kend;
             const MaterialConstants& mc = *group_consts_[std::size_t(g)];
             const Stress de = elastic_change(mc, e);  // eq. 6
+            // eq. 6 with the Jaumann rotation (the elastic trial); one point, or four in the
+            // lanes of a vector.
+            auto trial = [&](auto& xx, auto& yy, auto& xy, auto& zz) LPFDM_INLINE {
+                rotate_stress(xx, yy, xy, rc, rs);  // Jaumann: the old stress turns with the material
+                xx += de.xx; yy += de.yy; xy += de.xy; zz += de.zz;  // eq. 6
+            };
             if (mc.model == Model::Elastic) {
-                const long q0 = q;
+                auto elastic = [&](auto& xx, auto& yy, auto& xy, auto& zz, auto& vol) LPFDM_INLINE {
+                    trial(xx, yy, xy, zz);
+                    vol *= dv;
+                };
+                long r0 = q;
                 q = qend;
+#if LPFDM_WIDE
+                if constexpr (Wide) {  // four points per register, stored as the motion below loads them
+                    lanes_stored = true;
+                    for (; r0 + 4 <= qend; r0 += 4) {
+                        detail::v4d xx, yy, xy, zz, vol;
+                        std::memcpy(&xx, psxx + r0, sizeof xx); std::memcpy(&yy, psyy + r0, sizeof yy);
+                        std::memcpy(&xy, psxy + r0, sizeof xy); std::memcpy(&zz, pszz + r0, sizeof zz);
+                        std::memcpy(&vol, pvol + r0, sizeof vol);
+                        elastic(xx, yy, xy, zz, vol);
+                        std::memcpy(psxx + r0, &xx, sizeof xx); std::memcpy(psyy + r0, &yy, sizeof yy);
+                        std::memcpy(psxy + r0, &xy, sizeof xy); std::memcpy(pszz + r0, &zz, sizeof zz);
+                        std::memcpy(pvol + r0, &vol, sizeof vol);
+                    }
+                }
+#endif
                 LPFDM_OMP(omp simd)  // independent points: two (or four) per instruction, the same results
-                for (long r = q0; r < qend; ++r) {
-                    Stress s{psxx[r], psyy[r], psxy[r], pszz[r]};
-                    rotate_stress(s, rc, rs);  // Jaumann: the old stress turns with the material
-                    psxx[r] = s.xx + de.xx; psyy[r] = s.yy + de.yy; psxy[r] = s.xy + de.xy; pszz[r] = s.zz + de.zz;  // eq. 6
-                    pvol[r] *= dv;
+                for (long r = r0; r < qend; ++r) {
+                    double xx = psxx[r], yy = psyy[r], xy = psxy[r], zz = pszz[r], vol = pvol[r];
+                    elastic(xx, yy, xy, zz, vol);
+                    psxx[r] = xx; psyy[r] = yy; psxy[r] = xy; pszz[r] = zz; pvol[r] = vol;
                 }
             } else if (mc.model == Model::MohrCoulomb) {
                 // The point's strength: its own (scatter) or the material's, softened once
@@ -1558,8 +1633,7 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
                     constexpr bool own = decltype(scatter)::value;
                     for (; q < qend; ++q) {
                         Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
-                        rotate_stress(s, rc, rs);
-                        s.xx += de.xx; s.yy += de.yy; s.xy += de.xy; s.zz += de.zz;  // eq. 6, the elastic trial
+                        trial(s.xx, s.yy, s.xy, s.zz);  // eq. 6, the elastic trial
                         const double c0 = own ? pc0[q] : mc.c;
                         detail::MohrTrial tr;
                         tr.np = own ? pnp[q] : mc.n_phi;
@@ -1599,30 +1673,77 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
         bool stayed = false;
         int g = one_group ? pgroup[k] : -1;
         double gm = one_group ? groups_[std::size_t(g)].mass : 0, gv0 = one_group ? groups_[std::size_t(g)].vol0 : 0;
-        // The loop in four versions: with or without fixed edges, one group or several.
-        auto motion = [&](auto edges, auto one) LPFDM_INLINE {
-            for (long q = k; q < kend; ++q) {
-                const double x0 = px[q], y0 = py[q];
-                const double dx = x0 - xi, dy = y0 - yj;
-                double x, y, ddx = 0, ddy = 0;  // ddx, ddy: the point's own increment (ADVECT POINTS only)
-                if constexpr (M == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
-                    x = x0 + e.xx * dx + e.xy * dy + ux1;
-                    y = y0 + e.yy * dy + e.yx * dx + uy1;
-                } else if constexpr (M == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
-                    const double cx = dx - 0.5 * L, cy = dy - 0.5 * L;
-                    x = x0 + e.xx * cx + e.xy * cy + umx;
-                    y = y0 + e.yy * cy + e.yx * cx + umy;
-                    if constexpr (Carry) { ddx = e.xx * cx + e.xy * cy + umx; ddy = e.yy * cy + e.yx * cx + umy; }
-                } else {  // bilinear shape functions of the cell
-                    const double u = dx * invL, v = dy * invL;
-                    const double w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
-                    x = x0 + w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
-                    y = y0 + w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
-                    if constexpr (Carry) {
-                        ddx = w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
-                        ddy = w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
-                    }
+        // eq. 7a/7b: where a point of this cell at (x0, y0) moves; one point, or four in
+        // the lanes of a vector (the same operations in the same order in every lane).
+        // d: the point's own increment (ADVECT POINTS only).
+        auto moved = [&](const auto& x0, const auto& y0, auto& x, auto& y, auto& ddx, auto& ddy) LPFDM_INLINE {
+            const auto dx = x0 - xi, dy = y0 - yj;
+            if constexpr (M == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
+                x = x0 + e.xx * dx + e.xy * dy + ux1;
+                y = y0 + e.yy * dy + e.yx * dx + uy1;
+            } else if constexpr (M == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
+                const auto cx = dx - 0.5 * L, cy = dy - 0.5 * L;
+                x = x0 + e.xx * cx + e.xy * cy + umx;
+                y = y0 + e.yy * cy + e.yx * cx + umy;
+                if constexpr (Carry) { ddx = e.xx * cx + e.xy * cy + umx; ddy = e.yy * cy + e.yx * cx + umy; }
+            } else {  // bilinear shape functions of the cell
+                const auto u = dx * invL, v = dy * invL;
+                const auto w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
+                x = x0 + w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
+                y = y0 + w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
+                if constexpr (Carry) {
+                    ddx = w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
+                    ddy = w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
                 }
+            }
+        };
+        // Point q, now at (x, y): its new cell, min(m - 1, int(x / L)) (the run's own cell
+        // in the usual case), and eq. 7 and 8 into it. Fused: the sums of cell c stay in
+        // registers while its points stay in it.
+        auto land = [&](long q, double x, double y, double ddx, double ddy, auto one) LPFDM_INLINE {
+            (void)ddx; (void)ddy;
+            const double u = x * invL, v = y * invL;
+            int ni = ci, nj = cj, cn = c;
+            if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
+                if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
+                    pcell[q] = -1;
+                    ++t.departed;
+                    return;
+                }
+                ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
+                pcell[q] = cn;
+            }
+            if constexpr ((Carry || Fused) && !decltype(one)::value) {
+                if (pgroup[q] != g) { g = pgroup[q]; gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0; }
+            }
+            if constexpr (Carry) {
+                if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
+                else { pdx_[std::size_t(q)] = ddx; pdy_[std::size_t(q)] = ddy; pfrom_[std::size_t(q)] = c; }
+            }
+            if constexpr (!Fused) {  // the cells this chunk's points landed in (map_to_lattice)
+                if (cn == c) stayed = true;
+                else { t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn); t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni); }
+            }
+            if constexpr (Fused) {
+                const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
+                if (cn == c) {
+                    sums.add(gm, vk, sxx, syy, sxy);  // eq. 7, 8
+                    stayed = true;
+                } else {
+                    add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
+                    t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
+                    t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
+                }
+                t.mass += gm;
+            }
+        };
+        // Points q0 .. kend-1 one at a time, in four versions: with or without fixed edges,
+        // one group or several.
+        auto motion = [&](long q0, auto edges, auto one) LPFDM_INLINE {
+            for (long q = q0; q < kend; ++q) {
+                const double x0 = px[q], y0 = py[q];
+                double x, y, ddx = 0, ddy = 0;
+                moved(x0, y0, x, y, ddx, ddy);
                 if constexpr (decltype(edges)::value) {
                     // A fixed edge is impermeable: eq. 7a/7b is an affine map of the whole cell and
                     // moves a point on a fixed edge by d_eps_yx dx (or d_eps_xy dy) when the far
@@ -1633,45 +1754,56 @@ inline void Simulation::advance_run(long k0, long k1, Tally& tally) {
                     if ((fe & kEdgeRight) && x >= (ci + 1) * L) x = edge_below(ci + 1);
                 }
                 px[q] = x; py[q] = y;
-                // The new cell, min(m - 1, int(x / L)): the run's own cell in the usual case.
-                const double u = x * invL, v = y * invL;
-                int ni = ci, nj = cj, cn = c;
-                if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
-                    if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
-                        pcell[q] = -1;
-                        ++t.departed;
-                        continue;
-                    }
-                    ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
-                    pcell[q] = cn;
-                }
-                if constexpr ((Carry || Fused) && !decltype(one)::value) {
-                    if (pgroup[q] != g) { g = pgroup[q]; gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0; }
-                }
-                if constexpr (Carry) {
-                    if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
-                    else { pdx_[std::size_t(q)] = ddx; pdy_[std::size_t(q)] = ddy; pfrom_[std::size_t(q)] = c; }
-                }
-                if constexpr (!Fused) {  // the cells this chunk's points landed in (map_to_lattice)
-                    if (cn == c) stayed = true;
-                    else { t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn); t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni); }
-                }
-                if constexpr (Fused) {
-                    const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
-                    if (cn == c) {
-                        sums.add(gm, vk, sxx, syy, sxy);  // eq. 7, 8
-                        stayed = true;
-                    } else {
-                        add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
-                        t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
-                        t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
-                    }
-                    t.mass += gm;
-                }
+                land(q, x, y, ddx, ddy, one);
             }
         };
-        if (fe) one_group ? motion(std::true_type{}, std::true_type{}) : motion(std::true_type{}, std::false_type{});
-        else one_group ? motion(std::false_type{}, std::true_type{}) : motion(std::false_type{}, std::false_type{});
+        long q0 = k;
+#if LPFDM_WIDE
+        if constexpr (Wide && !Carry) {
+            // Four points at a time in the lanes of an AVX2 register (one group, no fixed
+            // edge): the motion and the test whether each stays in its cell. When all four
+            // stay, their sums are added from the lanes in point order; otherwise each
+            // lands on its own, in order. Either way the result is that of the loop above,
+            // bit for bit (no fused multiply-add; the same operations, the same order).
+            if (!fe && one_group) {
+                using detail::v4d;
+                const v4d u0 = {uc0, uc0, uc0, uc0}, u1 = {uc1, uc1, uc1, uc1}, v0 = {vc0, vc0, vc0, vc0}, v1 = {vc1, vc1, vc1, vc1};
+                const v4d gv = {gv0, gv0, gv0, gv0};
+                for (; q0 + 4 <= kend; q0 += 4) {
+                    v4d x0, y0, x, y, ddx{}, ddy{};
+                    std::memcpy(&x0, px + q0, sizeof x0); std::memcpy(&y0, py + q0, sizeof y0);
+                    moved(x0, y0, x, y, ddx, ddy);
+                    std::memcpy(px + q0, &x, sizeof x); std::memcpy(py + q0, &y, sizeof y);
+                    const v4d u = x * invL, v = y * invL;
+                    if (!detail::all_lanes((u >= u0) & (u < u1) & (v >= v0) & (v < v1))) {
+                        for (int l = 0; l < 4; ++l) land(q0 + l, x[l], y[l], 0.0, 0.0, std::true_type{});
+                        continue;
+                    }
+                    stayed = true;
+                    if constexpr (!Fused) continue;
+                    if (!lanes_stored) {  // stored one point at a time: loaded so (a wide load would stall)
+                        for (long q = q0; q < q0 + 4; ++q) {
+                            sums.add(gm, std::min(pvol[q], gv0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
+                            t.mass += gm;
+                        }
+                        continue;
+                    }
+                    v4d vol, sxx, syy, sxy;
+                    std::memcpy(&vol, pvol + q0, sizeof vol);
+                    std::memcpy(&sxx, psxx + q0, sizeof sxx); std::memcpy(&syy, psyy + q0, sizeof syy); std::memcpy(&sxy, psxy + q0, sizeof sxy);
+                    const v4d vk = gv < vol ? gv : vol;  // std::min(vol, gv0)
+                    const v4d pxx = vk * sxx, pyy = vk * syy, pxy = vk * sxy;  // eq. 8's products
+                    for (int l = 0; l < 4; ++l) {  // added in point order
+                        sums.m += gm; sums.v += vk[l];  // eq. 7
+                        sums.xx += pxx[l]; sums.yy += pyy[l]; sums.xy += pxy[l];  // eq. 8
+                        t.mass += gm;
+                    }
+                }
+            }
+        }
+#endif
+        if (fe) one_group ? motion(q0, std::true_type{}, std::true_type{}) : motion(q0, std::true_type{}, std::false_type{});
+        else one_group ? motion(q0, std::false_type{}, std::true_type{}) : motion(q0, std::false_type{}, std::false_type{});
         if (stayed) {
             if constexpr (Fused) store_sums(std::size_t(c), sums);
             t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);

@@ -3,7 +3,8 @@
 # median of 5 runs (with min and max), peak memory, bytes per point and the time split by
 # phase. With git history, the same scenes also run on the plain serial loop the
 # optimised cycle replaced (BEFORE, default the commit that introduced the benchmark's
-# predecessor), side by side, and the ratio is printed.
+# predecessor), side by side, and the ratio is printed; and the same program with the
+# points one at a time instead of four per AVX2 register (--no-avx2), with that ratio.
 #   bash tools/bench.sh [EXE] [RUNS]
 set -u
 cd "$(dirname "$0")/.."
@@ -44,6 +45,14 @@ for sc in "${scenes[@]}"; do
     new1=$(for r in $(seq "$runs"); do rate "$exe" 1 "$deck" "$opts"; done | stats)
     printf "%-12s %-7s %10s %10s %10s   (plain serial loop of %s; ratio now/before %s)\n" "$name" before $old "$before_rev" \
       "$(awk -v a="${new1%% *}" -v b="${old%% *}" 'BEGIN {printf "%.2f", a / b}')"
+  fi
+  # The same program with the points one at a time instead of four per AVX2 register
+  # (the same output), interleaved with runs of the default, one thread.
+  if "$exe" --help 2>/dev/null | grep -q -- --no-avx2; then
+    pair=$(for r in $(seq "$runs"); do echo "$(rate "$exe" 1 "$deck" "$opts --no-avx2") $(rate "$exe" 1 "$deck" "$opts")"; done)
+    narrow=$(cut -d' ' -f1 <<<"$pair" | stats); wide=$(cut -d' ' -f2 <<<"$pair" | stats)
+    printf "%-12s %-7s %10s %10s %10s   (points one at a time; ratio AVX2/one at a time %s)\n" "$name" no-avx2 $narrow \
+      "$(awk -v a="${wide%% *}" -v b="${narrow%% *}" 'BEGIN {printf "%.2f", a / b}')"
   fi
 done
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load now $(cut -d' ' -f1-3 /proc/loadavg)"
