@@ -142,8 +142,10 @@
 // LPFDM_WIDE: on x86-64 with GCC or Clang, the point loop (with the paper's motion rule)
 // has a second version built for AVX2, taken when the processor has it: four points per
 // register instead of one or two, the same numbers bit for bit. Define LPFDM_NO_WIDE to
-// leave it out.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(LPFDM_NO_WIDE)
+// leave it out. A build with fused multiply-add (-mfma, -march=native, x86-64-v3) leaves
+// it out too: the compiler fuses a*b - c*d on either product, not always alike in the two
+// versions, so they would no longer agree bit for bit.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__FMA__) && !defined(LPFDM_NO_WIDE)
 #define LPFDM_WIDE 1
 #else
 #define LPFDM_WIDE 0
@@ -1764,7 +1766,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             // edge): the motion and the test whether each stays in its cell. When all four
             // stay, their sums are added from the lanes in point order; otherwise each
             // lands on its own, in order. Either way the result is that of the loop above,
-            // bit for bit (no fused multiply-add; the same operations, the same order).
+            // bit for bit: the same expressions in the same order, and no fused multiply-add
+            // (see LPFDM_WIDE).
             if (!fe && one_group) {
                 using detail::v4d;
                 const v4d u0 = {uc0, uc0, uc0, uc0}, u1 = {uc1, uc1, uc1, uc1}, v0 = {vc0, vc0, vc0, vc0}, v1 = {vc1, vc1, vc1, vc1};
@@ -1792,10 +1795,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                     std::memcpy(&vol, pvol + q0, sizeof vol);
                     std::memcpy(&sxx, psxx + q0, sizeof sxx); std::memcpy(&syy, psyy + q0, sizeof syy); std::memcpy(&sxy, psxy + q0, sizeof sxy);
                     const v4d vk = gv < vol ? gv : vol;  // std::min(vol, gv0)
-                    const v4d pxx = vk * sxx, pyy = vk * syy, pxy = vk * sxy;  // eq. 8's products
-                    for (int l = 0; l < 4; ++l) {  // added in point order
-                        sums.m += gm; sums.v += vk[l];  // eq. 7
-                        sums.xx += pxx[l]; sums.yy += pyy[l]; sums.xy += pxy[l];  // eq. 8
+                    for (int l = 0; l < 4; ++l) {  // in point order
+                        sums.add(gm, vk[l], sxx[l], syy[l], sxy[l]);  // eq. 7, 8
                         t.mass += gm;
                     }
                 }
