@@ -1582,7 +1582,6 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
         // increment depends on the cell and the material only: once per run and group.
         const double rc = ce.rc, rs = ce.rs, dv = 1 + e.xx + e.yy;
         bool one_group = true;
-        [[maybe_unused]] bool lanes_stored = false;  // the run's stresses were stored four at a time
         for (long q = k; q < kend;) {
             const int g = pgroup[q];
             long qend = single ? kend : q + 1;  // one group in the scene: the whole run
@@ -1604,8 +1603,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 long r0 = q;
                 q = qend;
 #if LPFDM_WIDE
-                if constexpr (Wide) {  // four points per register, stored as the motion below loads them
-                    lanes_stored = true;
+                if constexpr (Wide) {  // four points per register (the simd loop's set-up costs more for runs this short)
                     for (; r0 + 4 <= qend; r0 += 4) {
                         detail::v4d xx, yy, xy, zz, vol;
                         std::memcpy(&xx, psxx + r0, sizeof xx); std::memcpy(&yy, psyy + r0, sizeof yy);
@@ -1771,7 +1769,6 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             if (!fe && one_group) {
                 using detail::v4d;
                 const v4d u0 = {uc0, uc0, uc0, uc0}, u1 = {uc1, uc1, uc1, uc1}, v0 = {vc0, vc0, vc0, vc0}, v1 = {vc1, vc1, vc1, vc1};
-                const v4d gv = {gv0, gv0, gv0, gv0};
                 for (; q0 + 4 <= kend; q0 += 4) {
                     v4d x0, y0, x, y, ddx{}, ddy{};
                     std::memcpy(&x0, px + q0, sizeof x0); std::memcpy(&y0, py + q0, sizeof y0);
@@ -1783,21 +1780,11 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                         continue;
                     }
                     stayed = true;
-                    if constexpr (!Fused) continue;
-                    if (!lanes_stored) {  // stored one point at a time: loaded so (a wide load would stall)
-                        for (long q = q0; q < q0 + 4; ++q) {
+                    if constexpr (Fused) {
+                        for (long q = q0; q < q0 + 4; ++q) {  // in point order
                             sums.add(gm, std::min(pvol[q], gv0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
                             t.mass += gm;
                         }
-                        continue;
-                    }
-                    v4d vol, sxx, syy, sxy;
-                    std::memcpy(&vol, pvol + q0, sizeof vol);
-                    std::memcpy(&sxx, psxx + q0, sizeof sxx); std::memcpy(&syy, psyy + q0, sizeof syy); std::memcpy(&sxy, psxy + q0, sizeof sxy);
-                    const v4d vk = gv < vol ? gv : vol;  // std::min(vol, gv0)
-                    for (int l = 0; l < 4; ++l) {  // in point order
-                        sums.add(gm, vk[l], sxx[l], syy[l], sxy[l]);  // eq. 7, 8
-                        t.mass += gm;
                     }
                 }
             }
