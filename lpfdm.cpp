@@ -34,8 +34,8 @@ const char* kUsage =
     "                their order in the deck from 1); may be given several times\n"
     "  --threads N   use N threads (default 1, or OMP_NUM_THREADS; the output is the same for any N)\n"
     "  --profile     print the time of each phase of the cycle, peak memory and bytes per point\n"
-    "  --no-avx2     run the points one at a time, not four per AVX2 register (the same output;\n"
-    "                for speed comparisons)\n"
+    "  --no-avx2     run points, cells and nodes one at a time, not four per AVX2 register (the\n"
+    "                same output; for speed comparisons)\n"
     "  -q            quiet: no progress line and no summary\n"
     "  --help        this text\n"
     "  --version     the version\n"
@@ -301,8 +301,11 @@ int main(int argc, char** argv) {
         getrusage(RUSAGE_SELF, &ru);
         double total = 0;
         for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
-        std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, points %s\n", nthreads,
-                    double(ru.ru_maxrss) / 1024.0, sim.bytes_per_point(), sim.wide() ? "four per AVX2 register" : "one at a time");
+        const char* lanes = !sim.wide() ? "points, cells and nodes one at a time"
+                            : sim.scene().motion == lpfdm::Motion::Paper ? "points, cells and nodes four per AVX2 register"
+                                                                          : "cells and nodes four per AVX2 register, points one at a time";
+        std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, %s\n", nthreads,
+                    double(ru.ru_maxrss) / 1024.0, sim.bytes_per_point(), lanes);
         for (int k = 0; k < lpfdm::Simulation::kPhases; ++k)
             std::printf("profile: %-15s %8.3f s  %5.1f %%\n", lpfdm::Simulation::phase_name(k), sim.phase_seconds()[k],
                         total > 0 ? 100 * sim.phase_seconds()[k] / total : 0.0);

@@ -140,8 +140,9 @@
 #define LPFDM_INLINE
 #endif
 // LPFDM_WIDE: on x86-64 with GCC or Clang, the point loop (with the paper's motion rule)
-// has a second version built for AVX2, taken when the processor has it: four points per
-// register instead of one or two, the same numbers bit for bit. Define LPFDM_NO_WIDE to
+// and the regular lattice phases (eq. 5, the nodal forces, eq. 13-14) have a second
+// version built for AVX2, taken when the processor has it: four points, cells or nodes
+// per register instead of one or two, the same numbers bit for bit. Define LPFDM_NO_WIDE to
 // leave it out. A build with fused multiply-add (-mfma, -march=native, x86-64-v3) leaves
 // it out too: the compiler fuses a*b - c*d on either product, not always alike in the two
 // versions, so they would no longer agree bit for bit.
@@ -411,22 +412,54 @@ inline void elastic_increment(const MaterialConstants& k, const StrainIncrement&
 // The rotation of eq. 5f as an exact orthogonal matrix (Cayley form, no trigonometry):
 // the material turns by phi with tan(phi/2) = theta/2 (phi = theta to third order), so
 // the stress components turn by 2 phi. Returns (cos 2phi, sin 2phi).
-inline void jaumann_rotation(double d_theta, double& c2, double& s2) {
-    const double t = 0.5 * d_theta, d = 1 / (1 + t * t);
-    const double co = (1 - t * t) * d, si = 2 * t * d;
+// T: one value, or the lanes of a vector (the same operations in every lane).
+template <class T>
+LPFDM_INLINE inline void jaumann_rotation(const T& d_theta, T& c2, T& s2) {
+    const T t = 0.5 * d_theta, d = 1 / (1 + t * t);
+    const T co = (1 - t * t) * d, si = 2 * t * d;
     c2 = co * co - si * si;
     s2 = 2 * si * co;
 }
 
+namespace detail {
+// Code written once for one value (T = double) and for the lanes of a vector (see
+// LPFDM_WIDE): v = p[0], or p[0 .. lanes - 1]. (Vectors go through references: a
+// function returning one would have another ABI without AVX, GCC warns.)
+template <class T> inline constexpr int lanes = int(sizeof(T) / sizeof(double));
+template <class T>
+LPFDM_INLINE inline void load(const double* p, T& v) { std::memcpy(&v, p, sizeof v); }
+template <class T>
+LPFDM_INLINE inline void store(double* p, const T& v) { std::memcpy(p, &v, sizeof v); }
+template <class T>
+LPFDM_INLINE inline double lane(const T& v, int l) {
+    if constexpr (std::is_same_v<T, double>) {
+        (void)l;
+        return v;
+    } else {
+        return v[l];
+    }
+}
+// A type as a value (a lambda's argument that says which T to use).
+template <class T> struct Tag { using type = T; };
+}  // namespace detail
+
 // eq. 5a-5d: the strain increments of the cell whose node [1] is n1 (nodes in rows of
-// `row`; h = 1 / 2L) from the nodal increments ux, uy.
-inline StrainIncrement cell_strain(const double* ux, const double* uy, int n1, int row, double h) {
+// `row`; h = 1 / 2L) from the nodal increments ux, uy; T: one cell, or the lanes of a
+// vector for the cells n1 .. n1 + 3 of a row.
+template <class T>
+LPFDM_INLINE inline void cell_strain(const double* ux, const double* uy, int n1, int row, double h, T& xx, T& yy, T& xy, T& yx) {
     const int n2 = n1 + 1, n3 = n1 + row, n4 = n3 + 1;
+    T ux1, ux2, ux3, ux4, uy1, uy2, uy3, uy4;
+    detail::load(ux + n1, ux1); detail::load(ux + n2, ux2); detail::load(ux + n3, ux3); detail::load(ux + n4, ux4);
+    detail::load(uy + n1, uy1); detail::load(uy + n2, uy2); detail::load(uy + n3, uy3); detail::load(uy + n4, uy4);
+    xx = (ux2 + ux4 - ux1 - ux3) * h;  // eq. 5a
+    yy = (uy3 + uy4 - uy1 - uy2) * h;  // eq. 5b
+    xy = (ux3 + ux4 - ux1 - ux2) * h;  // eq. 5c
+    yx = (uy2 + uy4 - uy1 - uy3) * h;  // eq. 5d
+}
+inline StrainIncrement cell_strain(const double* ux, const double* uy, int n1, int row, double h) {
     StrainIncrement e;
-    e.xx = (ux[n2] + ux[n4] - ux[n1] - ux[n3]) * h;  // eq. 5a
-    e.yy = (uy[n3] + uy[n4] - uy[n1] - uy[n2]) * h;  // eq. 5b
-    e.xy = (ux[n3] + ux[n4] - ux[n1] - ux[n2]) * h;  // eq. 5c
-    e.yx = (uy[n2] + uy[n4] - uy[n1] - uy[n3]) * h;  // eq. 5d
+    cell_strain(ux, uy, n1, row, h, e.xx, e.yy, e.xy, e.yx);
     return e;
 }
 
@@ -739,9 +772,18 @@ namespace detail {
 // function built for AVX2.
 typedef double v4d __attribute__((vector_size(32)));
 typedef long long v4m __attribute__((vector_size(32)));
+// The lanes (i, j, k, l) of a and b side by side (0-3 of a, 4-7 of b).
+#if defined(__clang__)
+#define LPFDM_SHUFFLE(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
+#else
+#define LPFDM_SHUFFLE(a, b, i, j, k, l) __builtin_shuffle(a, b, ::lpfdm::detail::v4m{i, j, k, l})
+#endif
 // True when every lane of a comparison's mask is set.
 LPFDM_INLINE inline bool all_lanes(const v4m& m) { return (m[0] & m[1] & m[2] & m[3]) != 0; }
+// a = |v| lane by lane (the sign bit cleared, as std::fabs does).
+LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7fffffffffffffffLL); }
 #endif
+LPFDM_INLINE inline void abs_of(double v, double& a) { a = std::fabs(v); }
 
 // Boxes select cells by their centres and nodes by their positions, with a tolerance of a
 // thousandth of a cell, so a degenerate box selects a line. The index span [lo, hi] is
@@ -993,9 +1035,9 @@ public:
         return names[k];
     }
     void set_profiling(bool on) { profiling_ = on; }                 // time each phase from now on
-    // The point loop's AVX2 version: used when built in (LPFDM_WIDE), the processor has
-    // AVX2 and the motion rule is the paper's; set_wide(false) takes the one-point loop
-    // (the same numbers, bit for bit).
+    // The AVX2 version of the point loop (with the paper's motion rule) and of the regular
+    // lattice phases: used when built in (LPFDM_WIDE) and the processor has AVX2;
+    // set_wide(false) takes the one-at-a-time loops (the same numbers, bit for bit).
     static bool have_wide() {
 #if LPFDM_WIDE
         return __builtin_cpu_supports("avx2");
@@ -1127,6 +1169,18 @@ private:
 #if LPFDM_WIDE
     template <bool Fused> __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Tally& t);
 #endif
+    // Row j of a lattice phase: f(j, std::false_type), or f(j, std::true_type) built for
+    // AVX2 (f inlined into row_wide) when the AVX2 version is on, so that f may work
+    // through the row four nodes or cells at a time in the lanes of a vector.
+    template <class F> void each_row(const F& f, int j) const {
+#if LPFDM_WIDE
+        if (wide_) { row_wide(f, j); return; }
+#endif
+        f(j, std::false_type{});
+    }
+#if LPFDM_WIDE
+    template <class F> __attribute__((target("avx2"))) static void row_wide(const F& f, int j) { f(j, std::true_type{}); }
+#endif
     void map_point(std::size_t k);
     // The sums of eq. 7 and 8 of one cell: mass, volume and V sigma. A run of points that
     // stay in one cell adds to a local copy (kept in registers) and stores it once.
@@ -1203,7 +1257,7 @@ private:
     }
     bool profiling_ = false;
     double phase_s_[kPhases] = {0, 0, 0, 0, 0, 0};
-    bool wide_ = have_wide();  // the point loop's AVX2 version (LPFDM_WIDE)
+    bool wide_ = have_wide();  // the AVX2 version of the point loop and lattice phases (LPFDM_WIDE)
 
     Scene sc_;
     int mx_ = 0, my_ = 0;
@@ -1429,26 +1483,60 @@ inline void Simulation::cell_strains() {
     CellStrain* cs = strain_.data();
     double *hgx = hgx_.data(), *hgy = hgy_.data();
     const bool hourglass = !hgx_.empty();
-    LPFDM_OMP(omp parallel for schedule(static) if ((r.j1 - r.j0) * (r.i1 - r.i0) > 8192))
-    for (int j = r.j0; j < r.j1; ++j)
-        for (int i = r.i0; i < r.i1; ++i) {
-            const int c = j * mx + i, n1 = j * (mx + 1) + i;
-            // An empty cell holds no material to strain; its "increments" between moving
-            // and resting nodes would make eq. 12 brake every node on a free surface.
-            CellStrain& out = cs[c];
-            if (cm[c] > 0) {
-                const StrainIncrement e = cell_strain(ux, uy, n1, mx + 1, h);  // eq. 5a-5d
-                out.xx = e.xx; out.yy = e.yy; out.xy = e.xy; out.yx = e.yx;
-                jaumann_rotation(e.theta(), out.rc, out.rs);  // eq. 5f
-            } else {
-                out = CellStrain{};  // no strain, no rotation (what eq. 5f gives for zero)
-            }
-            if (hourglass) {  // the checkerboard part h = (+1, -1, -1, +1)/4 that eq. 5 cannot see
-                const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
-                hgx[c] = cm[c] > 0 ? 0.25 * (ux[n1] - ux[n2] - ux[n3] + ux[n4]) : 0.0;
-                hgy[c] = cm[c] > 0 ? 0.25 * (uy[n1] - uy[n2] - uy[n3] + uy[n4]) : 0.0;
-            }
+    // Cell (i, j), or the cells i .. i + 3 in the lanes of a vector T.
+    auto cells = [&](int i, int j, auto tag) LPFDM_INLINE {
+        using T = typename decltype(tag)::type;
+        const int c = j * mx + i, n1 = j * (mx + 1) + i;
+        T xx, yy, xy, yx, rc, rs;
+        cell_strain(ux, uy, n1, mx + 1, h, xx, yy, xy, yx);  // eq. 5a-5d
+        jaumann_rotation(T(0.5 * (yx - xy)), rc, rs);        // eq. 5f (theta = (yx - xy) / 2)
+        // An empty cell holds no material to strain; its "increments" between moving
+        // and resting nodes would make eq. 12 brake every node on a free surface: no
+        // strain, no rotation there (what eq. 5f gives for zero).
+        T mass;
+        detail::load(cm + c, mass);
+        const auto full = mass > 0;
+        const T zero{}, unit = zero + 1;
+        xx = full ? xx : zero; yy = full ? yy : zero; xy = full ? xy : zero; yx = full ? yx : zero;
+        rc = full ? rc : unit; rs = full ? rs : zero;
+        if constexpr (std::is_same_v<T, double>) {
+            cs[c] = CellStrain{xx, yy, xy, yx, rc, rs};
+        } else {  // four records of six doubles: 24 in a row, stored as six vectors
+#if LPFDM_WIDE
+            using detail::v4d;
+            const v4d a = LPFDM_SHUFFLE(xx, yy, 0, 4, 2, 6), b = LPFDM_SHUFFLE(xx, yy, 1, 5, 3, 7);  // xx yy of cells 0 2, 1 3
+            const v4d d = LPFDM_SHUFFLE(xy, yx, 0, 4, 2, 6), e = LPFDM_SHUFFLE(xy, yx, 1, 5, 3, 7);  // xy yx
+            const v4d p = LPFDM_SHUFFLE(rc, rs, 0, 4, 2, 6), q = LPFDM_SHUFFLE(rc, rs, 1, 5, 3, 7);  // rc rs
+            const v4d c1 = LPFDM_SHUFFLE(b, e, 0, 1, 4, 5), c3 = LPFDM_SHUFFLE(b, e, 2, 3, 6, 7);  // xx yy xy yx of cells 1, 3
+            const v4d out[6] = {LPFDM_SHUFFLE(a, d, 0, 1, 4, 5), LPFDM_SHUFFLE(p, c1, 0, 1, 4, 5),
+                                LPFDM_SHUFFLE(c1, q, 2, 3, 4, 5), LPFDM_SHUFFLE(a, d, 2, 3, 6, 7),
+                                LPFDM_SHUFFLE(p, c3, 2, 3, 4, 5), LPFDM_SHUFFLE(c3, q, 2, 3, 6, 7)};
+            static_assert(sizeof(CellStrain) == 6 * sizeof(double), "six doubles, no padding");
+            std::memcpy(static_cast<void*>(cs + c), out, sizeof out);
+#endif
         }
+        if (hourglass) {  // the checkerboard part h = (+1, -1, -1, +1)/4 that eq. 5 cannot see
+            const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
+            T ux1, ux2, ux3, ux4, uy1, uy2, uy3, uy4;
+            detail::load(ux + n1, ux1); detail::load(ux + n2, ux2); detail::load(ux + n3, ux3); detail::load(ux + n4, ux4);
+            detail::load(uy + n1, uy1); detail::load(uy + n2, uy2); detail::load(uy + n3, uy3); detail::load(uy + n4, uy4);
+            const T gx = 0.25 * (ux1 - ux2 - ux3 + ux4), gy = 0.25 * (uy1 - uy2 - uy3 + uy4);
+            detail::store(hgx + c, full ? gx : zero);
+            detail::store(hgy + c, full ? gy : zero);
+        }
+    };
+    auto row = [&](int j, auto wide) LPFDM_INLINE {
+        int i = r.i0;
+#if LPFDM_WIDE
+        if constexpr (decltype(wide)::value)
+            for (; i + 4 <= r.i1; i += 4) cells(i, j, detail::Tag<detail::v4d>{});
+#else
+        (void)wide;
+#endif
+        for (; i < r.i1; ++i) cells(i, j, detail::Tag<double>{});
+    };
+    LPFDM_OMP(omp parallel for schedule(static) if ((r.j1 - r.j0) * (r.i1 - r.i0) > 8192))
+    for (int j = r.j0; j < r.j1; ++j) each_row(row, j);
 }
 
 // eq. 6 (one consult of the constitutive model per point), the Jaumann rotation by
@@ -1964,18 +2052,31 @@ inline void Simulation::nodal_forces() {
     const double gx = sc_.gravity_x, gy = sc_.gravity_y;
     if (carried_.empty()) {  // only eq. 12 reads the previous masses
         LPFDM_OMP(omp parallel for schedule(static) if (par))
-        for (int j = keep.j0; j < keep.j1; ++j)
-            for (int i = keep.i0; i < keep.i1; ++i) nm_prev[j * (mx + 1) + i] = nm[j * (mx + 1) + i];
+        for (int j = keep.j0; j < keep.j1; ++j) std::copy(nm + (j * (mx + 1) + keep.i0), nm + (j * (mx + 1) + keep.i1), nm_prev + (j * (mx + 1) + keep.i0));
     }
-    // eq. 8 with the fill capped at one, applied once per cell (map_to_lattice clears it).
+    // eq. 8 with the fill capped at one, applied once per cell (map_to_lattice clears it);
+    // cell c, or the cells c .. c + 3 in the lanes of a vector T.
     const Range oc = occupied_;
+    auto smear = [&](int c, auto tag) LPFDM_INLINE {
+        using T = typename decltype(tag)::type;
+        T v, xx, yy, xy;
+        detail::load(cv + c, v); detail::load(sxx + c, xx); detail::load(syy + c, yy); detail::load(sxy + c, xy);
+        const T one = T{} + 1, w = inv2L * (v > L2 ? L2 / v : one);
+        detail::store(sxx + c, xx * w); detail::store(syy + c, yy * w); detail::store(sxy + c, xy * w);
+    };
+    auto smear_row = [&](int j, auto wide) LPFDM_INLINE {
+        int c = j * mx + oc.i0;
+        const int cend = j * mx + oc.i1;
+#if LPFDM_WIDE
+        if constexpr (decltype(wide)::value)
+            for (; c + 4 <= cend; c += 4) smear(c, detail::Tag<detail::v4d>{});
+#else
+        (void)wide;
+#endif
+        for (; c < cend; ++c) smear(c, detail::Tag<double>{});
+    };
     LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = oc.j0; j < oc.j1; ++j)
-        for (int i = oc.i0; i < oc.i1; ++i) {
-            const int c = j * mx + i;
-            const double w = inv2L * (cv[c] > L2 ? L2 / cv[c] : 1.0);
-            sxx[c] *= w; syy[c] *= w; sxy[c] *= w;
-        }
+    for (int j = oc.j0; j < oc.j1; ++j) each_row(smear_row, j);
     const bool hourglass = !hgx_.empty();
     const double khg = hourglass ? sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s) : 0.0;
     // The node is corner [1] of cell (i, j), [2] of (i-1, j), [3] of (i, j-1) and [4] of
@@ -1984,16 +2085,21 @@ inline void Simulation::nodal_forces() {
     // count as empty; empty cells hold zeros.
     // Interior: a node with all four cells and no hourglass force, where the tests are
     // known true at compile time (the same sums in the same order).
-    auto node_force = [&](int i, int j, auto interior) LPFDM_INLINE {
+    // T: node (i, j), or (interior only) the nodes i .. i + 3 in the lanes of a vector.
+    auto node_force = [&](int i, int j, auto interior, auto tag) LPFDM_INLINE {
+        using T = typename decltype(tag)::type;
         constexpr bool in = decltype(interior)::value;
-        double fx = 0, fy = 0, m = 0;
+        T fx{}, fy{}, m{};
         const bool left = in || i > 0, right = in || i < mx, below = in || j > 0, above = in || j < my;
         const int c = j * mx + i;  // cell (i, j)
-        if (right && above) { fx += sxx[c] + sxy[c]; fy += sxy[c] + syy[c]; m += cm[c]; }
-        if (left && above) { const int a = c - 1; fx += sxy[a] - sxx[a]; fy += syy[a] - sxy[a]; m += cm[a]; }
-        if (right && below) { const int a = c - mx; fx += sxx[a] - sxy[a]; fy += sxy[a] - syy[a]; m += cm[a]; }
-        if (left && below) { const int a = c - mx - 1; fx -= sxx[a] + sxy[a]; fy -= sxy[a] + syy[a]; m += cm[a]; }
-        if (!in && hourglass) {
+        // The stresses and mass of cell a.
+        T xx, yy, xy, ma;
+        auto at = [&](int a) LPFDM_INLINE { detail::load(sxx + a, xx); detail::load(syy + a, yy); detail::load(sxy + a, xy); detail::load(cm + a, ma); };
+        if (right && above) { at(c); fx += xx + xy; fy += xy + yy; m += ma; }
+        if (left && above) { at(c - 1); fx += xy - xx; fy += yy - xy; m += ma; }
+        if (right && below) { at(c - mx); fx += xx - xy; fy += xy - yy; m += ma; }
+        if (left && below) { at(c - mx - 1); fx -= xx + xy; fy -= xy + yy; m += ma; }
+        if constexpr (!in) if (hourglass) {
             // HOURGLASS: a viscous force on the zero-energy mode only, F[a] = -kappa
             // (M_J / 4) q_J h[a] / dt^2. It is orthogonal to every affine increment
             // field (sum h = sum h x = sum h y = 0), so uniform strain and rigid motion
@@ -2008,19 +2114,28 @@ inline void Simulation::nodal_forces() {
             if (left && below) hg(c - mx - 1, 1);
         }
         const int n = j * (mx + 1) + i;
-        const double mn = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
-        nm[n] = mn;
-        fxn[n] = fx + gx * mn;
-        fyn[n] = fy + gy * mn;
+        const T mn = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
+        detail::store(nm + n, mn);
+        detail::store(fxn + n, fx + gx * mn);
+        detail::store(fyn + n, fy + gy * mn);
     };
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = nr.j0; j < nr.j1; ++j) {
+    const detail::Tag<double> one;
+    auto force_row = [&](int j, auto wide) LPFDM_INLINE {
         const bool inner_row = j > 0 && j < my && !hourglass;
         const int ia = inner_row ? std::min(std::max(nr.i0, 1), nr.i1) : nr.i1, ib = inner_row ? std::max(ia, std::min(nr.i1, mx)) : nr.i1;
-        for (int i = nr.i0; i < ia; ++i) node_force(i, j, std::false_type{});
-        for (int i = ia; i < ib; ++i) node_force(i, j, std::true_type{});
-        for (int i = ib; i < nr.i1; ++i) node_force(i, j, std::false_type{});
-    }
+        for (int i = nr.i0; i < ia; ++i) node_force(i, j, std::false_type{}, one);
+        int i = ia;
+#if LPFDM_WIDE
+        if constexpr (decltype(wide)::value)
+            for (; i + 4 <= ib; i += 4) node_force(i, j, std::true_type{}, detail::Tag<detail::v4d>{});
+#else
+        (void)wide;
+#endif
+        for (; i < ib; ++i) node_force(i, j, std::true_type{}, one);
+        for (i = ib; i < nr.i1; ++i) node_force(i, j, std::false_type{}, one);
+    };
+    LPFDM_OMP(omp parallel for schedule(static) if (par))
+    for (int j = nr.j0; j < nr.j1; ++j) each_row(force_row, j);
 }
 
 // eq. 12: the increment carried by node k belonged to the material now at x_k - du_k;
@@ -2143,26 +2258,50 @@ inline void Simulation::integrate() {
     const Range nodes_now{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     const Range nr = nodes_now.unite(live_nodes_);
     const double dt2 = sc_.dt_s * sc_.dt_s, alpha = sc_.damping;
-    auto sgn = [](double v) { return double((v > 0) - (v < 0)); };
     double ke = 0, maxdu = 0;
     [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
     const int mx = mx_;
     double *ux_n = dux_.data(), *uy_n = duy_.data(), *nm = nmass_.data(), *fxn = fx_.data(), *fyn = fy_.data();
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = nr.j0; j < nr.j1; ++j) {
-        const bool row_inside = j >= nodes_now.j0 && j < nodes_now.j1;
-        for (int i = nr.i0; i < nr.i1; ++i) {
-            const int n = j * (mx + 1) + i;
-            const bool inside = row_inside && i >= nodes_now.i0 && i < nodes_now.i1;
-            const double m = inside ? nm[n] : 0.0;
-            if (!inside) { nm[n] = 0; fxn[n] = fyn[n] = 0; }
-            if (m == 0) { ux_n[n] = uy_n[n] = 0; continue; }  // no mass, no motion
-            const double fx = fxn[n], fy = fyn[n], ux0 = ux_n[n], uy0 = uy_n[n];
-            const double ux = ux0 + dt2 / m * (fx - alpha * std::fabs(fx) * sgn(ux0));  // eq. 13, 14
-            const double uy = uy0 + dt2 / m * (fy - alpha * std::fabs(fy) * sgn(uy0));
-            ux_n[n] = ux; uy_n[n] = uy;
+    // Node n of the nodes this step's cells touch, or the nodes n .. n + 3 in the lanes of
+    // a vector T.
+    auto advance = [&](int n, auto tag) LPFDM_INLINE {
+        using T = typename decltype(tag)::type;
+        constexpr bool one = std::is_same_v<T, double>;
+        T m, fx, fy, ux0, uy0;
+        detail::load(nm + n, m);
+        if constexpr (one)
+            if (m == 0) { ux_n[n] = uy_n[n] = 0; return; }  // no mass, no motion
+        detail::load(fxn + n, fx); detail::load(fyn + n, fy); detail::load(ux_n + n, ux0); detail::load(uy_n + n, uy0);
+        const T zero{}, unit = zero + 1;
+        const T sx = ux0 > 0 ? unit : (ux0 < 0 ? -unit : zero), sy = uy0 > 0 ? unit : (uy0 < 0 ? -unit : zero);  // sign of the increment
+        T ax, ay;
+        detail::abs_of(fx, ax); detail::abs_of(fy, ay);
+        T ux = ux0 + dt2 / m * (fx - alpha * ax * sx);  // eq. 13, 14
+        T uy = uy0 + dt2 / m * (fy - alpha * ay * sy);
+        if constexpr (!one) {  // no mass, no motion
+            const auto moving = m != 0;
+            ux = moving ? ux : zero; uy = moving ? uy : zero;
         }
-    }
+        detail::store(ux_n + n, ux); detail::store(uy_n + n, uy);
+    };
+    auto advance_row = [&](int j, auto wide) LPFDM_INLINE {
+        const bool row_inside = j >= nodes_now.j0 && j < nodes_now.j1;  // then nr holds nodes_now's columns
+        const int ia = row_inside ? nodes_now.i0 : nr.i1, ib = row_inside ? nodes_now.i1 : nr.i1;
+        const int n0 = j * (mx + 1);
+        auto idle = [&](int i) { const int n = n0 + i; nm[n] = 0; fxn[n] = fyn[n] = 0; ux_n[n] = uy_n[n] = 0; };  // no mass, no motion
+        for (int i = nr.i0; i < ia; ++i) idle(i);
+        int i = ia;
+#if LPFDM_WIDE
+        if constexpr (decltype(wide)::value)
+            for (; i + 4 <= ib; i += 4) advance(n0 + i, detail::Tag<detail::v4d>{});
+#else
+        (void)wide;
+#endif
+        for (; i < ib; ++i) advance(n0 + i, detail::Tag<double>{});
+        for (i = ib; i < nr.i1; ++i) idle(i);
+    };
+    LPFDM_OMP(omp parallel for schedule(static) if (par))
+    for (int j = nr.j0; j < nr.j1; ++j) each_row(advance_row, j);
     integrated_ = nr;
     rx_ = ry_ = 0;
     for (const std::int32_t n : fixed_nodes_) {
@@ -2190,15 +2329,40 @@ inline void Simulation::integrate() {
     double* row_ke_of = row_ke_.data();
     LPFDM_OMP(omp parallel for schedule(static) reduction(max : maxdu) if (par))
     for (int j = nr.j0; j < nr.j1; ++j) {
-        double row_ke = 0;
-        for (int i = nr.i0; i < nr.i1; ++i) {
-            const int n = j * (mx + 1) + i;
-            const double m = nm[n], ux = ux_n[n], uy = uy_n[n];
-            if (m == 0) continue;
-            row_ke += 0.5 * m * (ux * ux + uy * uy);
-            maxdu = std::max(maxdu, std::max(std::fabs(ux), std::fabs(uy)));
-        }
-        row_ke_of[j] = row_ke;
+        // The kinetic energy of the row, summed in node order, and the largest increment
+        // (nodes with mass only); four nodes' terms at a time in the lanes of a vector.
+        auto energy_row = [&](int, auto wide) LPFDM_INLINE {
+            double row_ke = 0;
+            int n = j * (mx + 1) + nr.i0;
+            const int nend = j * (mx + 1) + nr.i1;
+#if LPFDM_WIDE
+            if constexpr (decltype(wide)::value) {
+                using detail::v4d;
+                v4d big{};
+                for (; n + 4 <= nend; n += 4) {
+                    v4d m, ux, uy, ax, ay;
+                    detail::load(nm + n, m); detail::load(ux_n + n, ux); detail::load(uy_n + n, uy);
+                    const auto full = m != 0;
+                    const v4d e = 0.5 * m * (ux * ux + uy * uy);
+                    for (int l = 0; l < 4; ++l) if (full[l]) row_ke += e[l];
+                    detail::abs_of(ux, ax); detail::abs_of(uy, ay);
+                    const v4d a = ax < ay ? ay : ax;  // std::max(ax, ay), lane by lane
+                    big = full && big < a ? a : big;
+                }
+                for (int l = 0; l < 4; ++l) maxdu = std::max(maxdu, big[l]);
+            }
+#else
+            (void)wide;
+#endif
+            for (; n < nend; ++n) {
+                const double m = nm[n], ux = ux_n[n], uy = uy_n[n];
+                if (m == 0) continue;
+                row_ke += 0.5 * m * (ux * ux + uy * uy);
+                maxdu = std::max(maxdu, std::max(std::fabs(ux), std::fabs(uy)));
+            }
+            row_ke_of[j] = row_ke;
+        };
+        each_row(energy_row, j);
     }
     for (int j = nr.j0; j < nr.j1; ++j) ke += row_ke_[std::size_t(j)];
     ke_ = ke / dt2;

@@ -504,7 +504,7 @@ bool same_points(const Points& a, const Points& b) {
 // of two groups), ppc x ppc points per cell (3: runs of nine, two of four lanes and one
 // alone; 4: runs of four times four lanes), a fixed floor (cells with fixed edges) and a
 // wall pressing down on the crest. The paper's motion rule (the default).
-Scene collapsing_slope(int ppc) {
+Scene collapsing_slope(int ppc, const std::string& extra = "") {
     const std::string deck = std::string(R"(
 GRID     60 24 0.25
 MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000
@@ -516,24 +516,23 @@ WALL     1  8 5  10 5  0 -1
 GRAVITY  0 -9.81
 SEED     7
 STEP     3E-4 400
-END
-)");
+)") + extra + "\nEND\n";
     Scene s;
     REQUIRE(read_deck_text(deck, "slope", s).empty());
     for (auto& c : s.clusters) c.ppc = ppc;
     return s;
 }
 
-// Both versions of the point loop side by side on collapsing_slope(ppc), compared after
-// every step.
-void compare_wide_and_narrow(int ppc, int threads) {
+// Both versions of the point loop and the lattice phases side by side on
+// collapsing_slope(ppc, extra), compared after every step.
+void compare_wide_and_narrow(int ppc, int threads, const std::string& extra = "") {
 #if defined(_OPENMP)
     const int before = omp_get_max_threads();
     omp_set_num_threads(threads);
 #else
     if (threads > 1) return;
 #endif
-    const Scene s = collapsing_slope(ppc);
+    const Scene s = collapsing_slope(ppc, extra);
     Simulation wide(s), narrow(s);
     narrow.set_wide(false);
     // A little noise on the initial stresses: points of one cell that start alike stay
@@ -549,7 +548,8 @@ void compare_wide_and_narrow(int ppc, int threads) {
     for (long n = 0; n < s.steps && same; ++n) {
         wide.step(); narrow.step();
         same = same_points(wide.points(), narrow.points()) && wide.cell_mass() == narrow.cell_mass() &&
-               wide.du_x() == narrow.du_x() && wide.du_y() == narrow.du_y();
+               wide.du_x() == narrow.du_x() && wide.du_y() == narrow.du_y() &&
+               wide.kinetic_energy() == narrow.kinetic_energy() && wide.max_du() == narrow.max_du();
     }
 #if defined(_OPENMP)
     omp_set_num_threads(before);
@@ -559,19 +559,29 @@ void compare_wide_and_narrow(int ppc, int threads) {
     // The scene exercises what it is for: points crossing into other cells, points leaving
     // the lattice, and (with two threads) the threaded point loop.
     CHECK(wide.points().size() > 4096);
-    CHECK(wide.mass_outflow() > 0);
+    if (extra.empty()) CHECK(wide.mass_outflow() > 0);  // damping slows the collapse: none leave in 400 steps
     CHECK(wide.points().size() == narrow.points().size());
 }
 
 }  // namespace
 
-TEST_CASE("the point loop's AVX2 version gives the one-point loop's numbers, bit for bit") {
+TEST_CASE("the AVX2 version (point loop and lattice phases) gives the one-point loop's numbers, bit for bit") {
     if (!Simulation::have_wide()) {
         MESSAGE("this processor has no AVX2, or the build left the AVX2 loop out (LPFDM_NO_WIDE, or fused multiply-add): nothing to compare");
         return;
     }
     compare_wide_and_narrow(3, 1);
     compare_wide_and_narrow(3, 2);
+}
+
+TEST_CASE("the lattice phases' AVX2 version with local damping and hourglass control: the same numbers, bit for bit") {
+    // Damping takes the sign of each nodal increment (eq. 14); HOURGLASS adds the
+    // checkerboard increments to eq. 5 and sends the nodal forces of every row through
+    // the one-node gather. The second wall moves through empty space faster than any
+    // material: its nodes have no mass and must not count in max_du().
+    if (!Simulation::have_wide()) return;
+    compare_wide_and_narrow(3, 1, "DAMPING 0.5\nWALL 2  1 5.5  3 5.5  0 -5");
+    compare_wide_and_narrow(3, 1, "HOURGLASS 0.2");
 }
 
 TEST_CASE("the AVX2 point loop with two threads and runs of whole lanes: the one-point loop's numbers [slow]") {

@@ -4,7 +4,8 @@
 # phase. With git history, the same scenes also run on the plain serial loop the
 # optimised cycle replaced (BEFORE, default the commit that introduced the benchmark's
 # predecessor), side by side, and the ratio is printed; and the same program with the
-# points one at a time instead of four per AVX2 register (--no-avx2), with that ratio.
+# points, cells and nodes one at a time instead of four per AVX2 register (--no-avx2),
+# with that ratio.
 #   bash tools/bench.sh [EXE] [RUNS]
 set -u
 cd "$(dirname "$0")/.."
@@ -46,7 +47,7 @@ for sc in "${scenes[@]}"; do
     printf "%-12s %-7s %10s %10s %10s   (plain serial loop of %s; ratio now/before %s)\n" "$name" before $old "$before_rev" \
       "$(awk -v a="${new1%% *}" -v b="${old%% *}" 'BEGIN {printf "%.2f", a / b}')"
   fi
-  # The same program with the points one at a time instead of four per AVX2 register
+  # The same program with points, cells and nodes one at a time instead of four per AVX2 register
   # (the same output), interleaved with runs of the default, one thread.
   if "$exe" --help 2>/dev/null | grep -q -- --no-avx2; then
     pair=$(for r in $(seq "$runs"); do echo "$(rate "$exe" 1 "$deck" "$opts --no-avx2") $(rate "$exe" 1 "$deck" "$opts")"; done)
