@@ -784,6 +784,17 @@ LPFDM_INLINE inline bool all_lanes(const v4m& m) { return (m[0] & m[1] & m[2] & 
 LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7fffffffffffffffLL); }
 #endif
 LPFDM_INLINE inline void abs_of(double v, double& a) { a = std::fabs(v); }
+// f(i, Tag<T>) for i = i0 .. i1 - 1: with Wide (std::true_type, inside a function built for
+// AVX2) four at a time in the lanes of a vector (T = v4d), the rest one at a time.
+template <class Wide, class F>
+LPFDM_INLINE inline void sweep(int i0, int i1, Wide, const F& f) {
+    int i = i0;
+#if LPFDM_WIDE
+    if constexpr (Wide::value)
+        for (; i + 4 <= i1; i += 4) f(i, Tag<v4d>{});
+#endif
+    for (; i < i1; ++i) f(i, Tag<double>{});
+}
 
 // Boxes select cells by their centres and nodes by their positions, with a tolerance of a
 // thousandth of a cell, so a degenerate box selects a line. The index span [lo, hi] is
@@ -1525,16 +1536,7 @@ inline void Simulation::cell_strains() {
             detail::store(hgy + c, full ? gy : zero);
         }
     };
-    auto row = [&](int j, auto wide) LPFDM_INLINE {
-        int i = r.i0;
-#if LPFDM_WIDE
-        if constexpr (decltype(wide)::value)
-            for (; i + 4 <= r.i1; i += 4) cells(i, j, detail::Tag<detail::v4d>{});
-#else
-        (void)wide;
-#endif
-        for (; i < r.i1; ++i) cells(i, j, detail::Tag<double>{});
-    };
+    auto row = [&](int j, auto wide) LPFDM_INLINE { detail::sweep(r.i0, r.i1, wide, [&](int i, auto tag) LPFDM_INLINE { cells(i, j, tag); }); };
     LPFDM_OMP(omp parallel for schedule(static) if ((r.j1 - r.j0) * (r.i1 - r.i0) > 8192))
     for (int j = r.j0; j < r.j1; ++j) each_row(row, j);
 }
@@ -2064,17 +2066,7 @@ inline void Simulation::nodal_forces() {
         const T one = T{} + 1, w = inv2L * (v > L2 ? L2 / v : one);
         detail::store(sxx + c, xx * w); detail::store(syy + c, yy * w); detail::store(sxy + c, xy * w);
     };
-    auto smear_row = [&](int j, auto wide) LPFDM_INLINE {
-        int c = j * mx + oc.i0;
-        const int cend = j * mx + oc.i1;
-#if LPFDM_WIDE
-        if constexpr (decltype(wide)::value)
-            for (; c + 4 <= cend; c += 4) smear(c, detail::Tag<detail::v4d>{});
-#else
-        (void)wide;
-#endif
-        for (; c < cend; ++c) smear(c, detail::Tag<double>{});
-    };
+    auto smear_row = [&](int j, auto wide) LPFDM_INLINE { detail::sweep(j * mx + oc.i0, j * mx + oc.i1, wide, smear); };
     LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = oc.j0; j < oc.j1; ++j) each_row(smear_row, j);
     const bool hourglass = !hgx_.empty();
@@ -2124,15 +2116,8 @@ inline void Simulation::nodal_forces() {
         const bool inner_row = j > 0 && j < my && !hourglass;
         const int ia = inner_row ? std::min(std::max(nr.i0, 1), nr.i1) : nr.i1, ib = inner_row ? std::max(ia, std::min(nr.i1, mx)) : nr.i1;
         for (int i = nr.i0; i < ia; ++i) node_force(i, j, std::false_type{}, one);
-        int i = ia;
-#if LPFDM_WIDE
-        if constexpr (decltype(wide)::value)
-            for (; i + 4 <= ib; i += 4) node_force(i, j, std::true_type{}, detail::Tag<detail::v4d>{});
-#else
-        (void)wide;
-#endif
-        for (; i < ib; ++i) node_force(i, j, std::true_type{}, one);
-        for (i = ib; i < nr.i1; ++i) node_force(i, j, std::false_type{}, one);
+        detail::sweep(ia, ib, wide, [&](int i, auto tag) LPFDM_INLINE { node_force(i, j, std::true_type{}, tag); });
+        for (int i = ib; i < nr.i1; ++i) node_force(i, j, std::false_type{}, one);
     };
     LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = nr.j0; j < nr.j1; ++j) each_row(force_row, j);
@@ -2290,15 +2275,8 @@ inline void Simulation::integrate() {
         const int n0 = j * (mx + 1);
         auto idle = [&](int i) { const int n = n0 + i; nm[n] = 0; fxn[n] = fyn[n] = 0; ux_n[n] = uy_n[n] = 0; };  // no mass, no motion
         for (int i = nr.i0; i < ia; ++i) idle(i);
-        int i = ia;
-#if LPFDM_WIDE
-        if constexpr (decltype(wide)::value)
-            for (; i + 4 <= ib; i += 4) advance(n0 + i, detail::Tag<detail::v4d>{});
-#else
-        (void)wide;
-#endif
-        for (; i < ib; ++i) advance(n0 + i, detail::Tag<double>{});
-        for (i = ib; i < nr.i1; ++i) idle(i);
+        detail::sweep(n0 + ia, n0 + ib, wide, advance);
+        for (int i = ib; i < nr.i1; ++i) idle(i);
     };
     LPFDM_OMP(omp parallel for schedule(static) if (par))
     for (int j = nr.j0; j < nr.j1; ++j) each_row(advance_row, j);
