@@ -423,22 +423,12 @@ LPFDM_INLINE inline void jaumann_rotation(const T& d_theta, T& c2, T& s2) {
 
 namespace detail {
 // Code written once for one value (T = double) and for the lanes of a vector (see
-// LPFDM_WIDE): v = p[0], or p[0 .. lanes - 1]. (Vectors go through references: a
-// function returning one would have another ABI without AVX, GCC warns.)
-template <class T> inline constexpr int lanes = int(sizeof(T) / sizeof(double));
+// LPFDM_WIDE): v = p[0], or p[0 .. 3]. (Vectors go through references: a function
+// returning one would have another ABI without AVX, GCC warns.)
 template <class T>
 LPFDM_INLINE inline void load(const double* p, T& v) { std::memcpy(&v, p, sizeof v); }
 template <class T>
 LPFDM_INLINE inline void store(double* p, const T& v) { std::memcpy(p, &v, sizeof v); }
-template <class T>
-LPFDM_INLINE inline double lane(const T& v, int l) {
-    if constexpr (std::is_same_v<T, double>) {
-        (void)l;
-        return v;
-    } else {
-        return v[l];
-    }
-}
 // A type as a value (a lambda's argument that says which T to use).
 template <class T> struct Tag { using type = T; };
 }  // namespace detail
@@ -1696,13 +1686,11 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 if constexpr (Wide) {  // four points per register (the simd loop's set-up costs more for runs this short)
                     for (; r0 + 4 <= qend; r0 += 4) {
                         detail::v4d xx, yy, xy, zz, vol;
-                        std::memcpy(&xx, psxx + r0, sizeof xx); std::memcpy(&yy, psyy + r0, sizeof yy);
-                        std::memcpy(&xy, psxy + r0, sizeof xy); std::memcpy(&zz, pszz + r0, sizeof zz);
-                        std::memcpy(&vol, pvol + r0, sizeof vol);
+                        detail::load(psxx + r0, xx); detail::load(psyy + r0, yy); detail::load(psxy + r0, xy);
+                        detail::load(pszz + r0, zz); detail::load(pvol + r0, vol);
                         elastic(xx, yy, xy, zz, vol);
-                        std::memcpy(psxx + r0, &xx, sizeof xx); std::memcpy(psyy + r0, &yy, sizeof yy);
-                        std::memcpy(psxy + r0, &xy, sizeof xy); std::memcpy(pszz + r0, &zz, sizeof zz);
-                        std::memcpy(pvol + r0, &vol, sizeof vol);
+                        detail::store(psxx + r0, xx); detail::store(psyy + r0, yy); detail::store(psxy + r0, xy);
+                        detail::store(pszz + r0, zz); detail::store(pvol + r0, vol);
                     }
                 }
 #endif
@@ -1861,9 +1849,9 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 const v4d u0 = {uc0, uc0, uc0, uc0}, u1 = {uc1, uc1, uc1, uc1}, v0 = {vc0, vc0, vc0, vc0}, v1 = {vc1, vc1, vc1, vc1};
                 for (; q0 + 4 <= kend; q0 += 4) {
                     v4d x0, y0, x, y, ddx{}, ddy{};
-                    std::memcpy(&x0, px + q0, sizeof x0); std::memcpy(&y0, py + q0, sizeof y0);
+                    detail::load(px + q0, x0); detail::load(py + q0, y0);
                     moved(x0, y0, x, y, ddx, ddy);
-                    std::memcpy(px + q0, &x, sizeof x); std::memcpy(py + q0, &y, sizeof y);
+                    detail::store(px + q0, x); detail::store(py + q0, y);
                     const v4d u = x * invL, v = y * invL;
                     if (!detail::all_lanes((u >= u0) & (u < u1) & (v >= v0) & (v < v1))) {
                         for (int l = 0; l < 4; ++l) land(q0 + l, x[l], y[l], 0.0, 0.0, std::true_type{});
@@ -2309,6 +2297,8 @@ inline void Simulation::integrate() {
     for (int j = nr.j0; j < nr.j1; ++j) {
         // The kinetic energy of the row, summed in node order, and the largest increment
         // (nodes with mass only); four nodes' terms at a time in the lanes of a vector.
+        // Defined here, inside the loop, so that it takes this thread's maxdu (the
+        // reduction's private copy), not the shared one.
         auto energy_row = [&](int, auto wide) LPFDM_INLINE {
             double row_ke = 0;
             int n = j * (mx + 1) + nr.i0;
