@@ -504,7 +504,7 @@ bool same_points(const Points& a, const Points& b) {
 // of two groups), ppc x ppc points per cell (3: runs of nine, two of four lanes and one
 // alone; 4: runs of four times four lanes), a fixed floor (cells with fixed edges) and a
 // wall pressing down on the crest. The paper's motion rule (the default).
-Scene collapsing_slope(int ppc, const std::string& extra = "") {
+Scene collapsing_slope(int ppc, const std::string& extra = "", bool scatter = true) {
     const std::string deck = std::string(R"(
 GRID     60 24 0.25
 MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000
@@ -520,19 +520,23 @@ STEP     3E-4 400
     Scene s;
     REQUIRE(read_deck_text(deck, "slope", s).empty());
     for (auto& c : s.clusters) c.ppc = ppc;
+    if (!scatter) {  // the material's own strength for every point, and a tension cut-off
+        s.materials[1].scatter = 0;
+        s.materials[1].tension = 300;  // Pa, below the apex c / tan(phi) = 2.1 kPa
+    }
     return s;
 }
 
 // Both versions of the point loop and the lattice phases side by side on
-// collapsing_slope(ppc, extra), compared after every step.
-void compare_wide_and_narrow(int ppc, int threads, const std::string& extra = "") {
+// collapsing_slope(ppc, extra, scatter), compared after every step.
+void compare_wide_and_narrow(int ppc, int threads, const std::string& extra = "", bool scatter = true) {
 #if defined(_OPENMP)
     const int before = omp_get_max_threads();
     omp_set_num_threads(threads);
 #else
     if (threads > 1) return;
 #endif
-    const Scene s = collapsing_slope(ppc, extra);
+    const Scene s = collapsing_slope(ppc, extra, scatter);
     Simulation wide(s), narrow(s);
     narrow.set_wide(false);
     // A little noise on the initial stresses: points of one cell that start alike stay
@@ -582,6 +586,14 @@ TEST_CASE("the lattice phases' AVX2 version with local damping and hourglass con
     if (!Simulation::have_wide()) return;
     compare_wide_and_narrow(3, 1, "DAMPING 0.5\nWALL 2  1 5.5  3 5.5  0 -5");
     compare_wide_and_narrow(3, 1, "HOURGLASS 0.2");
+}
+
+TEST_CASE("the AVX2 Mohr-Coulomb consult with the material's own strength (no scatter): the same numbers, bit for bit") {
+    // With SCATTER the lanes read each point's c and N_phi; without, the material's. The
+    // tension cut-off below the apex makes a stress that passes the shear test with a
+    // tensile principal value fail (without one, passing the shear test implies it).
+    if (!Simulation::have_wide()) return;
+    compare_wide_and_narrow(3, 1, "", false);
 }
 
 TEST_CASE("the AVX2 point loop with two threads and runs of whole lanes: the one-point loop's numbers [slow]") {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -231,6 +232,91 @@ TEST_CASE("elastic test: leaving out the tension limit for a stress without tens
     CHECK(skipped > 20000);  // the shortcut was taken
     CHECK(elastic > 20000);
     CHECK(yielding > 20000);
+}
+
+TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as the one-point code does, bit for bit") {
+    // The AVX2 point loop keeps four trials that detail::mohr_inside_lanes passes, else it
+    // calls mohr_return_lanes; it keeps a lane that settles and sends any other through
+    // mohr_inside and mohr_coulomb_correct. So a lane passed by the first must be exactly
+    // one for which mohr_inside takes its first exit; a lane settled as inside must be
+    // inside for mohr_inside, a lane returned by shear must get the one-point return's
+    // stress and plastic shear exactly (mode Shear), and an unsettled lane must be
+    // outside. Random stresses from tiny to huge, with zeros of both signs, subnormals,
+    // infinities and NaN in every component and strength, and three tension limits.
+#if LPFDM_WIDE
+    if (!Simulation::have_wide()) return;
+    Random r(29);
+    const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+    const double odd[] = {0.0, -0.0, 1e-310, -1e-310, 1e300, -1e300, inf, -inf, nan};
+    auto value = [&](double scale, double shift) {
+        const int pick = int(r.uniform() * 100);
+        return pick < 9 ? odd[pick] : scale * (r.uniform() - shift);
+    };
+    auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+    long passed = 0, first_exits = 0, inside = 0, shear = 0, other = 0;
+    for (int k = 0; k < 60000; ++k) {
+        Material m = Material::mohr(1, 5e7, 0.1 + 0.35 * r.uniform(), 2000, 45 * r.uniform(), 1e4 * r.uniform());
+        m.psi_deg = m.phi_deg * r.uniform();
+        m.tension = k % 3 == 0 ? -1.0 : (k % 3 == 1 ? 0.0 : 1e4 * r.uniform());
+        const MaterialConstants mc = constants_of(m);
+        detail::v4d xx, yy, xy, zz, np, two_c_sq, d_gamma;
+        Stress s[4];
+        for (int l = 0; l < 4; ++l) {
+            const double scale = std::ldexp(1.0, int(r.uniform() * 40) - 20) * 1e3;
+            s[l] = {value(scale, 0.8), value(scale, 0.8), value(scale, 0.5), value(scale, 0.8)};
+            xx[l] = s[l].xx; yy[l] = s[l].yy; xy[l] = s[l].xy; zz[l] = s[l].zz;
+            np[l] = k % 13 == 0 ? value(3, 0) : mc.n_phi * (1 + 0.2 * (r.uniform() - 0.5));  // scattered
+            two_c_sq[l] = k % 17 == 0 ? value(1e4, 0.2) : 2 * mc.c * r.uniform() * std::sqrt(np[l]);
+        }
+        detail::v4d radius;
+        const int first = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
+        const int bits = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma);
+        for (int l = 0; l < 4; ++l) {
+            const double unset = -12345.5;  // mohr_inside sets t.sig_t unless it takes its first exit
+            detail::MohrTrial t;
+            t.np = np[l];
+            t.two_c_sq = two_c_sq[l];
+            t.sig_t = unset;
+            Stress one = s[l];
+            const bool in = detail::mohr_inside(t, mc.tension, one);
+            const bool settled = bits >> l & 1, returned = bits >> (4 + l) & 1;
+            if (first >> l & 1) {  // mohr_inside's first exit: mohr_return_lanes settles it as inside too
+                REQUIRE((settled && !returned));
+                CHECK(t.sig_t == unset);
+                ++passed;
+            }
+            INFO("stress " << s[l].xx << " " << s[l].yy << " " << s[l].xy << " " << s[l].zz << ", N_phi " << np[l] << ", 2c sqrt(N_phi) " << two_c_sq[l] << ", tension " << mc.tension);
+            first_exits += in && t.sig_t == unset;
+            if (settled && !returned) {
+                ++inside;
+                REQUIRE(in);
+                CHECK((same(xx[l], s[l].xx) && same(yy[l], s[l].yy) && same(xy[l], s[l].xy) && same(zz[l], s[l].zz)));
+            } else if (returned) {
+                ++shear;
+                REQUIRE(settled);
+                REQUIRE(!in);
+                MohrStrength st;
+                st.n_phi = t.np;
+                st.n_psi = std::min(mc.n_psi, t.np);
+                st.tension = mc.tension;
+                const MohrResult res = detail::mohr_coulomb_correct(mc, st, t, one);
+                CHECK(res.mode == MohrResult::Shear);
+                CHECK((same(xx[l], one.xx) && same(yy[l], one.yy) && same(xy[l], one.xy) && same(zz[l], one.zz)));
+                CHECK(same(d_gamma[l], res.d_gamma_p));
+            } else {
+                ++other;
+                REQUIRE(!in);
+            }
+        }
+    }
+    CHECK(passed == first_exits);  // and takes it wherever mohr_inside does
+    MESSAGE("lanes through the first exit " << passed << ", settled as inside " << inside << ", returned by shear " << shear << ", left to the one-point code " << other);
+    CHECK(inside > 20000);  // every outcome is frequent
+    CHECK(shear > 10000);
+    CHECK(other > 20000);
+#else
+    MESSAGE("built without the AVX2 version (LPFDM_WIDE): nothing to compare");
+#endif
 }
 
 TEST_CASE("Jaumann, eq. 5f: a stressed point turned 360 degrees in small rigid steps keeps its invariants") {
