@@ -779,8 +779,8 @@ LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7ffff
 // Built for AVX2 (the square root's builtin needs the target); the compiler inlines the
 // elastic test into the AVX2 point loop, and calls the return, which most chunks skip.
 //
-// Mohr's circle of (xx, yy, xy) with its radius r given: t.a, t.sig and mohr_inside's
-// lo, hi and shear test.
+// Mohr's circle of (xx, yy) with its radius r given: t.a, t.sig and mohr_inside's lo, hi
+// and shear test.
 __attribute__((target("avx2"), always_inline)) inline void mohr_circle_lanes(const v4d& xx, const v4d& yy, const v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, v4d& a, v4d& t0, v4d& t1, v4d& hi, v4m& shear_ok) {
     const v4d p = 0.5 * (xx + yy);
     a = 0.5 * (xx - yy);
@@ -1277,6 +1277,11 @@ private:
     // chunks' cell ranges that update_points found still hold (nothing changed the points).
     void map_points(bool after_update);
     void plastic_correction(const MaterialConstants& mc, std::size_t q, const detail::MohrTrial& t, Stress& s);
+    // Point q was returned to the yield surface with plastic shear increment d_gamma_p.
+    void record_yield(std::size_t q, double d_gamma_p) {
+        p_.plastic_shear[q] += d_gamma_p;
+        p_.yielded[q] = 1;  // softening takes effect from the next consult
+    }
     void user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s);
     void carried_increments(const Range& nodes);
     // ADVECT POINTS: the increment field a point of mass m brings to cell c = (i, j), where
@@ -1675,10 +1680,7 @@ inline void Simulation::plastic_correction(const MaterialConstants& mc, std::siz
     st.n_psi = std::min(mc.n_psi, t.np);
     st.tension = mc.tension;
     const MohrResult r = detail::mohr_coulomb_correct(mc, st, t, s);
-    if (r.mode != MohrResult::Elastic) {
-        p_.plastic_shear[q] += r.d_gamma_p;
-        p_.yielded[q] = 1;  // softening takes effect from the next consult
-    }
+    if (r.mode != MohrResult::Elastic) record_yield(q, r.d_gamma_p);
 }
 
 // eq. 6 by a model the embedding program gave (set_user_model).
@@ -1818,9 +1820,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                             if (settled == 15) continue;
                             for (int l = 0; l < 4; ++l) {
                                 const long r = q + l;
-                                if (settled >> (4 + l) & 1) {  // plastic_correction's bookkeeping
-                                    p_.plastic_shear[std::size_t(r)] += d_gamma[l];
-                                    p_.yielded[std::size_t(r)] = 1;
+                                if (settled >> (4 + l) & 1) {
+                                    record_yield(std::size_t(r), d_gamma[l]);
                                 } else if (!(settled >> l & 1)) {
                                     Stress s{t_xx[l], t_yy[l], t_xy[l], t_zz[l]};
                                     check(r, s);
