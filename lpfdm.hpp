@@ -1233,6 +1233,8 @@ private:
         long departed = 0;
         long listed = 0;  // threaded map_to_lattice: points whose sums wait for lower chunks
     };
+    // Points per block of the AVX2 point loop with a Mohr-Coulomb material (run_points).
+    static constexpr long kConsultBlock = 256;
     template <bool Fused> void advance_range(long k0, long k1, Tally& t);
     template <bool Fused, Motion M, bool Carry> void advance_run(long k0, long k1, Tally& t);
     template <bool Fused, Motion M, bool Carry, bool Wide> LPFDM_INLINE void run_points(long k0, long k1, Tally& t);
@@ -1715,286 +1717,332 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
     const int mx = mx_, my = my_;
     const double L = L_, invL = invL_, X = mx * L, Y = my * L;
     const bool single = groups_.size() == 1;
-    long k = k0;
+    const double* pc0 = p_.c0.data();
+    const double* pnp = p_.n_phi.data();
+    const double* psq = p_.sqrt_n_phi.data();
+    const std::uint8_t* pyield = p_.yielded.data();
+    // Mohr-Coulomb point r of material mc: its strength, its own (own: scatter) or the
+    // material's, softened once it has yielded; and with its elastic trial s, the test
+    // and the return when outside.
+    auto strength = [&](const MaterialConstants& mc, long r, detail::MohrTrial& tr, auto own) LPFDM_INLINE {
+        const double c0 = own ? pc0[r] : mc.c;
+        tr.np = own ? pnp[r] : mc.n_phi;
+        tr.two_c_sq = 2 * (pyield[r] ? c0 * (1 - mc.soften) : c0) * (own ? psq[r] : mc.sqrt_n_phi);
+    };
+    auto check = [&](const MaterialConstants& mc, long r, Stress& s, auto own) LPFDM_INLINE {
+        detail::MohrTrial tr;
+        strength(mc, r, tr, own);
+        if (!detail::mohr_inside(tr, mc.tension, s)) plastic_correction(mc, std::size_t(r), tr, s);
+    };
     int cprev = -2, iprev = -2, jprev = -2;
-    while (k < k1) {
-        // The run: points k .. kend-1, all in cell c = (ci, cj). The next run is usually
-        // the next cell of the row: no integer division then.
-        const int c = pcell[k];
-        const bool next = c == cprev + 1 && iprev + 1 < mx;
-        const int ci = next ? iprev + 1 : c % mx, cj = next ? jprev : c / mx, n1 = node(ci, cj);
-        cprev = c; iprev = ci; jprev = cj;
-        long kend = k + 1;
-        while (kend < k1 && pcell[kend] == c) ++kend;
-        const CellStrain& ce = strain_[std::size_t(c)];
-        const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
+    // The runs of points k .. k1-1, in one of three stages: kWhole, the whole step of each
+    // run; kTrial, eq. 6's elastic trial only (a Mohr-Coulomb point is consulted later, by
+    // consult_block); kMotion, eq. 7a/7b and the landing only.
+    enum : int { kWhole, kTrial, kMotion };
+    auto runs = [&](long k, const long k1, auto stage) LPFDM_INLINE {
+        constexpr int S = decltype(stage)::value;
+        while (k < k1) {
+            // The run: points k .. kend-1, all in cell c = (ci, cj). The next run is usually
+            // the next cell of the row: no integer division then.
+            const int c = pcell[k];
+            const bool next = c == cprev + 1 && iprev + 1 < mx;
+            const int ci = next ? iprev + 1 : c % mx, cj = next ? jprev : c / mx, n1 = node(ci, cj);
+            cprev = c; iprev = ci; jprev = cj;
+            long kend = k + 1;
+            while (kend < k1 && pcell[kend] == c) ++kend;
+            const CellStrain& ce = strain_[std::size_t(c)];
+            const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
 
-        // eq. 6 with the Jaumann rotation of eq. 5f, then the volume change. The elastic
-        // increment depends on the cell and the material only: once per run and group.
-        const double rc = ce.rc, rs = ce.rs, dv = 1 + e.xx + e.yy;
-        bool one_group = true;
-        for (long q = k; q < kend;) {
-            const int g = pgroup[q];
-            long qend = single ? kend : q + 1;  // one group in the scene: the whole run
-            while (qend < kend && pgroup[qend] == g) ++qend;
-            one_group = one_group && qend == kend;
-            const MaterialConstants& mc = *group_consts_[std::size_t(g)];
-            const Stress de = elastic_change(mc, e);  // eq. 6
-            // eq. 6 with the Jaumann rotation (the elastic trial); one point, or four in the
-            // lanes of a vector.
-            auto trial = [&](auto& xx, auto& yy, auto& xy, auto& zz) LPFDM_INLINE {
-                rotate_stress(xx, yy, xy, rc, rs);  // Jaumann: the old stress turns with the material
-                xx += de.xx; yy += de.yy; xy += de.xy; zz += de.zz;  // eq. 6
-            };
-            if (mc.model == Model::Elastic) {
-                auto elastic = [&](auto& xx, auto& yy, auto& xy, auto& zz, auto& vol) LPFDM_INLINE {
-                    trial(xx, yy, xy, zz);
-                    vol *= dv;
+            // eq. 6 with the Jaumann rotation of eq. 5f, then the volume change. The elastic
+            // increment depends on the cell and the material only: once per run and group.
+            const double rc = ce.rc, rs = ce.rs, dv = 1 + e.xx + e.yy;
+            bool one_group = true;
+            if constexpr (S == kMotion) {
+                for (long q = k + 1; q < kend && !single; ++q) one_group = one_group && pgroup[q] == pgroup[k];
+            }
+            for (long q = k; q < kend && S != kMotion;) {
+                const int g = pgroup[q];
+                long qend = single ? kend : q + 1;  // one group in the scene: the whole run
+                while (qend < kend && pgroup[qend] == g) ++qend;
+                one_group = one_group && qend == kend;
+                const MaterialConstants& mc = *group_consts_[std::size_t(g)];
+                const Stress de = elastic_change(mc, e);  // eq. 6
+                // eq. 6 with the Jaumann rotation (the elastic trial); one point, or four in the
+                // lanes of a vector.
+                auto trial = [&](auto& xx, auto& yy, auto& xy, auto& zz) LPFDM_INLINE {
+                    rotate_stress(xx, yy, xy, rc, rs);  // Jaumann: the old stress turns with the material
+                    xx += de.xx; yy += de.yy; xy += de.xy; zz += de.zz;  // eq. 6
                 };
-                long r0 = q;
-                q = qend;
+                if (mc.model == Model::Elastic || (S == kTrial && mc.model == Model::MohrCoulomb)) {
+                    auto elastic = [&](auto& xx, auto& yy, auto& xy, auto& zz, auto& vol) LPFDM_INLINE {
+                        trial(xx, yy, xy, zz);
+                        vol *= dv;
+                    };
+                    long r0 = q;
+                    q = qend;
 #if LPFDM_WIDE
-                if constexpr (Wide) {  // four points per register (the simd loop's set-up costs more for runs this short)
-                    for (; r0 + 4 <= qend; r0 += 4) {
-                        detail::v4d xx, yy, xy, zz, vol;
-                        detail::load(psxx + r0, xx); detail::load(psyy + r0, yy); detail::load(psxy + r0, xy);
-                        detail::load(pszz + r0, zz); detail::load(pvol + r0, vol);
+                    if constexpr (Wide) {  // four points per register (the simd loop's set-up costs more for runs this short)
+                        for (; r0 + 4 <= qend; r0 += 4) {
+                            detail::v4d xx, yy, xy, zz, vol;
+                            detail::load(psxx + r0, xx); detail::load(psyy + r0, yy); detail::load(psxy + r0, xy);
+                            detail::load(pszz + r0, zz); detail::load(pvol + r0, vol);
+                            elastic(xx, yy, xy, zz, vol);
+                            detail::store(psxx + r0, xx); detail::store(psyy + r0, yy); detail::store(psxy + r0, xy);
+                            detail::store(pszz + r0, zz); detail::store(pvol + r0, vol);
+                        }
+                    }
+#endif
+                    LPFDM_OMP(omp simd)  // independent points: two (or four) per instruction, the same results
+                    for (long r = r0; r < qend; ++r) {
+                        double xx = psxx[r], yy = psyy[r], xy = psxy[r], zz = pszz[r], vol = pvol[r];
                         elastic(xx, yy, xy, zz, vol);
-                        detail::store(psxx + r0, xx); detail::store(psyy + r0, yy); detail::store(psxy + r0, xy);
-                        detail::store(pszz + r0, zz); detail::store(pvol + r0, vol);
+                        psxx[r] = xx; psyy[r] = yy; psxy[r] = xy; pszz[r] = zz; pvol[r] = vol;
+                    }
+                } else if (mc.model == Model::MohrCoulomb) {
+                    auto consult = [&](auto own) LPFDM_INLINE {
+                        for (; q < qend; ++q) {
+                            Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                            trial(s.xx, s.yy, s.xy, s.zz);  // eq. 6, the elastic trial
+                            check(mc, q, s, own);
+                            psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+                            pvol[q] *= dv;
+                        }
+                    };
+                    if (!p_.c0.empty()) consult(std::true_type{});  // scatter: each point's own strength
+                    else consult(std::false_type{});
+                } else {
+                    for (; q < qend; ++q) {
+                        Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                        rotate_stress(s, rc, rs);
+                        user_consult(mc, std::size_t(q), e, s);  // eq. 6 by the user's model
+                        psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+                        pvol[q] *= dv;
                     }
                 }
-#endif
-                LPFDM_OMP(omp simd)  // independent points: two (or four) per instruction, the same results
-                for (long r = r0; r < qend; ++r) {
-                    double xx = psxx[r], yy = psyy[r], xy = psxy[r], zz = pszz[r], vol = pvol[r];
-                    elastic(xx, yy, xy, zz, vol);
-                    psxx[r] = xx; psyy[r] = yy; psxy[r] = xy; pszz[r] = zz; pvol[r] = vol;
-                }
-            } else if (mc.model == Model::MohrCoulomb) {
-                // The point's strength: its own (scatter) or the material's, softened once
-                // it has yielded; the elastic test inline, the return out of line.
-                const double* pc0 = p_.c0.data();
-                const double* pnp = p_.n_phi.data();
-                const double* psq = p_.sqrt_n_phi.data();
-                const std::uint8_t* pyield = p_.yielded.data();
-                auto consult = [&](auto scatter) LPFDM_INLINE {
-                    constexpr bool own = decltype(scatter)::value;
-                    auto strength = [&](long r, detail::MohrTrial& tr) LPFDM_INLINE {
-                        const double c0 = own ? pc0[r] : mc.c;
-                        tr.np = own ? pnp[r] : mc.n_phi;
-                        tr.two_c_sq = 2 * (pyield[r] ? c0 * (1 - mc.soften) : c0) * (own ? psq[r] : mc.sqrt_n_phi);
-                    };
-                    // Point r with its elastic trial s: the test, and the return when outside.
-                    auto check = [&](long r, Stress& s) LPFDM_INLINE {
-                        detail::MohrTrial tr;
-                        strength(r, tr);
-                        if (!detail::mohr_inside(tr, mc.tension, s)) plastic_correction(mc, std::size_t(r), tr, s);
-                    };
+            }
+
+            if constexpr (S != kTrial) {
+                // eq. 7a/7b, about node [1] of the cell; then eq. 7 and 8 into the cell each point
+                // lands in. Fused: the sums of cell c stay in registers while its points stay in it.
+                const std::uint8_t fe = fixed_edges_[std::size_t(c)];
+                const double xi = ci * L, yj = cj * L;
+                // A point of a cell in the last column or row takes the full test below: x < X
+                // does not follow from x / L < m there.
+                const double uc0 = ci, uc1 = ci + 1 < mx ? ci + 1 : -1, vc0 = cj, vc1 = cj + 1 < my ? cj + 1 : -1;
+                const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
+                const double ux1 = dux_[n1], uy1 = duy_[n1];
+                double ux2 = 0, uy2 = 0, ux3 = 0, uy3 = 0, ux4 = 0, uy4 = 0, umx = 0, umy = 0;
+                if constexpr (M != Motion::Paper) { ux2 = dux_[n2]; uy2 = duy_[n2]; ux3 = dux_[n3]; uy3 = duy_[n3]; ux4 = dux_[n4]; uy4 = duy_[n4]; }
+                if constexpr (M == Motion::Centre) { umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4); }
+                CellSums sums{0, 0, 0, 0, 0};
+                if constexpr (Fused) sums = cell_sums(std::size_t(c));
+                bool stayed = false;
+                int g = one_group ? pgroup[k] : -1;
+                double gm = one_group ? groups_[std::size_t(g)].mass : 0, gv0 = one_group ? groups_[std::size_t(g)].vol0 : 0;
+                // eq. 7a/7b: where a point of this cell at (x0, y0) moves; one point, or four in
+                // the lanes of a vector (the same operations in the same order in every lane).
+                // d: the point's own increment (ADVECT POINTS only).
+                auto moved = [&](const auto& x0, const auto& y0, auto& x, auto& y, auto& ddx, auto& ddy) LPFDM_INLINE {
+                    const auto dx = x0 - xi, dy = y0 - yj;
+                    if constexpr (M == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
+                        x = x0 + e.xx * dx + e.xy * dy + ux1;
+                        y = y0 + e.yy * dy + e.yx * dx + uy1;
+                    } else if constexpr (M == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
+                        const auto cx = dx - 0.5 * L, cy = dy - 0.5 * L;
+                        x = x0 + e.xx * cx + e.xy * cy + umx;
+                        y = y0 + e.yy * cy + e.yx * cx + umy;
+                        if constexpr (Carry) { ddx = e.xx * cx + e.xy * cy + umx; ddy = e.yy * cy + e.yx * cx + umy; }
+                    } else {  // bilinear shape functions of the cell
+                        const auto u = dx * invL, v = dy * invL;
+                        const auto w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
+                        x = x0 + w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
+                        y = y0 + w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
+                        if constexpr (Carry) {
+                            ddx = w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
+                            ddy = w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
+                        }
+                    }
+                };
+                // Point q, now at (x, y): its new cell, min(m - 1, int(x / L)) (the run's own cell
+                // in the usual case), and eq. 7 and 8 into it. Fused: the sums of cell c stay in
+                // registers while its points stay in it.
+                auto land = [&](long q, double x, double y, double ddx, double ddy, auto one) LPFDM_INLINE {
+                    (void)ddx; (void)ddy;
+                    const double u = x * invL, v = y * invL;
+                    int ni = ci, nj = cj, cn = c;
+                    if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
+                        if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
+                            pcell[q] = -1;
+                            ++t.departed;
+                            return;
+                        }
+                        ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
+                        pcell[q] = cn;
+                    }
+                    if constexpr ((Carry || Fused) && !decltype(one)::value) {
+                        if (pgroup[q] != g) { g = pgroup[q]; gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0; }
+                    }
+                    if constexpr (Carry) {
+                        if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
+                        else { pdx_[std::size_t(q)] = ddx; pdy_[std::size_t(q)] = ddy; pfrom_[std::size_t(q)] = c; }
+                    }
+                    if constexpr (!Fused) {  // the cells this chunk's points landed in (map_to_lattice)
+                        if (cn == c) stayed = true;
+                        else { t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn); t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni); }
+                    }
+                    if constexpr (Fused) {
+                        const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
+                        if (cn == c) {
+                            sums.add(gm, vk, sxx, syy, sxy);  // eq. 7, 8
+                            stayed = true;
+                        } else {
+                            add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
+                            t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
+                            t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
+                        }
+                        t.mass += gm;
+                    }
+                };
+                // Points q0 .. kend-1 one at a time, in four versions: with or without fixed edges,
+                // one group or several.
+                auto motion = [&](long q0, auto edges, auto one) LPFDM_INLINE {
+                    for (long q = q0; q < kend; ++q) {
+                        const double x0 = px[q], y0 = py[q];
+                        double x, y, ddx = 0, ddy = 0;
+                        moved(x0, y0, x, y, ddx, ddy);
+                        if constexpr (decltype(edges)::value) {
+                            // A fixed edge is impermeable: eq. 7a/7b is an affine map of the whole cell and
+                            // moves a point on a fixed edge by d_eps_yx dx (or d_eps_xy dy) when the far
+                            // nodes move unequally; it stops on the edge, inside its cell.
+                            if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
+                            if ((fe & kEdgeTop) && y >= (cj + 1) * L) y = edge_below(cj + 1);
+                            if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
+                            if ((fe & kEdgeRight) && x >= (ci + 1) * L) x = edge_below(ci + 1);
+                        }
+                        px[q] = x; py[q] = y;
+                        land(q, x, y, ddx, ddy, one);
+                    }
+                };
+                long q0 = k;
 #if LPFDM_WIDE
-                    if constexpr (Wide) {
-                        // Four points per register: the trial, the elastic test and the
-                        // closed-form shear return (detail::mohr_inside_lanes and
-                        // mohr_return_lanes). A point they do not settle takes the one-
-                        // point test and return on its trial, the one the loop below would
-                        // have computed. The last one to three points of a run go through
-                        // the loop below: in lanes padded with copies they took 5 % longer.
-                        for (; q + 4 <= qend; q += 4) {
-                            detail::v4d xx, yy, xy, zz, vol, np, two_c_sq, radius, d_gamma, t_xx, t_yy, t_xy, t_zz;
-                            detail::load(psxx + q, xx); detail::load(psyy + q, yy); detail::load(psxy + q, xy);
-                            detail::load(pszz + q, zz); detail::load(pvol + q, vol);
-                            trial(xx, yy, xy, zz);  // eq. 6, the elastic trial
-                            vol *= dv;
-                            for (int l = 0; l < 4; ++l) {
-                                detail::MohrTrial tr;
-                                strength(q + l, tr);
-                                np[l] = tr.np; two_c_sq[l] = tr.two_c_sq;
+                if constexpr (Wide && !Carry) {
+                    // Four points at a time in the lanes of an AVX2 register (one group, no fixed
+                    // edge): the motion and the test whether each stays in its cell. When all four
+                    // stay, their sums are added from the lanes in point order; otherwise each
+                    // lands on its own, in order. Either way the result is that of the loop above,
+                    // bit for bit: the same expressions in the same order, and no fused multiply-add
+                    // (see LPFDM_WIDE).
+                    if (!fe && one_group) {
+                        using detail::v4d;
+                        const v4d u0 = {uc0, uc0, uc0, uc0}, u1 = {uc1, uc1, uc1, uc1}, v0 = {vc0, vc0, vc0, vc0}, v1 = {vc1, vc1, vc1, vc1};
+                        for (; q0 + 4 <= kend; q0 += 4) {
+                            v4d x0, y0, x, y, ddx{}, ddy{};
+                            detail::load(px + q0, x0); detail::load(py + q0, y0);
+                            moved(x0, y0, x, y, ddx, ddy);
+                            detail::store(px + q0, x); detail::store(py + q0, y);
+                            const v4d u = x * invL, v = y * invL;
+                            if (!detail::all_lanes((u >= u0) & (u < u1) & (v >= v0) & (v < v1))) {
+                                for (int l = 0; l < 4; ++l) land(q0 + l, x[l], y[l], 0.0, 0.0, std::true_type{});
+                                continue;
                             }
-                            int settled = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
-                            if (settled != 15) {
-                                t_xx = xx; t_yy = yy; t_xy = xy; t_zz = zz;
-                                settled = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma);
-                            }
-                            detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy);
-                            detail::store(pszz + q, zz); detail::store(pvol + q, vol);
-                            if (settled == 15) continue;
-                            for (int l = 0; l < 4; ++l) {
-                                const long r = q + l;
-                                if (settled >> (4 + l) & 1) {
-                                    record_yield(std::size_t(r), d_gamma[l]);
-                                } else if (!(settled >> l & 1)) {
-                                    Stress s{t_xx[l], t_yy[l], t_xy[l], t_zz[l]};
-                                    check(r, s);
-                                    psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
+                            stayed = true;
+                            if constexpr (Fused) {
+                                for (long q = q0; q < q0 + 4; ++q) {  // in point order
+                                    sums.add(gm, std::min(pvol[q], gv0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
+                                    t.mass += gm;
                                 }
                             }
                         }
                     }
+                }
 #endif
-                    for (; q < qend; ++q) {
-                        Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
-                        trial(s.xx, s.yy, s.xy, s.zz);  // eq. 6, the elastic trial
-                        check(q, s);
-                        psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
-                        pvol[q] *= dv;
-                    }
-                };
-                if (!p_.c0.empty()) consult(std::true_type{});  // scatter: each point's own strength
-                else consult(std::false_type{});
-            } else {
-                for (; q < qend; ++q) {
-                    Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
-                    rotate_stress(s, rc, rs);
-                    user_consult(mc, std::size_t(q), e, s);  // eq. 6 by the user's model
-                    psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
-                    pvol[q] *= dv;
+                if (fe) one_group ? motion(q0, std::true_type{}, std::true_type{}) : motion(q0, std::true_type{}, std::false_type{});
+                else one_group ? motion(q0, std::false_type{}, std::true_type{}) : motion(q0, std::false_type{}, std::false_type{});
+                if (stayed) {
+                    if constexpr (Fused) store_sums(std::size_t(c), sums);
+                    t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
+                    t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
                 }
             }
+            k = kend;
         }
-
-        // eq. 7a/7b, about node [1] of the cell; then eq. 7 and 8 into the cell each point
-        // lands in. Fused: the sums of cell c stay in registers while its points stay in it.
-        const std::uint8_t fe = fixed_edges_[std::size_t(c)];
-        const double xi = ci * L, yj = cj * L;
-        // A point of a cell in the last column or row takes the full test below: x < X
-        // does not follow from x / L < m there.
-        const double uc0 = ci, uc1 = ci + 1 < mx ? ci + 1 : -1, vc0 = cj, vc1 = cj + 1 < my ? cj + 1 : -1;
-        const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
-        const double ux1 = dux_[n1], uy1 = duy_[n1];
-        double ux2 = 0, uy2 = 0, ux3 = 0, uy3 = 0, ux4 = 0, uy4 = 0, umx = 0, umy = 0;
-        if constexpr (M != Motion::Paper) { ux2 = dux_[n2]; uy2 = duy_[n2]; ux3 = dux_[n3]; uy3 = duy_[n3]; ux4 = dux_[n4]; uy4 = duy_[n4]; }
-        if constexpr (M == Motion::Centre) { umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4); }
-        CellSums sums{0, 0, 0, 0, 0};
-        if constexpr (Fused) sums = cell_sums(std::size_t(c));
-        bool stayed = false;
-        int g = one_group ? pgroup[k] : -1;
-        double gm = one_group ? groups_[std::size_t(g)].mass : 0, gv0 = one_group ? groups_[std::size_t(g)].vol0 : 0;
-        // eq. 7a/7b: where a point of this cell at (x0, y0) moves; one point, or four in
-        // the lanes of a vector (the same operations in the same order in every lane).
-        // d: the point's own increment (ADVECT POINTS only).
-        auto moved = [&](const auto& x0, const auto& y0, auto& x, auto& y, auto& ddx, auto& ddy) LPFDM_INLINE {
-            const auto dx = x0 - xi, dy = y0 - yj;
-            if constexpr (M == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
-                x = x0 + e.xx * dx + e.xy * dy + ux1;
-                y = y0 + e.yy * dy + e.yx * dx + uy1;
-            } else if constexpr (M == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
-                const auto cx = dx - 0.5 * L, cy = dy - 0.5 * L;
-                x = x0 + e.xx * cx + e.xy * cy + umx;
-                y = y0 + e.yy * cy + e.yx * cx + umy;
-                if constexpr (Carry) { ddx = e.xx * cx + e.xy * cy + umx; ddy = e.yy * cy + e.yx * cx + umy; }
-            } else {  // bilinear shape functions of the cell
-                const auto u = dx * invL, v = dy * invL;
-                const auto w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
-                x = x0 + w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
-                y = y0 + w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
-                if constexpr (Carry) {
-                    ddx = w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
-                    ddy = w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
-                }
-            }
-        };
-        // Point q, now at (x, y): its new cell, min(m - 1, int(x / L)) (the run's own cell
-        // in the usual case), and eq. 7 and 8 into it. Fused: the sums of cell c stay in
-        // registers while its points stay in it.
-        auto land = [&](long q, double x, double y, double ddx, double ddy, auto one) LPFDM_INLINE {
-            (void)ddx; (void)ddy;
-            const double u = x * invL, v = y * invL;
-            int ni = ci, nj = cj, cn = c;
-            if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
-                if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
-                    pcell[q] = -1;
-                    ++t.departed;
-                    return;
-                }
-                ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
-                pcell[q] = cn;
-            }
-            if constexpr ((Carry || Fused) && !decltype(one)::value) {
-                if (pgroup[q] != g) { g = pgroup[q]; gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0; }
-            }
-            if constexpr (Carry) {
-                if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
-                else { pdx_[std::size_t(q)] = ddx; pdy_[std::size_t(q)] = ddy; pfrom_[std::size_t(q)] = c; }
-            }
-            if constexpr (!Fused) {  // the cells this chunk's points landed in (map_to_lattice)
-                if (cn == c) stayed = true;
-                else { t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn); t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni); }
-            }
-            if constexpr (Fused) {
-                const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
-                if (cn == c) {
-                    sums.add(gm, vk, sxx, syy, sxy);  // eq. 7, 8
-                    stayed = true;
-                } else {
-                    add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
-                    t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
-                    t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
-                }
-                t.mass += gm;
-            }
-        };
-        // Points q0 .. kend-1 one at a time, in four versions: with or without fixed edges,
-        // one group or several.
-        auto motion = [&](long q0, auto edges, auto one) LPFDM_INLINE {
-            for (long q = q0; q < kend; ++q) {
-                const double x0 = px[q], y0 = py[q];
-                double x, y, ddx = 0, ddy = 0;
-                moved(x0, y0, x, y, ddx, ddy);
-                if constexpr (decltype(edges)::value) {
-                    // A fixed edge is impermeable: eq. 7a/7b is an affine map of the whole cell and
-                    // moves a point on a fixed edge by d_eps_yx dx (or d_eps_xy dy) when the far
-                    // nodes move unequally; it stops on the edge, inside its cell.
-                    if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
-                    if ((fe & kEdgeTop) && y >= (cj + 1) * L) y = edge_below(cj + 1);
-                    if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
-                    if ((fe & kEdgeRight) && x >= (ci + 1) * L) x = edge_below(ci + 1);
-                }
-                px[q] = x; py[q] = y;
-                land(q, x, y, ddx, ddy, one);
-            }
-        };
-        long q0 = k;
+    };
 #if LPFDM_WIDE
-        if constexpr (Wide && !Carry) {
-            // Four points at a time in the lanes of an AVX2 register (one group, no fixed
-            // edge): the motion and the test whether each stays in its cell. When all four
-            // stay, their sums are added from the lanes in point order; otherwise each
-            // lands on its own, in order. Either way the result is that of the loop above,
-            // bit for bit: the same expressions in the same order, and no fused multiply-add
-            // (see LPFDM_WIDE).
-            if (!fe && one_group) {
-                using detail::v4d;
-                const v4d u0 = {uc0, uc0, uc0, uc0}, u1 = {uc1, uc1, uc1, uc1}, v0 = {vc0, vc0, vc0, vc0}, v1 = {vc1, vc1, vc1, vc1};
-                for (; q0 + 4 <= kend; q0 += 4) {
-                    v4d x0, y0, x, y, ddx{}, ddy{};
-                    detail::load(px + q0, x0); detail::load(py + q0, y0);
-                    moved(x0, y0, x, y, ddx, ddy);
-                    detail::store(px + q0, x); detail::store(py + q0, y);
-                    const v4d u = x * invL, v = y * invL;
-                    if (!detail::all_lanes((u >= u0) & (u < u1) & (v >= v0) & (v < v1))) {
-                        for (int l = 0; l < 4; ++l) land(q0 + l, x[l], y[l], 0.0, 0.0, std::true_type{});
-                        continue;
+    if constexpr (Wide) {
+        bool mohr = false;
+        for (const MaterialConstants* mc : group_consts_) mohr = mohr || mc->model == Model::MohrCoulomb;
+        // The Mohr-Coulomb points of b0 .. b1-1, holding their elastic trials: the elastic
+        // test and the closed-form shear return four points per register
+        // (detail::mohr_inside_lanes, mohr_return_lanes). A point they do not settle, and
+        // the last one to three points of a material's span, take the one-point test and
+        // return on the trial.
+        auto consult_block = [&](long b0, long b1) LPFDM_INLINE {
+            auto consult = [&](long q, const long qend, const MaterialConstants& mc, auto own) LPFDM_INLINE {
+                for (; q + 4 <= qend; q += 4) {
+                    detail::v4d xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;
+                    detail::load(psxx + q, xx); detail::load(psyy + q, yy); detail::load(psxy + q, xy); detail::load(pszz + q, zz);
+                    for (int l = 0; l < 4; ++l) {
+                        detail::MohrTrial tr;
+                        strength(mc, q + l, tr, own);
+                        np[l] = tr.np; two_c_sq[l] = tr.two_c_sq;
                     }
-                    stayed = true;
-                    if constexpr (Fused) {
-                        for (long q = q0; q < q0 + 4; ++q) {  // in point order
-                            sums.add(gm, std::min(pvol[q], gv0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
-                            t.mass += gm;
+                    int settled = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
+                    if (settled == 15) continue;  // all four inside: the trial stands
+                    const detail::v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
+                    settled = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma);
+                    detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy); detail::store(pszz + q, zz);
+                    if (settled == 15) continue;
+                    for (int l = 0; l < 4; ++l) {
+                        const long r = q + l;
+                        if (settled >> (4 + l) & 1) {
+                            record_yield(std::size_t(r), d_gamma[l]);
+                        } else if (!(settled >> l & 1)) {
+                            Stress s{t_xx[l], t_yy[l], t_xy[l], t_zz[l]};
+                            check(mc, r, s, own);
+                            psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
                         }
                     }
                 }
+                for (; q < qend; ++q) {
+                    Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                    check(mc, q, s, own);
+                    psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+                }
+            };
+            for (long q = b0; q < b1;) {  // spans of points of one material
+                const MaterialConstants& mc = *group_consts_[std::size_t(pgroup[q])];
+                long qend = single ? b1 : q + 1;
+                while (qend < b1 && group_consts_[std::size_t(pgroup[qend])] == &mc) ++qend;
+                if (mc.model == Model::MohrCoulomb) {
+                    if (!p_.c0.empty()) consult(q, qend, mc, std::true_type{});  // scatter: each point's own strength
+                    else consult(q, qend, mc, std::false_type{});
+                }
+                q = qend;
             }
+        };
+        if (mohr) {
+            // With a Mohr-Coulomb material, the points go in blocks of about kConsultBlock,
+            // each ending where a run ends: the elastic trial of the block's runs, then the
+            // consult of its Mohr-Coulomb points four at a time whatever cells they lie in
+            // (the consult needs no cell; within runs, a cell's 2 x 2 points and the runs that
+            // fragment as points cross edges left a third of them to the one-point code),
+            // then the motion and landing of its runs, which read the consulted stresses
+            // while they are still in the cache. The same operations on the same values as
+            // the whole step of each run: the output is the same bit for bit.
+            for (long b0 = k0; b0 < k1;) {
+                long b1 = std::min(k1, b0 + kConsultBlock);
+                while (b1 < k1 && pcell[b1] == pcell[b1 - 1]) ++b1;
+                runs(b0, b1, std::integral_constant<int, kTrial>{});
+                consult_block(b0, b1);
+                runs(b0, b1, std::integral_constant<int, kMotion>{});
+                b0 = b1;
+            }
+            tally = t;
+            return;
         }
-#endif
-        if (fe) one_group ? motion(q0, std::true_type{}, std::true_type{}) : motion(q0, std::true_type{}, std::false_type{});
-        else one_group ? motion(q0, std::false_type{}, std::true_type{}) : motion(q0, std::false_type{}, std::false_type{});
-        if (stayed) {
-            if constexpr (Fused) store_sums(std::size_t(c), sums);
-            t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
-            t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
-        }
-        k = kend;
     }
+#endif
+    runs(k0, k1, std::integral_constant<int, kWhole>{});
     tally = t;
 }
 
