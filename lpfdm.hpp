@@ -1735,13 +1735,13 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
         if (!detail::mohr_inside(tr, mc.tension, s)) plastic_correction(mc, std::size_t(r), tr, s);
     };
     int cprev = -2, iprev = -2, jprev = -2;
-    // The runs of points k .. k1-1, in one of three stages: kWhole, the whole step of each
+    // The runs of points k .. stop-1, in one of three stages: kWhole, the whole step of each
     // run; kTrial, eq. 6's elastic trial only (a Mohr-Coulomb point is consulted later, by
     // consult_block); kMotion, eq. 7a/7b and the landing only.
     enum : int { kWhole, kTrial, kMotion };
-    auto runs = [&](long k, const long k1, auto stage) LPFDM_INLINE {
+    auto runs = [&](long k, const long stop, auto stage) LPFDM_INLINE {
         constexpr int S = decltype(stage)::value;
-        while (k < k1) {
+        while (k < stop) {
             // The run: points k .. kend-1, all in cell c = (ci, cj). The next run is usually
             // the next cell of the row: no integer division then.
             const int c = pcell[k];
@@ -1749,7 +1749,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             const int ci = next ? iprev + 1 : c % mx, cj = next ? jprev : c / mx, n1 = node(ci, cj);
             cprev = c; iprev = ci; jprev = cj;
             long kend = k + 1;
-            while (kend < k1 && pcell[kend] == c) ++kend;
+            while (kend < stop && pcell[kend] == c) ++kend;
             const CellStrain& ce = strain_[std::size_t(c)];
             const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
 
