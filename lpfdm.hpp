@@ -2024,8 +2024,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             // With a Mohr-Coulomb material, the points go in blocks of about kConsultBlock,
             // each ending where a run ends: the elastic trial of the block's runs, then the
             // consult of its Mohr-Coulomb points four at a time whatever cells they lie in
-            // (the consult needs no cell; within runs, a cell's 2 x 2 points and the runs that
-            // fragment as points cross edges left a third of them to the one-point code),
+            // (the consult needs no cell; lanes within runs, rarely more than four points long
+            // with 2 x 2 points per cell, left half the returns to the one-point code),
             // then the motion and landing of its runs, which read the consulted stresses
             // while they are still in the cache. The same operations on the same values as
             // the whole step of each run: the output is the same bit for bit.
