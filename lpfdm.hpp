@@ -1722,17 +1722,18 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
     const double* psq = p_.sqrt_n_phi.data();
     const std::uint8_t* pyield = p_.yielded.data();
     // Mohr-Coulomb point r of material mc: its strength, its own (own: scatter) or the
-    // material's, softened once it has yielded; and with its elastic trial s, the test
-    // and the return when outside.
+    // material's, softened once it has yielded; and with its elastic trial s, the test,
+    // the return when outside, and the stress written to the point.
     auto strength = [&](const MaterialConstants& mc, long r, detail::MohrTrial& tr, auto own) LPFDM_INLINE {
         const double c0 = own ? pc0[r] : mc.c;
         tr.np = own ? pnp[r] : mc.n_phi;
         tr.two_c_sq = 2 * (pyield[r] ? c0 * (1 - mc.soften) : c0) * (own ? psq[r] : mc.sqrt_n_phi);
     };
-    auto check = [&](const MaterialConstants& mc, long r, Stress& s, auto own) LPFDM_INLINE {
+    auto consult_point = [&](const MaterialConstants& mc, long r, Stress s, auto own) LPFDM_INLINE {
         detail::MohrTrial tr;
         strength(mc, r, tr, own);
         if (!detail::mohr_inside(tr, mc.tension, s)) plastic_correction(mc, std::size_t(r), tr, s);
+        psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
     };
     int cprev = -2, iprev = -2, jprev = -2;
     // The runs of points k .. stop-1, in one of three stages: kWhole, the whole step of each
@@ -1798,13 +1799,12 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                         elastic(xx, yy, xy, zz, vol);
                         psxx[r] = xx; psyy[r] = yy; psxy[r] = xy; pszz[r] = zz; pvol[r] = vol;
                     }
-                } else if (mc.model == Model::MohrCoulomb) {
+                } else if (mc.model == Model::MohrCoulomb) {  // the one-point loop (the AVX2 loop consults in consult_block)
                     auto consult = [&](auto own) LPFDM_INLINE {
                         for (; q < qend; ++q) {
                             Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
                             trial(s.xx, s.yy, s.xy, s.zz);  // eq. 6, the elastic trial
-                            check(mc, q, s, own);
-                            psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+                            consult_point(mc, q, s, own);
                             pvol[q] *= dv;
                         }
                     };
@@ -1997,17 +1997,11 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                         if (settled >> (4 + l) & 1) {
                             record_yield(std::size_t(r), d_gamma[l]);
                         } else if (!(settled >> l & 1)) {
-                            Stress s{t_xx[l], t_yy[l], t_xy[l], t_zz[l]};
-                            check(mc, r, s, own);
-                            psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
+                            consult_point(mc, r, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]}, own);
                         }
                     }
                 }
-                for (; q < qend; ++q) {
-                    Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
-                    check(mc, q, s, own);
-                    psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
-                }
+                for (; q < qend; ++q) consult_point(mc, q, Stress{psxx[q], psyy[q], psxy[q], pszz[q]}, own);
             };
             for (long q = b0; q < b1;) {  // spans of points of one material
                 const MaterialConstants& mc = *group_consts_[std::size_t(pgroup[q])];
