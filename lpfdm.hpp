@@ -770,6 +770,8 @@ typedef long long v4m __attribute__((vector_size(32)));
 #endif
 // True when every lane of a comparison's mask is set.
 LPFDM_INLINE inline bool all_lanes(const v4m& m) { return (m[0] & m[1] & m[2] & m[3]) != 0; }
+// True when no lane of a comparison's mask is set.
+LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { return (m[0] | m[1] | m[2] | m[3]) == 0; }
 // a = |v| lane by lane (the sign bit cleared, as std::fabs does).
 LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7fffffffffffffffLL); }
 // The Mohr-Coulomb consult of four elastic trials in the lanes of a vector: mohr_inside,
@@ -2300,59 +2302,132 @@ inline void Simulation::compensate() {
                 }
             if (msum > 0) { ux_n[n] = sx / msum; uy_n[n] = sy / msum; }
         }
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = nr.j0; j < nr.j1; ++j)
-        for (int i = nr.i0; i < nr.i1; ++i) {
-            const int n = j * (mx + 1) + i;
-            const double ux = ux_n[n], uy = uy_n[n];
-            if ((ux == 0 && uy == 0) || nm_prev[n] == 0) continue;
-            // The cell holding x_node - du_node; where that point lies exactly on a cell
-            // edge (a zero component of du), the cells on both sides share the lookup,
-            // so that a mirror-symmetric motion stays symmetric.
-            const double fxs = i - ux * invL, fys = j - uy * invL;
-            int ci = int(fxs), cj = int(fys);  // floor without a library call (|du| < L/2)
-            ci -= fxs < ci; cj -= fys < cj;
-            const int ci0 = fxs == ci ? ci - 1 : ci, cj0 = fys == cj ? cj - 1 : cj;
-            double exx, eyy, exy, eyx;
-            if (ci0 == ci && cj0 == cj) {  // the usual case: one cell
-                if (ci < st.i0 || cj < st.j0 || ci >= st.i1 || cj >= st.j1) continue;
-                const int c = cj * mx + ci;
-                exx = cs[c].xx; eyy = cs[c].yy; exy = cs[c].xy; eyx = cs[c].yx;
-            } else if (ci0 >= st.i0 && cj0 >= st.j0 && ci < st.i1 && cj < st.j1) {  // two or four cells, all strained
-                // Kept apart from the border path below: one path with per-cell tests costs
-                // this phase a third more instructions where a block settles (ux = 0).
-                const CellStrain* a = cs + (cj0 * mx + ci0);
-                exx = 0 + a->xx; eyy = 0 + a->yy; exy = 0 + a->xy; eyx = 0 + a->yx;  // the same sums as below
-                if (ci0 != ci) { exx += a[1].xx; eyy += a[1].yy; exy += a[1].xy; eyx += a[1].yx; }
-                if (cj0 != cj) {
-                    const CellStrain* b = a + mx;
-                    exx += b->xx; eyy += b->yy; exy += b->xy; eyx += b->yx;
-                    if (ci0 != ci) { exx += b[1].xx; eyy += b[1].yy; exy += b[1].xy; eyx += b[1].yx; }
-                }
-                const double iw = ci0 != ci && cj0 != cj ? 0.25 : 0.5;
-                exx *= iw; eyy *= iw; exy *= iw; eyx *= iw;
-            } else {  // two or four cells, in row order, some outside the strained box
-                exx = eyy = exy = eyx = 0;
-                double w = 0;
-                auto add = [&](int a, int b) {
-                    if (a < st.i0 || b < st.j0 || a >= st.i1 || b >= st.j1) return;
-                    const CellStrain& e = cs[b * mx + a];
-                    exx += e.xx; eyy += e.yy; exy += e.xy; eyx += e.yx; w += 1;
-                };
-                add(ci0, cj0);
-                if (ci0 != ci) add(ci, cj0);
-                if (cj0 != cj) { add(ci0, cj); if (ci0 != ci) add(ci, cj); }
-                if (w == 0) continue;
-                if (w == 2 || w == 4) {  // x / 2 and x * 0.5 are the same number: no division
-                    const double iw = w == 2 ? 0.5 : 0.25;
-                    exx *= iw; eyy *= iw; exy *= iw; eyx *= iw;
-                } else if (w > 1) {
-                    exx /= w; eyy /= w; exy /= w; eyx /= w;
-                }
+    // Node (i, j): eq. 12 one node at a time.
+    auto shift = [&](int i, int j) LPFDM_INLINE {
+        const int n = j * (mx + 1) + i;
+        const double ux = ux_n[n], uy = uy_n[n];
+        if ((ux == 0 && uy == 0) || nm_prev[n] == 0) return;
+        // The cell holding x_node - du_node; where that point lies exactly on a cell
+        // edge (a zero component of du), the cells on both sides share the lookup,
+        // so that a mirror-symmetric motion stays symmetric.
+        const double fxs = i - ux * invL, fys = j - uy * invL;
+        int ci = int(fxs), cj = int(fys);  // floor without a library call (|du| < L/2)
+        ci -= fxs < ci; cj -= fys < cj;
+        const int ci0 = fxs == ci ? ci - 1 : ci, cj0 = fys == cj ? cj - 1 : cj;
+        double exx, eyy, exy, eyx;
+        if (ci0 == ci && cj0 == cj) {  // the usual case: one cell
+            if (ci < st.i0 || cj < st.j0 || ci >= st.i1 || cj >= st.j1) return;
+            const int c = cj * mx + ci;
+            exx = cs[c].xx; eyy = cs[c].yy; exy = cs[c].xy; eyx = cs[c].yx;
+        } else if (ci0 >= st.i0 && cj0 >= st.j0 && ci < st.i1 && cj < st.j1) {  // two or four cells, all strained
+            // Kept apart from the border path below: one path with per-cell tests costs
+            // this phase a third more instructions where a block settles (ux = 0).
+            const CellStrain* a = cs + (cj0 * mx + ci0);
+            exx = 0 + a->xx; eyy = 0 + a->yy; exy = 0 + a->xy; eyx = 0 + a->yx;  // the same sums as below
+            if (ci0 != ci) { exx += a[1].xx; eyy += a[1].yy; exy += a[1].xy; eyx += a[1].yx; }
+            if (cj0 != cj) {
+                const CellStrain* b = a + mx;
+                exx += b->xx; eyy += b->yy; exy += b->xy; eyx += b->yx;
+                if (ci0 != ci) { exx += b[1].xx; eyy += b[1].yy; exy += b[1].xy; eyx += b[1].yx; }
             }
-            ux_n[n] = ux * (1 - exx) - uy * exy;  // eq. 12a
-            uy_n[n] = uy * (1 - eyy) - ux * eyx;  // eq. 12b
+            const double iw = ci0 != ci && cj0 != cj ? 0.25 : 0.5;
+            exx *= iw; eyy *= iw; exy *= iw; eyx *= iw;
+        } else {  // two or four cells, in row order, some outside the strained box
+            exx = eyy = exy = eyx = 0;
+            double w = 0;
+            auto add = [&](int a, int b) {
+                if (a < st.i0 || b < st.j0 || a >= st.i1 || b >= st.j1) return;
+                const CellStrain& e = cs[b * mx + a];
+                exx += e.xx; eyy += e.yy; exy += e.xy; eyx += e.yx; w += 1;
+            };
+            add(ci0, cj0);
+            if (ci0 != ci) add(ci, cj0);
+            if (cj0 != cj) { add(ci0, cj); if (ci0 != ci) add(ci, cj); }
+            if (w == 0) return;
+            if (w == 2 || w == 4) {  // x / 2 and x * 0.5 are the same number: no division
+                const double iw = w == 2 ? 0.5 : 0.25;
+                exx *= iw; eyy *= iw; exy *= iw; eyx *= iw;
+            } else if (w > 1) {
+                exx /= w; eyy /= w; exy /= w; eyx /= w;
+            }
         }
+        ux_n[n] = ux * (1 - exx) - uy * exy;  // eq. 12a
+        uy_n[n] = uy * (1 - eyy) - ux * eyx;  // eq. 12b
+    };
+    // Nodes i .. i + 3 of row j in the lanes of a vector, when each lane is one that shift
+    // leaves alone or one whose x_node - du_node lies in a strained cell, or on the edge of
+    // two or four strained cells: the same operations on the same numbers. Otherwise (the
+    // border of the strained box, a number not finite) the four nodes go one at a time.
+    auto shift_row = [&](int j, auto wide) LPFDM_INLINE {
+        detail::sweep(nr.i0, nr.i1, wide, [&](int i, auto tag) LPFDM_INLINE {
+            using T = typename decltype(tag)::type;
+            if constexpr (std::is_same_v<T, double>) {
+                shift(i, j);
+            } else {
+#if LPFDM_WIDE
+                using detail::v4d;
+                using detail::v4m;
+                typedef int v4i __attribute__((vector_size(16)));
+                const int n = j * (mx + 1) + i;
+                v4d ux, uy, mp;
+                detail::load(ux_n + n, ux); detail::load(uy_n + n, uy); detail::load(nm_prev + n, mp);
+                const v4d zero{};
+                const v4m idle = ((ux == zero) & (uy == zero)) | (mp == zero);
+                if (detail::all_lanes(idle)) return;
+                const v4d fxs = (double(i) + v4d{0, 1, 2, 3}) - ux * invL, fys = double(j) - uy * invL;  // i + l is exact
+                // The floor as shift takes it: int() truncates (as the conversion of the lanes
+                // does), then one less below a negative number that is not whole.
+                const v4d tx = __builtin_convertvector(__builtin_convertvector(fxs, v4i), v4d);
+                const v4d ty = __builtin_convertvector(__builtin_convertvector(fys, v4i), v4d);
+                const v4d one = zero + 1, ci = fxs < tx ? tx - one : tx, cj = fys < ty ? ty - one : ty;
+                // On an edge (fxs or fys whole), the cell below or to the left as well.
+                const v4m hx = fxs == ci, hy = fys == cj;
+                const v4d ci0 = hx ? ci - one : ci, cj0 = hy ? cj - one : cj;
+                const v4m strained = (ci0 >= double(st.i0)) & (cj0 >= double(st.j0)) & (ci < double(st.i1)) & (cj < double(st.j1));
+                if (!detail::all_lanes(idle | strained)) {
+                    for (int l = 0; l < 4; ++l) shift(i + l, j);
+                    return;
+                }
+                // The strains (xx, yy, xy, yx) of cells c + d (d = 1, mx, mx + 1 where the lane's
+                // mask m is set, else 0), one record a lane, transposed; lanes that keep their
+                // increment read cell 0.
+                const v4d c = idle ? zero : cj0 * double(mx) + ci0;
+                v4d exx, eyy, exy, eyx;
+                auto cells = [&](const v4m& m, double d, v4d& xx, v4d& yy, v4d& xy, v4d& yx) LPFDM_INLINE {
+                    const v4d at = m ? c + d : c;
+                    v4d r0, r1, r2, r3;
+                    detail::load(&cs[int(at[0])].xx, r0); detail::load(&cs[int(at[1])].xx, r1);
+                    detail::load(&cs[int(at[2])].xx, r2); detail::load(&cs[int(at[3])].xx, r3);
+                    const v4d t0 = LPFDM_SHUFFLE(r0, r1, 0, 4, 2, 6), t1 = LPFDM_SHUFFLE(r0, r1, 1, 5, 3, 7);  // xx xy, yy yx of 0 1
+                    const v4d t2 = LPFDM_SHUFFLE(r2, r3, 0, 4, 2, 6), t3 = LPFDM_SHUFFLE(r2, r3, 1, 5, 3, 7);  // of 2 3
+                    xx = LPFDM_SHUFFLE(t0, t2, 0, 1, 4, 5); xy = LPFDM_SHUFFLE(t0, t2, 2, 3, 6, 7);
+                    yy = LPFDM_SHUFFLE(t1, t3, 0, 1, 4, 5); yx = LPFDM_SHUFFLE(t1, t3, 2, 3, 6, 7);
+                };
+                cells(v4m{}, 0, exx, eyy, exy, eyx);
+                const v4m edge = (hx | hy) & ~idle;
+                if (!detail::none_of_lanes(edge)) {  // the mean of two or four cells, as shift takes it
+                    v4d xx = 0 + exx, yy = 0 + eyy, xy = 0 + exy, yx = 0 + eyx, bxx, byy, bxy, byx;
+                    auto add = [&](const v4m& m, double d) LPFDM_INLINE {
+                        if (detail::none_of_lanes(m)) return;
+                        cells(m, d, bxx, byy, bxy, byx);
+                        xx = m ? xx + bxx : xx; yy = m ? yy + byy : yy; xy = m ? xy + bxy : xy; yx = m ? yx + byx : yx;
+                    };
+                    add(edge & hx, 1);
+                    add(edge & hy, mx);
+                    add(edge & hx & hy, mx + 1);
+                    const v4d iw = hx & hy ? zero + 0.25 : zero + 0.5;
+                    exx = edge ? xx * iw : exx; eyy = edge ? yy * iw : eyy; exy = edge ? xy * iw : exy; eyx = edge ? yx * iw : eyx;
+                }
+                const v4d sx = ux * (1 - exx) - uy * exy;  // eq. 12a
+                const v4d sy = uy * (1 - eyy) - ux * eyx;  // eq. 12b
+                detail::store(ux_n + n, idle ? ux : sx);
+                detail::store(uy_n + n, idle ? uy : sy);
+#endif
+            }
+        });
+    };
+    LPFDM_OMP(omp parallel for schedule(static) if (par))
+    for (int j = nr.j0; j < nr.j1; ++j) each_row(shift_row, j);
 }
 
 // ADVECT POINTS, in place of eq. 12: each node's increment is the mass-weighted mean of
