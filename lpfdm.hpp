@@ -1353,6 +1353,11 @@ private:
     std::vector<std::int32_t> fixed_nodes_;
     enum : std::uint8_t { kEdgeBottom = 1, kEdgeTop = 2, kEdgeLeft = 4, kEdgeRight = 8 };
     std::vector<std::uint8_t> fixed_edges_;  // per cell: which of its edges are fixed across
+    // Per column i (and row j): its left edge i L, and the bounds of x / L inside it, i and i + 1
+    // (-1 in the last column, where x < X does not follow from x / L < m): read by the point
+    // loop once per run instead of converted from integers.
+    struct Span { double at, lo, hi; };
+    std::vector<Span> cols_, rows_;
     // cells
     std::vector<double> cmass_, cvol_, svxx_, svyy_, svxy_;
     // Strain increments of eq. 5a-5d and the rotation of eq. 5f per cell, one record per
@@ -1413,6 +1418,12 @@ inline void Simulation::setup() {
     fixed_.assign(nodes, 0);
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) v->assign(cells, 0.0);
     strain_.assign(cells, CellStrain{});
+    auto spans = [&](int m, std::vector<Span>& v) {
+        v.resize(std::size_t(m));
+        for (int i = 0; i < m; ++i) v[std::size_t(i)] = Span{i * L_, double(i), i + 1 < m ? double(i + 1) : -1.0};
+    };
+    spans(mx_, cols_);
+    spans(my_, rows_);
     if (sc_.hourglass > 0) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
     if (sc_.advect == Advect::Points)
         carried_.assign(cells, Carried{});
@@ -1723,6 +1734,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
     const double* pnp = p_.n_phi.data();
     const double* psq = p_.sqrt_n_phi.data();
     const std::uint8_t* pyield = p_.yielded.data();
+    const Span* cols = cols_.data();
+    const Span* rows = rows_.data();
     // Mohr-Coulomb point r of material mc: its strength, its own (own: scatter) or the
     // material's, softened once it has yielded; and with its elastic trial s, the test,
     // the return when outside, and the stress written to the point.
@@ -1841,10 +1854,10 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 // eq. 7a/7b, about node [1] of the cell; then eq. 7 and 8 into the cell each point
                 // lands in. Fused: the sums of cell c stay in registers while its points stay in it.
                 const std::uint8_t fe = fixed_edges_[std::size_t(c)];
-                const double xi = ci * L, yj = cj * L;
                 // A point of a cell in the last column or row takes the full test below: x < X
-                // does not follow from x / L < m there.
-                const double uc0 = ci, uc1 = ci + 1 < mx ? ci + 1 : -1, vc0 = cj, vc1 = cj + 1 < my ? cj + 1 : -1;
+                // does not follow from x / L < m there (Span).
+                const double xi = cols[ci].at, yj = rows[cj].at;  // ci L, cj L
+                const double uc0 = cols[ci].lo, uc1 = cols[ci].hi, vc0 = rows[cj].lo, vc1 = rows[cj].hi;
                 const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
                 const double ux1 = dux_[n1], uy1 = duy_[n1];
                 double ux2 = 0, uy2 = 0, ux3 = 0, uy3 = 0, ux4 = 0, uy4 = 0, umx = 0, umy = 0;

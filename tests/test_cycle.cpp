@@ -264,6 +264,30 @@ TEST_CASE("eq. 12 four nodes per AVX2 register: the one-node numbers, bit for bi
     for (int kind : kinds) CHECK(kind > 100);
 }
 
+TEST_CASE("a point at x = X in the last column leaves the lattice, though x / L < m there") {
+    // L = 0.3, m = 31: X = m L = 9.299999999999999 and X (1 / L) = 30.999999999999996, so
+    // the test x / L < m alone would keep a point at x = X in the last column. With no
+    // increment anywhere, eq. 7a/7b leaves the point where it is put; both versions of the
+    // point loop must see it leave.
+    for (const bool avx2 : {true, false}) {
+        Scene s = block_scene(31, 4, 0.3, {8.4, 0, 9.3, 0.6});
+        Simulation sim(s);
+        sim.set_wide(avx2);
+        Points& p = sim.points();
+        const std::size_t n = p.size();
+        std::size_t k = 0;
+        while (k < n && p.cell[k] != sim.cell(30, 0)) ++k;
+        REQUIRE(k < n);
+        const double X = 31 * 0.3;
+        REQUIRE(X * (1 / 0.3) < 31);
+        p.x[k] = X;
+        sim.cell_strains();
+        sim.update_points();
+        CHECK(sim.points().size() == n - 1);
+        CHECK(sim.mass_outflow() > 0);
+    }
+}
+
 TEST_CASE("eq. 13-14: a free block falls at g undamped and at (1 - alpha) g with local damping; so with ADVECT POINTS") {
     struct Mode { Advect advect; Motion motion; };
     for (const Mode mode : {Mode{Advect::Eq12, Motion::Paper}, Mode{Advect::Points, Motion::Centre}, Mode{Advect::Points, Motion::Bilinear}})
