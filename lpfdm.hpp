@@ -1751,45 +1751,56 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
         psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
     };
     int cprev = -2, iprev = -2, jprev = -2;
+    // The runs of one block of the block loop below, as its trial stage found them, for its
+    // motion stage (a block of kConsultBlock points, extended to the end of a run, holds at
+    // most kConsultBlock runs). On the stack: no allocation.
+    struct Run { long kend; int c, ci, cj; bool one_group; };
+    [[maybe_unused]] Run block_runs[kConsultBlock];
+    [[maybe_unused]] int nrun = 0, irun = 0;
     // The runs of points k .. stop-1, in one of three stages: kWhole, the whole step of each
     // run; kTrial, eq. 6's elastic trial only (a Mohr-Coulomb point is consulted later, by
-    // consult_block); kMotion, eq. 7a/7b and the landing only.
+    // consult_block); kMotion, eq. 7a/7b and the landing only (of the runs kTrial found).
     enum : int { kWhole, kTrial, kMotion };
     auto runs = [&](long k, const long stop, auto stage) LPFDM_INLINE {
         constexpr int S = decltype(stage)::value;
         while (k < stop) {
             // The run: points k .. kend-1, all in cell c = (ci, cj). The next run is usually
             // the next cell of the row: no integer division then.
-            const int c = pcell[k];
-            const bool next = c == cprev + 1 && iprev + 1 < mx;
-            const int ci = next ? iprev + 1 : c % mx, cj = next ? jprev : c / mx, n1 = node(ci, cj);
-            cprev = c; iprev = ci; jprev = cj;
-            long kend = k + 1;
+            int c, ci, cj;
+            long kend;
+            bool one_group = true;
+            if constexpr (S == kMotion) {
+                const Run& run = block_runs[irun++];
+                c = run.c; ci = run.ci; cj = run.cj; kend = run.kend; one_group = run.one_group;
+            } else {
+                c = pcell[k];
+                const bool next = c == cprev + 1 && iprev + 1 < mx;
+                ci = next ? iprev + 1 : c % mx; cj = next ? jprev : c / mx;
+                cprev = c; iprev = ci; jprev = cj;
+                kend = k + 1;
 #if LPFDM_WIDE
-            if constexpr (Wide) {  // four cell numbers per compare: a run's end costs no mispredicted branch per point
-                typedef int v4i __attribute__((vector_size(16)));
-                typedef float v4f __attribute__((vector_size(16)));
-                for (; kend + 4 <= stop; kend += 4) {
-                    v4i w;
-                    std::memcpy(&w, pcell + kend, sizeof w);
-                    const int same = __builtin_ia32_movmskps(v4f(w == c));
-                    if (same != 15) { kend += __builtin_ctz(~unsigned(same)); break; }
+                if constexpr (Wide) {  // four cell numbers per compare: a run's end costs no mispredicted branch per point
+                    typedef int v4i __attribute__((vector_size(16)));
+                    typedef float v4f __attribute__((vector_size(16)));
+                    for (; kend + 4 <= stop; kend += 4) {
+                        v4i w;
+                        std::memcpy(&w, pcell + kend, sizeof w);
+                        const int same = __builtin_ia32_movmskps(v4f(w == c));
+                        if (same != 15) { kend += __builtin_ctz(~unsigned(same)); break; }
+                    }
+                    if (kend + 4 > stop)
+                        while (kend < stop && pcell[kend] == c) ++kend;
                 }
-                if (kend + 4 > stop)
-                    while (kend < stop && pcell[kend] == c) ++kend;
-            }
 #endif
-            if constexpr (!Wide) while (kend < stop && pcell[kend] == c) ++kend;
+                if constexpr (!Wide) while (kend < stop && pcell[kend] == c) ++kend;
+            }
+            const int n1 = node(ci, cj);
             const CellStrain& ce = strain_[std::size_t(c)];
             const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
 
             // eq. 6 with the Jaumann rotation of eq. 5f, then the volume change. The elastic
             // increment depends on the cell and the material only: once per run and group.
             const double rc = ce.rc, rs = ce.rs, dv = 1 + e.xx + e.yy;
-            bool one_group = true;
-            if constexpr (S == kMotion) {
-                for (long q = k + 1; q < kend && !single; ++q) one_group = one_group && pgroup[q] == pgroup[k];
-            }
             for (long q = k; q < kend && S != kMotion;) {
                 const int g = pgroup[q];
                 long qend = single ? kend : q + 1;  // one group in the scene: the whole run
@@ -1849,6 +1860,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                     }
                 }
             }
+            if constexpr (S == kTrial) block_runs[nrun++] = Run{kend, c, ci, cj, one_group};
 
             if constexpr (S != kTrial) {
                 // eq. 7a/7b, about node [1] of the cell; then eq. 7 and 8 into the cell each point
@@ -2055,6 +2067,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             for (long b0 = k0; b0 < k1;) {
                 long b1 = std::min(k1, b0 + kConsultBlock);
                 while (b1 < k1 && pcell[b1] == pcell[b1 - 1]) ++b1;
+                nrun = irun = 0;
                 runs(b0, b1, std::integral_constant<int, kTrial>{});
                 consult_block(b0, b1);
                 runs(b0, b1, std::integral_constant<int, kMotion>{});
