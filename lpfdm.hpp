@@ -1779,7 +1779,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 cprev = c; iprev = ci; jprev = cj;
                 kend = k + 1;
 #if LPFDM_WIDE
-                if constexpr (Wide) {  // four cell numbers per compare: a run's end costs no mispredicted branch per point
+                if constexpr (Wide) {  // four cell numbers per compare: one branch per four points, not one per point
                     typedef int v4i __attribute__((vector_size(16)));
                     typedef float v4f __attribute__((vector_size(16)));
                     for (; kend + 4 <= stop; kend += 4) {
