@@ -1175,6 +1175,7 @@ public:
             consts_[m].user = int(user_models_.size());
             user_models_.push_back(std::move(f));
         }
+        find_mohr_groups();
         if (p_.plastic_shear.empty()) {
             p_.plastic_shear.assign(p_.size(), 0.0);
             p_.yielded.assign(p_.size(), 0);
@@ -1344,6 +1345,11 @@ private:
     std::vector<MaterialConstants> consts_;
     std::vector<Group> groups_;
     std::vector<const MaterialConstants*> group_consts_;  // per group, for the point loop
+    bool mohr_groups_ = false;  // some group is Mohr-Coulomb (set where a model is set): the point loop's blocks
+    void find_mohr_groups() {
+        mohr_groups_ = false;
+        for (const MaterialConstants* mc : group_consts_) mohr_groups_ = mohr_groups_ || mc->model == Model::MohrCoulomb;
+    }
     std::vector<double> row_ke_;                        // per node row: a fixed-order reduction
     std::vector<UserModel> user_models_;
     Points p_;
@@ -1463,6 +1469,7 @@ inline void Simulation::setup() {
         pfrom_.assign(p_.cell.begin(), p_.cell.end());
     }
     for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
+    find_mohr_groups();
 #if defined(_OPENMP)
     if (omp_get_max_threads() > 1 && p_.size() > 4096) {  // the threaded map_to_lattice's room
         map_tally_.resize(std::size_t(omp_get_max_threads()));
@@ -1788,7 +1795,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                         const int same = __builtin_ia32_movmskps(v4f(w == c));
                         if (same != 15) { kend += __builtin_ctz(~unsigned(same)); break; }
                     }
-                    if (kend + 4 > stop)
+                    if (kend + 4 > stop)  // the last points; the scalar loop after every run instead cost 3 % more instructions
                         while (kend < stop && pcell[kend] == c) ++kend;
                 }
 #endif
@@ -2010,8 +2017,6 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
     };
 #if LPFDM_WIDE
     if constexpr (Wide) {
-        bool mohr = false;
-        for (const MaterialConstants* mc : group_consts_) mohr = mohr || mc->model == Model::MohrCoulomb;
         // The Mohr-Coulomb points of b0 .. b1-1, holding their elastic trials: the elastic
         // test and the closed-form shear return four points per register
         // (detail::mohr_inside_lanes, mohr_return_lanes). A point they do not settle, and
@@ -2055,7 +2060,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 q = qend;
             }
         };
-        if (mohr) {
+        if (mohr_groups_) {
             // With a Mohr-Coulomb material, the points go in blocks of about kConsultBlock,
             // each ending where a run ends: the elastic trial of the block's runs, then the
             // consult of its Mohr-Coulomb points four at a time whatever cells they lie in
