@@ -774,6 +774,22 @@ LPFDM_INLINE inline bool all_lanes(const v4m& m) { return (m[0] & m[1] & m[2] & 
 LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { return (m[0] | m[1] | m[2] | m[3]) == 0; }
 // a = |v| lane by lane (the sign bit cleared, as std::fabs does).
 LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7fffffffffffffffLL); }
+// eq. 7, 8 (CellSums::add) for four points of one group, of volume vol and stress (sxx,
+// syy, sxy) in the lanes, into acc = (sum V, sum V sxx, sum V syy, sum V sxy): each
+// point's terms made in lanes (V = min(vol, vol0)), turned into one register per point
+// and added in point order, so that every component takes its terms in the order the
+// one-point code does.
+LPFDM_INLINE inline void add_four(v4d& acc, const v4d& vol, const v4d& sxx, const v4d& syy, const v4d& sxy, double vol0) {
+    const v4d v0 = {vol0, vol0, vol0, vol0};
+    const v4d vk = v0 < vol ? v0 : vol;  // std::min(vol, vol0)
+    const v4d vx = vk * sxx, vy = vk * syy, vxy = vk * sxy;
+    const v4d t0 = LPFDM_SHUFFLE(vk, vx, 0, 4, 2, 6), t1 = LPFDM_SHUFFLE(vk, vx, 1, 5, 3, 7);  // points 0 2, 1 3
+    const v4d t2 = LPFDM_SHUFFLE(vy, vxy, 0, 4, 2, 6), t3 = LPFDM_SHUFFLE(vy, vxy, 1, 5, 3, 7);
+    acc += LPFDM_SHUFFLE(t0, t2, 0, 1, 4, 5);  // point 0
+    acc += LPFDM_SHUFFLE(t1, t3, 0, 1, 4, 5);  // point 1
+    acc += LPFDM_SHUFFLE(t0, t2, 2, 3, 6, 7);  // point 2
+    acc += LPFDM_SHUFFLE(t1, t3, 2, 3, 6, 7);  // point 3
+}
 // The Mohr-Coulomb consult of four elastic trials in the lanes of a vector: mohr_inside,
 // and mohr_coulomb_correct's closed-form shear return, with the same operations in the
 // same order as those compute them one stress at a time (std::min(a, b) is b < a ? b : a,
@@ -1281,6 +1297,10 @@ private:
     // map_to_lattice; after_update: called by step() right after update_points, so the
     // chunks' cell ranges that update_points found still hold (nothing changed the points).
     void map_points(bool after_update);
+    template <bool Wide> LPFDM_INLINE void map_chunk(long k0, long k1, int id, long& listed, double& mass);
+#if LPFDM_WIDE
+    __attribute__((target("avx2"))) void map_chunk_wide(long k0, long k1, int id, long& listed, double& mass);
+#endif
     void plastic_correction(const MaterialConstants& mc, std::size_t q, const detail::MohrTrial& t, Stress& s);
     // Point q was returned to the yield surface with plastic shear increment d_gamma_p.
     void record_yield(std::size_t q, double d_gamma_p) {
@@ -1834,20 +1854,10 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             detail::store(pszz + k, zz); detail::store(pvol + k, vol);
             detail::store(px + k, x); detail::store(py + k, y);
             if constexpr (Fused) {
-                // eq. 7, 8 into cell c: each point's (V, V sxx, V syy, V sxy) made in lanes, turned
-                // into one register per point and added in point order (as CellSums::add does one
-                // component at a time); then the mass.
-                const double gm = groups_[std::size_t(g)].mass, gv0 = groups_[std::size_t(g)].vol0;
-                const v4d gv = {gv0, gv0, gv0, gv0};
-                const v4d vk = gv < vol ? gv : vol;  // std::min(vol, gv0)
-                const v4d vx = vk * xx, vy = vk * yy, vxy = vk * xy;
-                const v4d t0 = LPFDM_SHUFFLE(vk, vx, 0, 4, 2, 6), t1 = LPFDM_SHUFFLE(vk, vx, 1, 5, 3, 7);  // points 0 2, 1 3
-                const v4d t2 = LPFDM_SHUFFLE(vy, vxy, 0, 4, 2, 6), t3 = LPFDM_SHUFFLE(vy, vxy, 1, 5, 3, 7);
+                // eq. 7, 8 into cell c, then the mass.
+                const double gm = groups_[std::size_t(g)].mass;
                 v4d acc = {cvol[c], csxx[c], csyy[c], csxy[c]};
-                acc += LPFDM_SHUFFLE(t0, t2, 0, 1, 4, 5);  // point 0
-                acc += LPFDM_SHUFFLE(t1, t3, 0, 1, 4, 5);  // point 1
-                acc += LPFDM_SHUFFLE(t0, t2, 2, 3, 6, 7);  // point 2
-                acc += LPFDM_SHUFFLE(t1, t3, 2, 3, 6, 7);  // point 3
+                detail::add_four(acc, vol, xx, yy, xy, groups_[std::size_t(g)].vol0);
                 cvol[c] = acc[0]; csxx[c] = acc[1]; csyy[c] = acc[2]; csxy[c] = acc[3];
                 double m = cmass[c];
                 for (int l = 0; l < 4; ++l) { m += gm; mass += gm; }  // eq. 7
@@ -2244,6 +2254,62 @@ inline void Simulation::map_point(std::size_t k) {
     }
 }
 
+// The threaded map_to_lattice of chunk id, points k0 .. k1-1, once every chunk's cells are
+// known: runs of points sharing a cell; an unshared run's sums are kept in registers and
+// written once, each still taken in point order; a run in a cell that a lower chunk also
+// reaches is listed (deferred_[k0 ..]), to be added after those chunks. Wide: four points
+// of one group at a time in the lanes of an AVX2 register (detail::add_four).
+template <bool Wide>
+LPFDM_INLINE inline void Simulation::map_chunk(long k0, long k1, int id, long& listed, double& mass) {
+    const std::int32_t* pcell = p_.cell.data();
+    const std::uint16_t* pgroup = p_.group.data();
+    const double *pvol = p_.vol.data(), *psxx = p_.sxx.data(), *psyy = p_.syy.data(), *psxy = p_.sxy.data();
+    const bool carry = !pdx_.empty();
+    for (long k = k0; k < k1;) {
+        const int c = pcell[k];
+        long kend = k + 1;
+        while (kend < k1 && pcell[kend] == c) ++kend;
+        bool shared = false;
+        for (int u = 0; u < id; ++u) shared |= c >= map_tally_[std::size_t(u)].cmin && c <= map_tally_[std::size_t(u)].cmax;
+        if (shared || carry) {
+            for (long q = k; q < kend; ++q) {
+                mass += groups_[pgroup[q]].mass;
+                if (shared) deferred_[std::size_t(k0 + listed++)] = std::int32_t(q);
+                else map_point(std::size_t(q));
+            }
+        } else {
+            const std::size_t cc = std::size_t(c);
+            CellSums sums = cell_sums(cc);
+            long q = k;
+#if LPFDM_WIDE
+            if constexpr (Wide) {
+                for (; q + 4 <= kend; q += 4) {
+                    std::uint64_t gw;
+                    std::memcpy(&gw, pgroup + q, sizeof gw);
+                    if (gw != std::uint64_t(pgroup[q]) * 0x0001000100010001ULL) break;  // two groups: one at a time
+                    const Group& g = groups_[pgroup[q]];
+                    detail::v4d acc = {sums.v, sums.xx, sums.yy, sums.xy}, vol, sxx, syy, sxy;
+                    detail::load(pvol + q, vol); detail::load(psxx + q, sxx); detail::load(psyy + q, syy); detail::load(psxy + q, sxy);
+                    detail::add_four(acc, vol, sxx, syy, sxy, g.vol0);  // eq. 7, 8
+                    sums.v = acc[0]; sums.xx = acc[1]; sums.yy = acc[2]; sums.xy = acc[3];
+                    for (int l = 0; l < 4; ++l) { sums.m += g.mass; mass += g.mass; }  // eq. 7
+                }
+            }
+#endif
+            for (; q < kend; ++q) {
+                const Group& g = groups_[pgroup[q]];
+                sums.add(g.mass, std::min(pvol[q], g.vol0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
+                mass += g.mass;
+            }
+            store_sums(cc, sums);
+        }
+        k = kend;
+    }
+}
+#if LPFDM_WIDE
+__attribute__((target("avx2"))) inline void Simulation::map_chunk_wide(long k0, long k1, int id, long& listed, double& mass) { map_chunk<true>(k0, k1, id, listed, mass); }
+#endif
+
 // Every cell sum takes its terms in point order, whatever the number of threads. With
 // threads, thread t takes a contiguous chunk of points and adds directly to every cell
 // that no lower chunk can touch (outside the lowest..highest cell of each lower chunk);
@@ -2276,37 +2342,13 @@ inline void Simulation::map_points([[maybe_unused]] bool after_update) {
                 for (long k = k0; k < k1; ++k) tally(std::size_t(k), a);
             }
             LPFDM_OMP(omp barrier)
-            // Runs of points sharing a cell; an unshared run's sums are kept in registers
-            // and written once, each still taken in point order.
-            const std::int32_t* pcell = p_.cell.data();
-            const bool carry = !pdx_.empty();
             long listed = 0;  // the list of chunk id is kept in deferred_[k0 ..]
             double mass = 0;
-            for (long k = k0; k < k1;) {
-                const int c = pcell[k];
-                long kend = k + 1;
-                while (kend < k1 && pcell[kend] == c) ++kend;
-                bool shared = false;
-                for (int u = 0; u < id; ++u) shared |= c >= map_tally_[std::size_t(u)].cmin && c <= map_tally_[std::size_t(u)].cmax;
-                if (shared || carry) {
-                    for (long q = k; q < kend; ++q) {
-                        mass += groups_[p_.group[std::size_t(q)]].mass;
-                        if (shared) deferred_[std::size_t(k0 + listed++)] = std::int32_t(q);
-                        else map_point(std::size_t(q));
-                    }
-                } else {
-                    const std::size_t cc = std::size_t(c);
-                    CellSums sums = cell_sums(cc);
-                    for (long q = k; q < kend; ++q) {
-                        const std::size_t r = std::size_t(q);
-                        const Group& g = groups_[p_.group[r]];
-                        sums.add(g.mass, std::min(p_.vol[r], g.vol0), p_.sxx[r], p_.syy[r], p_.sxy[r]);  // eq. 7, 8
-                        mass += g.mass;
-                    }
-                    store_sums(cc, sums);
-                }
-                k = kend;
-            }
+#if LPFDM_WIDE
+            if (wide_) map_chunk_wide(k0, k1, id, listed, mass);
+            else
+#endif
+                map_chunk<false>(k0, k1, id, listed, mass);
             a.mass = mass;
             a.listed = listed;
             if (id == 0) team = nt;
