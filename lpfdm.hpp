@@ -2104,10 +2104,11 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                             }
                             stayed = true;
                             if constexpr (Fused) {
-                                for (long q = q0; q < q0 + 4; ++q) {  // in point order
-                                    sums.add(gm, std::min(pvol[q], gv0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
-                                    t.mass += gm;
-                                }
+                                v4d acc = {sums.v, sums.xx, sums.yy, sums.xy}, vol, sxx, syy, sxy;
+                                detail::load(pvol + q0, vol); detail::load(psxx + q0, sxx); detail::load(psyy + q0, syy); detail::load(psxy + q0, sxy);
+                                detail::add_four(acc, vol, sxx, syy, sxy, gv0);  // eq. 7, 8
+                                sums.v = acc[0]; sums.xx = acc[1]; sums.yy = acc[2]; sums.xy = acc[3];
+                                for (int l = 0; l < 4; ++l) { sums.m += gm; t.mass += gm; }  // eq. 7
                             }
                         }
                     }
