@@ -1848,8 +1848,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             paper_motion(x0, y0, x, y, e, cols[ci].at, rows[cj].at, dux_[n1], duy_[n1]);  // eq. 7a/7b
             const double uc0 = cols[ci].lo, uc1 = cols[ci].hi, vc0 = rows[cj].lo, vc1 = rows[cj].hi;
             const v4d u = x * invL, v = y * invL;
-            const v4d stays = v4d((u >= v4d{uc0, uc0, uc0, uc0}) & (u < v4d{uc1, uc1, uc1, uc1}) & (v >= v4d{vc0, vc0, vc0, vc0}) & (v < v4d{vc1, vc1, vc1, vc1}));
-            if (__builtin_ia32_movmskpd256(stays) != 15) break;
+            if (!detail::all_lanes((u >= v4d{uc0, uc0, uc0, uc0}) & (u < v4d{uc1, uc1, uc1, uc1}) & (v >= v4d{vc0, vc0, vc0, vc0}) & (v < v4d{vc1, vc1, vc1, vc1}))) break;
             cprev = c; iprev = ci; jprev = cj;
             detail::store(psxx + k, xx); detail::store(psyy + k, yy); detail::store(psxy + k, xy);
             detail::store(pszz + k, zz); detail::store(pvol + k, vol);
