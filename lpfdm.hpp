@@ -1285,6 +1285,17 @@ private:
             yy += pv * syy;
             xy += pv * sxy;
         }
+#if LPFDM_WIDE
+        // The same for four points of one group, mass pm each, in the lanes of vol and
+        // (sxx, syy, sxy), in point order (detail::add_four); mass: a running total that
+        // takes the four masses too.
+        LPFDM_INLINE void add_four(double pm, double vol0, const detail::v4d& vol, const detail::v4d& sxx, const detail::v4d& syy, const detail::v4d& sxy, double& mass) {
+            detail::v4d acc = {v, xx, yy, xy};
+            detail::add_four(acc, vol, sxx, syy, sxy, vol0);  // eq. 8
+            v = acc[0]; xx = acc[1]; yy = acc[2]; xy = acc[3];
+            for (int l = 0; l < 4; ++l) { m += pm; mass += pm; }  // eq. 7
+        }
+#endif
     };
     CellSums cell_sums(std::size_t c) const { return {cmass_[c], cvol_[c], svxx_[c], svyy_[c], svxy_[c]}; }
     void store_sums(std::size_t c, const CellSums& a) { cmass_[c] = a.m; cvol_[c] = a.v; svxx_[c] = a.xx; svyy_[c] = a.yy; svxy_[c] = a.xy; }
@@ -1791,6 +1802,13 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
         y = y0 + e.yy * dy + e.yx * dx + uy1;
     };
     int cprev = -2, iprev = -2, jprev = -2;
+    // Cell c's column ci and row cj; the next cell of the row (the usual case) without an
+    // integer division.
+    auto locate = [&](int c, int& ci, int& cj) LPFDM_INLINE {
+        const bool next = c == cprev + 1 && iprev + 1 < mx;
+        ci = next ? iprev + 1 : c % mx; cj = next ? jprev : c / mx;
+        cprev = c; iprev = ci; jprev = cj;
+    };
     // The runs of one block of the block loop below, as its trial stage found them, for its
     // motion stage (a block of kConsultBlock points, extended to the end of a run, holds at
     // most kConsultBlock runs). On the stack: no allocation.
@@ -1809,11 +1827,6 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
     // instructions per run of four (callgrind, elastic bench); this path about 220.
     const MaterialConstants* const* gconsts = group_consts_.data();
     const std::uint8_t* fixed = fixed_edges_.data();
-    double* cmass = cmass_.data();
-    double* cvol = cvol_.data();
-    double* csxx = svxx_.data();
-    double* csyy = svyy_.data();
-    double* csxy = svxy_.data();
     [[maybe_unused]] auto usual_runs = [&](long k, const long stop) LPFDM_INLINE {
         using detail::v4d;
         typedef int v4i __attribute__((vector_size(16)));
@@ -1833,8 +1846,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             }
             const MaterialConstants& mc = *gconsts[g];
             if (mc.model != Model::Elastic || fixed[c]) break;
-            const bool next = c == cprev + 1 && iprev + 1 < mx;
-            const int ci = next ? iprev + 1 : c % mx, cj = next ? jprev : c / mx;
+            int ci, cj;
+            locate(c, ci, cj);
             const CellStrain& ce = strain_[std::size_t(c)];
             const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
             const Stress de = elastic_change(mc, e);  // eq. 6
@@ -1849,19 +1862,13 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             const double uc0 = cols[ci].lo, uc1 = cols[ci].hi, vc0 = rows[cj].lo, vc1 = rows[cj].hi;
             const v4d u = x * invL, v = y * invL;
             if (!detail::all_lanes((u >= v4d{uc0, uc0, uc0, uc0}) & (u < v4d{uc1, uc1, uc1, uc1}) & (v >= v4d{vc0, vc0, vc0, vc0}) & (v < v4d{vc1, vc1, vc1, vc1}))) break;
-            cprev = c; iprev = ci; jprev = cj;
             detail::store(psxx + k, xx); detail::store(psyy + k, yy); detail::store(psxy + k, xy);
             detail::store(pszz + k, zz); detail::store(pvol + k, vol);
             detail::store(px + k, x); detail::store(py + k, y);
             if constexpr (Fused) {
-                // eq. 7, 8 into cell c, then the mass.
-                const double gm = groups_[std::size_t(g)].mass;
-                v4d acc = {cvol[c], csxx[c], csyy[c], csxy[c]};
-                detail::add_four(acc, vol, xx, yy, xy, groups_[std::size_t(g)].vol0);
-                cvol[c] = acc[0]; csxx[c] = acc[1]; csyy[c] = acc[2]; csxy[c] = acc[3];
-                double m = cmass[c];
-                for (int l = 0; l < 4; ++l) { m += gm; mass += gm; }  // eq. 7
-                cmass[c] = m;
+                CellSums sums = cell_sums(std::size_t(c));
+                sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, xx, yy, xy, mass);  // eq. 7, 8
+                store_sums(std::size_t(c), sums);
             }
             cmin = std::min(cmin, c); cmax = std::max(cmax, c);
             imin = std::min(imin, ci); imax = std::max(imax, ci);
@@ -1894,9 +1901,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 c = run.c; ci = run.ci; cj = run.cj; kend = run.kend; one_group = run.one_group;
             } else {
                 c = pcell[k];
-                const bool next = c == cprev + 1 && iprev + 1 < mx;
-                ci = next ? iprev + 1 : c % mx; cj = next ? jprev : c / mx;
-                cprev = c; iprev = ci; jprev = cj;
+                locate(c, ci, cj);
                 kend = k + 1;
 #if LPFDM_WIDE
                 if constexpr (Wide) {  // four cell numbers per compare: one branch per four points, not one per point
@@ -2104,11 +2109,9 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                             }
                             stayed = true;
                             if constexpr (Fused) {
-                                v4d acc = {sums.v, sums.xx, sums.yy, sums.xy}, vol, sxx, syy, sxy;
+                                v4d vol, sxx, syy, sxy;
                                 detail::load(pvol + q0, vol); detail::load(psxx + q0, sxx); detail::load(psyy + q0, syy); detail::load(psxy + q0, sxy);
-                                detail::add_four(acc, vol, sxx, syy, sxy, gv0);  // eq. 7, 8
-                                sums.v = acc[0]; sums.xx = acc[1]; sums.yy = acc[2]; sums.xy = acc[3];
-                                for (int l = 0; l < 4; ++l) { sums.m += gm; t.mass += gm; }  // eq. 7
+                                sums.add_four(gm, gv0, vol, sxx, syy, sxy, t.mass);  // eq. 7, 8
                             }
                         }
                     }
@@ -2289,11 +2292,9 @@ LPFDM_INLINE inline void Simulation::map_chunk(long k0, long k1, int id, long& l
                     std::memcpy(&gw, pgroup + q, sizeof gw);
                     if (gw != std::uint64_t(pgroup[q]) * 0x0001000100010001ULL) break;  // two groups: one at a time
                     const Group& g = groups_[pgroup[q]];
-                    detail::v4d acc = {sums.v, sums.xx, sums.yy, sums.xy}, vol, sxx, syy, sxy;
+                    detail::v4d vol, sxx, syy, sxy;
                     detail::load(pvol + q, vol); detail::load(psxx + q, sxx); detail::load(psyy + q, syy); detail::load(psxy + q, sxy);
-                    detail::add_four(acc, vol, sxx, syy, sxy, g.vol0);  // eq. 7, 8
-                    sums.v = acc[0]; sums.xx = acc[1]; sums.yy = acc[2]; sums.xy = acc[3];
-                    for (int l = 0; l < 4; ++l) { sums.m += g.mass; mass += g.mass; }  // eq. 7
+                    sums.add_four(g.mass, g.vol0, vol, sxx, syy, sxy, mass);  // eq. 7, 8
                 }
             }
 #endif
