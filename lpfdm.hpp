@@ -1106,7 +1106,7 @@ public:
         cell_strains();    // eq. 5a-5f
         if (serial()) {
             advance_points<true>();  // update_points and map_to_lattice in one pass
-        } else {
+        } else if (!advance_parted()) {  // the same, by threads
             update_points();   // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b
             map_points(true);  // map_to_lattice: eq. 7, 8 (the lattice is back at its original position)
         }
@@ -1154,6 +1154,11 @@ public:
     const std::vector<Group>& groups() const { return groups_; }      // material and mass of each point group
     const std::vector<WallState>& walls() const { return walls_; }    // force and travel of each wall, deck order
     long step_count() const { return step_; }                         // steps taken
+    // The threaded point pass (advance_parted): steps it took, points it listed for the
+    // serial add after it (landed in another thread's part of the cells), and steps it had to
+    // map again (a thread's points landed in a later thread's part).
+    struct PartedPass { long steps = 0, listed = 0, clashes = 0; };
+    const PartedPass& parted_pass() const { return parted_; }
     double time() const { return step_ * sc_.dt_s; }                 // model time [s]
     double kinetic_energy() const { return ke_; }                     // nodal, at the last half step [J/m]
     double mass_inside() const { return mass_in_; }                   // [kg/m]
@@ -1244,6 +1249,7 @@ private:
     void remove_departed();
     void clear_cells();
     template <bool Fused> void advance_points();
+    bool advance_parted();
     // What a range of points gives map_to_lattice's bookkeeping: the cells and columns
     // they landed in, their mass, how many left the lattice.
     struct Tally {
@@ -1251,6 +1257,12 @@ private:
         double mass = 0;
         long departed = 0;
         long listed = 0;  // threaded map_to_lattice: points whose sums wait for lower chunks
+        // The fused threaded pass (advance_parted): the cells own_lo .. own_hi-1 take this
+        // chunk's sums directly; a point landing in any other cell is listed in
+        // deferred_[list_at ..]. The defaults: every cell (the serial pass).
+        int own_lo = 0, own_hi = std::numeric_limits<int>::max();
+        long list_at = 0;
+        double seconds = 0;  // the time the chunk took (advance_parted balances the chunks)
     };
     // Points per block of the AVX2 point loop with a Mohr-Coulomb material (run_points).
     static constexpr long kConsultBlock = 256;
@@ -1416,6 +1428,13 @@ private:
     std::vector<Tally> map_tally_;
     std::vector<std::int32_t> deferred_;
     int tallied_team_ = 0;  // > 0: update_points left map_tally_ for that many chunks
+    // advance_parted: thread u's chunk of the points, chunk_at_[u] .. chunk_at_[u + 1] - 1,
+    // for chunk_team_ threads; parts_known_: map_tally_ holds the last pass's chunks (from
+    // list_at) and the cells their points lie in now.
+    std::vector<long> chunk_at_;
+    int chunk_team_ = 0;
+    bool parts_known_ = false;
+    PartedPass parted_;
     Range occupied_;   // cells holding points after the last mapping
     Range strained_;   // cells whose strains are current
     Range live_nodes_; // nodes that may hold a non-zero du
@@ -1504,6 +1523,7 @@ inline void Simulation::setup() {
 #if defined(_OPENMP)
     if (omp_get_max_threads() > 1 && p_.size() > 4096) {  // the threaded map_to_lattice's room
         map_tally_.resize(std::size_t(omp_get_max_threads()));
+        chunk_at_.assign(map_tally_.size() + 1, 0);
         deferred_.assign(p_.size(), 0);
     }
 #endif
@@ -1702,6 +1722,117 @@ inline void Simulation::advance_points() {
     }
 }
 
+// update_points and map_to_lattice in one pass by threads (without ADVECT POINTS). Thread u
+// moves the points of its chunk (a contiguous range) and adds those landing in its part
+// of the cells (own_lo .. own_hi-1 of its Tally; the parts follow one another in cell
+// order) directly; a point landing in another part is listed, and the lists are added
+// after the pass in chunk order. Each cell sum then takes its terms in point order, the
+// same as the serial pass, unless a chunk landed in a higher chunk's part: that higher
+// chunk's points went in first. That is checked after the pass, and then the step's sums
+// are cleared and made again by map_to_lattice (the points have moved already): the same
+// numbers either way, only slower. A part ends a row and two cells above the highest cell
+// the chunk's points lie in (known from the last step's pass, else looked up): beyond the
+// reach of a point that moves at most one cell. Returns false when it cannot
+// run (one thread, or ADVECT POINTS); step() then takes update_points and map_points.
+inline bool Simulation::advance_parted() {
+#if defined(_OPENMP)
+    const long n = long(p_.size());
+    const int want = omp_get_max_threads();
+    if (!pdx_.empty() || want < 2 || want > int(map_tally_.size())) return false;
+    if (chunk_team_ != want || chunk_at_[std::size_t(want)] != n) {  // a new thread count, or points left: even chunks
+        for (int u = 0; u <= want; ++u) chunk_at_[std::size_t(u)] = n * u / want;
+        chunk_team_ = want;
+        parts_known_ = false;
+    }
+    int lo = 0;
+    for (int u = 0; u < want; ++u) {
+        const long k0 = chunk_at_[std::size_t(u)], k1 = chunk_at_[std::size_t(u + 1)];
+        int hi = std::numeric_limits<int>::max();
+        if (u + 1 < want) {
+            int top = -1;  // the highest cell the chunk's points lie in, or above it
+            auto look = [&](long a, long b) { for (long k = a; k < b; ++k) top = std::max(top, p_.cell[std::size_t(k)]); };
+            if (parts_known_) {  // the last step's chunk u, o0 .. o1-1, and the points it did not hold
+                const long o0 = map_tally_[std::size_t(u)].list_at, o1 = map_tally_[std::size_t(u + 1)].list_at;
+                if (std::max(k0, o0) < std::min(k1, o1)) top = map_tally_[std::size_t(u)].cmax;
+                look(k0, std::min(k1, o0));
+                look(std::max(k0, o1), k1);
+            } else {
+                look(k0, k1);
+            }
+            hi = std::max(lo, top + mx_ + 2);
+        }
+        map_tally_[std::size_t(u)].own_lo = lo;
+        map_tally_[std::size_t(u)].own_hi = hi;
+        lo = hi;
+    }
+    tallied_team_ = 0;
+    clear_cells();
+    int team = 1;
+    LPFDM_OMP(omp parallel num_threads(want))
+    {
+        const int nt = omp_get_num_threads(), id = omp_get_thread_num();
+        const long k0 = nt == want ? chunk_at_[std::size_t(id)] : n * id / nt, k1 = nt == want ? chunk_at_[std::size_t(id + 1)] : n * (id + 1) / nt;
+        const double t0 = omp_get_wtime();
+        Tally mine;
+        mine.own_lo = map_tally_[std::size_t(id)].own_lo;
+        if (id + 1 < nt) mine.own_hi = map_tally_[std::size_t(id)].own_hi;  // the last chunk: every cell above
+        mine.list_at = k0;
+        advance_range<true>(k0, k1, mine);
+        mine.seconds = omp_get_wtime() - t0;
+        map_tally_[std::size_t(id)] = mine;
+        if (id == 0) team = nt;
+    }
+    Tally t;
+    bool clash = false;
+    double total = 0, slowest = 0;
+    for (int u = 0; u < team; ++u) {
+        const Tally& a = map_tally_[std::size_t(u)];
+        clash |= a.cmax >= a.own_hi;  // landed in a higher chunk's part
+        parted_.listed += a.listed;
+        t.departed += a.departed; t.mass += a.mass;
+        t.cmin = std::min(t.cmin, a.cmin); t.cmax = std::max(t.cmax, a.cmax);
+        t.imin = std::min(t.imin, a.imin); t.imax = std::max(t.imax, a.imax);
+        total += a.seconds; slowest = std::max(slowest, a.seconds);
+    }
+    if (!clash)
+        for (int u = 0; u < team; ++u) {
+            const Tally& a = map_tally_[std::size_t(u)];
+            for (long d = 0; d < a.listed; ++d) map_point(std::size_t(deferred_[std::size_t(a.list_at + d)]));  // eq. 7, 8
+        }
+    departed_ = std::size_t(t.departed);
+    if (departed_) remove_departed();
+    occupied_ = t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1};  // every cell written
+    mass_in_ = t.mass;
+    parts_known_ = !departed_ && !clash && team == want;
+    if (team != want) chunk_team_ = 0;
+    if (parts_known_ && slowest > 1.1 * total / team) {
+        // The chunks took unequal times (points that cross cells or yield cost more, and they
+        // gather in parts of a scene): the next step's chunks are cut halfway towards equal
+        // shares of this step's time, each point of a chunk taken to cost the same. Halfway:
+        // the times are those of one step, and noisy.
+        double before = 0;  // the time of chunks 0 .. u-1
+        int u = 0;
+        for (int j = 1; j < team; ++j) {
+            const double share = total * j / team;
+            while (u + 1 < team && before + map_tally_[std::size_t(u)].seconds < share) before += map_tally_[std::size_t(u++)].seconds;
+            const Tally& a = map_tally_[std::size_t(u)];
+            const long k0 = a.list_at, k1 = u + 1 < team ? map_tally_[std::size_t(u + 1)].list_at : n;
+            const double f = a.seconds > 0 ? std::min(1.0, (share - before) / a.seconds) : 0.5;
+            const long even = k0 + long(f * double(k1 - k0)), was = map_tally_[std::size_t(j)].list_at;
+            chunk_at_[std::size_t(j)] = was + (even - was) / 2;
+        }
+    }
+    ++parted_.steps;
+    if (clash) {
+        ++parted_.clashes;
+        map_points(false);
+    }
+    return true;
+#else
+    return false;
+#endif
+}
+
 // Points k0 .. k1-1. The points are stored cell by cell and mostly stay so (they are
 // created that way and cross a cell edge rarely), so the loop walks runs of points that
 // share a cell: the cell's strain, rotation, nodes and elastic stress increment are
@@ -1754,6 +1885,11 @@ __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0
 template <bool Fused, Motion M, bool Carry, bool Wide>
 LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) {
     Tally t = tally;  // a local: kept in registers (stores through the cell arrays could alias a reference)
+    // Fused: the cells this chunk adds to directly (all of them in the serial pass); a point
+    // landing in any other is listed (advance_parted).
+    const int own_lo = t.own_lo;
+    const unsigned own_n = unsigned(t.own_hi) - unsigned(t.own_lo);
+    auto owned = [&](int c) LPFDM_INLINE { return unsigned(c) - unsigned(own_lo) < own_n; };
     // Local pointers: stores through a double* may alias any double member, which would
     // make the compiler reload every member after every store.
     double* __restrict px = p_.x.data();
@@ -1845,7 +1981,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 if (gw != std::uint64_t(g) * 0x0001000100010001ULL) break;
             }
             const MaterialConstants& mc = *gconsts[g];
-            if (mc.model != Model::Elastic || fixed[c]) break;
+            if (mc.model != Model::Elastic || fixed[c] || (Fused && !owned(c))) break;
             int ci, cj;
             locate(c, ci, cj);
             const CellStrain& ce = strain_[std::size_t(c)];
@@ -1998,7 +2134,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 if constexpr (M != Motion::Paper) { ux2 = dux_[n2]; uy2 = duy_[n2]; ux3 = dux_[n3]; uy3 = duy_[n3]; ux4 = dux_[n4]; uy4 = duy_[n4]; }
                 if constexpr (M == Motion::Centre) { umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4); }
                 CellSums sums{0, 0, 0, 0, 0};
-                if constexpr (Fused) sums = cell_sums(std::size_t(c));
+                const bool own = !Fused || owned(c);  // Fused: the sums of cell c are this chunk's to add
+                if (Fused && own) sums = cell_sums(std::size_t(c));
                 bool stayed = false;
                 int g = one_group ? pgroup[k] : -1;
                 double gm = one_group ? groups_[std::size_t(g)].mass : 0, gv0 = one_group ? groups_[std::size_t(g)].vol0 : 0;
@@ -2054,11 +2191,12 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                     }
                     if constexpr (Fused) {
                         const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
-                        if (cn == c) {
+                        if (cn == c && own) {
                             sums.add(gm, vk, sxx, syy, sxy);  // eq. 7, 8
                             stayed = true;
                         } else {
-                            add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
+                            if (owned(cn)) add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
+                            else deferred_[std::size_t(t.list_at + t.listed++)] = std::int32_t(q);  // another chunk's cell
                             t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
                             t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
                         }
@@ -2094,7 +2232,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                     // lands on its own, in order. Either way the result is that of the loop above,
                     // bit for bit: the same expressions in the same order, and no fused multiply-add
                     // (see LPFDM_WIDE).
-                    if (!fe && one_group) {
+                    if (!fe && one_group && own) {
                         using detail::v4d;
                         const v4d u0 = {uc0, uc0, uc0, uc0}, u1 = {uc1, uc1, uc1, uc1}, v0 = {vc0, vc0, vc0, vc0}, v1 = {vc1, vc1, vc1, vc1};
                         for (; q0 + 4 <= kend; q0 += 4) {
@@ -2372,6 +2510,7 @@ inline void Simulation::map_points([[maybe_unused]] bool after_update) {
             t.mass += groups_[p_.group[std::size_t(k)]].mass;
         }
     tallied_team_ = 0;  // used once
+    parts_known_ = false;  // not advance_parted's chunks
     mass_in_ = t.mass;
     occupied_ = t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1};
 }

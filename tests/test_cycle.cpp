@@ -668,6 +668,25 @@ Exercised compare_scenes(const Scene& s, int threads, bool mix = false, double t
     return ex;
 }
 
+// A stiff elastic base and a soft elastic block on it, pulled to the right so hard that
+// the block shears off the lattice's right edge; the right half of the floor fixed.
+Scene spreading_block() {
+    const std::string deck = R"(
+GRID     80 40 0.15
+MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000
+MATERIAL 2 ELASTIC E=1E6 NU=0.3 RHO=1800
+CLUSTER  1  0 0  12 1.2
+CLUSTER  2  3 1.2  12 5
+FIX XY   6 0  12 0
+GRAVITY  100 -9.81         ! a strong pull to the right: the soft block shears off the right edge
+STEP     3E-4 400
+END
+)";
+    Scene s;
+    REQUIRE(read_deck_text(deck, "spread", s).empty());
+    return s;
+}
+
 void compare_wide_and_narrow(int ppc, int threads, const std::string& extra = "", bool scatter = true, bool mix = false) {
     const Exercised ex = compare_scenes(collapsing_slope(ppc, extra, scatter), threads, mix);
     // Damping slows the collapse, and elastic points among the Mohr-Coulomb ones stiffen
@@ -729,19 +748,7 @@ TEST_CASE("the AVX2 point loop of an elastic scene (its four-point runs in regis
     // swell past their initial volume (eq. 8 takes min(V, V0)); mixed, the runs of two
     // groups (two densities and stiffnesses) must not be taken as one group's.
     if (!Simulation::have_wide()) return;
-    const std::string deck = R"(
-GRID     80 40 0.15
-MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000
-MATERIAL 2 ELASTIC E=1E6 NU=0.3 RHO=1800
-CLUSTER  1  0 0  12 1.2
-CLUSTER  2  3 1.2  12 5
-FIX XY   6 0  12 0
-GRAVITY  100 -9.81         ! a strong pull to the right: the soft block shears off the right edge
-STEP     3E-4 400
-END
-)";
-    Scene s;
-    REQUIRE(read_deck_text(deck, "spread", s).empty());
+    const Scene s = spreading_block();
     for (int threads : {1, 2}) {
         // About 2 000 runs a step, over 400 steps, more than half of them usual.
         const Exercised ex = compare_scenes(s, threads, false, 2e4);
@@ -762,4 +769,107 @@ END
         fall.clusters[0].ppc = ppc;
         for (int threads : {1, 2}) CHECK(compare_scenes(fall, threads).usual_runs > 1600 * 400 * 3 / 4);
     }
+}
+
+namespace {
+
+// Scene s with one thread and with `threads`, compared after every step bit for bit.
+// shuffle: the points' order permuted before the first step (the same in both), so that
+// each thread's points lie all over the scene instead of in a band of rows. jump: after
+// the first step, the first point is put where the last one is (in the highest cells).
+Simulation::PartedPass compare_threads(const Scene& s, int threads, bool shuffle, bool jump = false) {
+    Simulation::PartedPass pass;
+#if defined(_OPENMP)
+    const int before = omp_get_max_threads();
+    omp_set_num_threads(1);
+    Simulation one(s);
+    omp_set_num_threads(threads);
+    Simulation many(s);
+    Noise noise;
+    const std::size_t n = one.points().size();
+    std::vector<std::size_t> order(n);
+    for (std::size_t k = 0; k < n; ++k) order[k] = k;
+    if (shuffle)
+        for (std::size_t k = n - 1; k > 0; --k) std::swap(order[k], order[std::min(k, std::size_t(noise.r.uniform() * double(k + 1)))]);
+    for (Simulation* sim : {&one, &many}) {
+        Points& p = sim->points();
+        Noise stress;  // as in compare_scenes: a sum of equal terms would not show a change of order
+        for (std::size_t k = 0; k < n; ++k) {
+            p.sxx[k] = 100 * stress(); p.syy[k] = 100 * stress(); p.sxy[k] = 100 * stress();
+        }
+    }
+    auto shuffle_points = [&](Points& p) {
+        auto permute = [&](auto& v) {
+            if (v.empty()) return;
+            auto w = v;
+            for (std::size_t k = 0; k < n; ++k) w[k] = v[order[k]];
+            v = w;
+        };
+        for (auto* v : {&p.x, &p.y, &p.sxx, &p.syy, &p.sxy, &p.szz, &p.vol, &p.plastic_shear, &p.c0, &p.n_phi, &p.sqrt_n_phi}) permute(*v);
+        permute(p.cell); permute(p.id); permute(p.group); permute(p.yielded);
+    };
+    bool same = true;
+    for (long k = 0; k < s.steps && same; ++k) {
+        if (k == 0 && shuffle)
+            for (Simulation* sim : {&one, &many}) shuffle_points(sim->points());
+        if (k == 1 && jump)
+            for (Simulation* sim : {&one, &many}) {
+                Points& p = sim->points();
+                const std::size_t last = p.size() - 1;
+                p.x[0] = p.x[last]; p.y[0] = p.y[last]; p.cell[0] = p.cell[last];
+            }
+        omp_set_num_threads(1);
+        one.step();
+        omp_set_num_threads(threads);
+        many.step();
+        same = same_points(one.points(), many.points()) && one.cell_mass() == many.cell_mass() &&
+               one.du_x() == many.du_x() && one.du_y() == many.du_y() &&
+               one.kinetic_energy() == many.kinetic_energy() && one.mass_inside() == many.mass_inside() &&
+               one.mass_outflow() == many.mass_outflow();
+    }
+    omp_set_num_threads(before);
+    INFO(threads << " threads, " << std::string(shuffle ? "points shuffled" : "points in cell order") << std::string(jump ? ", the first point moved" : ""));
+    CHECK(same);
+    CHECK(one.parted_pass().steps == 0);
+    pass = many.parted_pass();
+    MESSAGE(threads << " threads" << std::string(shuffle ? ", shuffled" : "") << std::string(jump ? ", a point moved" : "") << ": " << pass.steps << " steps in one pass, " << pass.listed << " points listed, " << pass.clashes << " steps mapped again");
+#else
+    (void)s; (void)threads; (void)shuffle; (void)jump;
+#endif
+    return pass;
+}
+
+}  // namespace
+
+TEST_CASE("threads in one pass over the points: the serial pass's numbers bit for bit, also when a thread's points land in another's cells") {
+    // With threads, each thread moves its chunk of the points and adds those landing in
+    // its part of the cells at once; the others are listed and added after, in chunk
+    // order; when a chunk landed in a later chunk's part, the step's sums are made again.
+    // The chunks move with the threads' times: none of it may change a number.
+#if defined(_OPENMP)
+    const Scene spread = spreading_block();
+    for (int threads : {2, 3}) {
+        // In cell order: every step in one pass, a few hundred points listed a step (those
+        // of a chunk's lowest row), never made again: no point moves a cell and a row.
+        Simulation::PartedPass pass = compare_threads(spread, threads, false);
+        CHECK(pass.steps == spread.steps);
+        CHECK(pass.listed > spread.steps * 100);
+        CHECK(pass.clashes == 0);
+        // Shuffled: each chunk but the last lists most of its points.
+        pass = compare_threads(spread, threads, true);
+        CHECK(pass.steps == spread.steps);
+        CHECK(pass.clashes == 0);
+        CHECK(pass.listed > spread.steps * 2000);
+        // A point of the first chunk put at the top between steps: the second step's parts
+        // are cut from where the chunk's points were, the point lands in the last part, and
+        // that step is mapped again.
+        pass = compare_threads(spread, threads, false, true);
+        CHECK(pass.clashes == 1);
+    }
+    // Mohr-Coulomb: the block loop (trial, consult, motion), points leaving the lattice.
+    const Scene slope = collapsing_slope(3);  // 6 894 points: threads take them
+    CHECK(compare_threads(slope, 2, false).steps == slope.steps);
+    CHECK(compare_threads(slope, 2, true).listed > slope.steps * 1000);
+    CHECK(compare_threads(slope, 2, false, true).clashes == 1);
+#endif
 }
