@@ -1182,6 +1182,7 @@ public:
     const std::vector<double>& force_y() const { return fy_; }
     const std::vector<double>& node_mass() const { return nmass_; }   // lumped mass, eq. 10 [kg/m]
     const std::vector<double>& cell_mass() const { return cmass_; }   // eq. 7 [kg/m]
+    const std::vector<double>& cell_volume() const { return cvol_; }  // eq. 8: the sum of the points' V [m^2/m]
 
     // Changes a wall's velocity from the next step on (staged loading; 0 holds it).
     void set_wall_velocity(int wall_id, double vx, double vy) {
@@ -1737,11 +1738,18 @@ inline void Simulation::advance_points() {
 inline bool Simulation::advance_parted() {
 #if defined(_OPENMP)
     const long n = long(p_.size());
-    const int want = omp_get_max_threads();
-    if (!pdx_.empty() || want < 2 || want > int(map_tally_.size())) return false;
-    if (chunk_team_ != want || chunk_at_[std::size_t(want)] != n) {  // a new thread count, or points left: even chunks
+    const int want = std::min(omp_get_max_threads(), omp_get_thread_limit());
+    // A team smaller than asked for (dynamic teams, or inside another parallel region) would
+    // make parts for threads that do not come: the two passes then.
+    if (!pdx_.empty() || want < 2 || want > int(map_tally_.size()) || omp_get_dynamic() || omp_in_parallel()) return false;
+    if (chunk_team_ != want) {  // a new thread count: even chunks
         for (int u = 0; u <= want; ++u) chunk_at_[std::size_t(u)] = n * u / want;
         chunk_team_ = want;
+        parts_known_ = false;
+    } else if (chunk_at_[std::size_t(want)] != n) {  // points left: the chunks in proportion
+        const long was = std::max(1L, chunk_at_[std::size_t(want)]);
+        for (int u = 0; u <= want; ++u) chunk_at_[std::size_t(u)] = std::min(n, chunk_at_[std::size_t(u)] * n / was);
+        chunk_at_[std::size_t(want)] = n;
         parts_known_ = false;
     }
     int lo = 0;
@@ -1803,7 +1811,7 @@ inline bool Simulation::advance_parted() {
     if (departed_) remove_departed();
     occupied_ = t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1};  // every cell written
     mass_in_ = t.mass;
-    parts_known_ = !departed_ && !clash && team == want;
+    parts_known_ = t.departed == 0 && !clash && team == want;
     if (team != want) chunk_team_ = 0;
     if (parts_known_ && slowest > 1.1 * total / team) {
         // The chunks took unequal times (points that cross cells or yield cost more, and they
