@@ -1178,6 +1178,8 @@ public:
     // Nodal and cell fields (whole lattice, row-major).
     std::vector<double>& du_x() { return dux_; }                      // nodal increments du_x [m]
     std::vector<double>& du_y() { return duy_; }
+    const std::vector<double>& du_x() const { return dux_; }
+    const std::vector<double>& du_y() const { return duy_; }
     const std::vector<double>& force_x() const { return fx_; }        // net nodal force, gravity included [N/m]
     const std::vector<double>& force_y() const { return fy_; }
     const std::vector<double>& node_mass() const { return nmass_; }   // lumped mass, eq. 10 [kg/m]
@@ -1264,7 +1266,15 @@ private:
         int own_lo = 0, own_hi = std::numeric_limits<int>::max();
         long list_at = 0;
         double seconds = 0;  // the time the chunk took (advance_parted balances the chunks)
+        // Another chunk's cells, mass and departures, added to these.
+        void merge(const Tally& a) {
+            mass += a.mass; departed += a.departed;
+            cmin = std::min(cmin, a.cmin); cmax = std::max(cmax, a.cmax);
+            imin = std::min(imin, a.imin); imax = std::max(imax, a.imax);
+        }
     };
+    // The cells a tally's points landed in, as a box of whole rows (map_to_lattice's occupied_).
+    Range landed(const Tally& t) const { return t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1}; }
     // Points per block of the AVX2 point loop with a Mohr-Coulomb material (run_points).
     static constexpr long kConsultBlock = 256;
     template <bool Fused> void advance_range(long k0, long k1, Tally& t);
@@ -1719,7 +1729,7 @@ inline void Simulation::advance_points() {
     if (departed_) remove_departed();
     if constexpr (Fused) {
         mass_in_ = t.mass;
-        occupied_ = t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1};
+        occupied_ = landed(t);
     }
 }
 
@@ -1797,9 +1807,7 @@ inline bool Simulation::advance_parted() {
         const Tally& a = map_tally_[std::size_t(u)];
         clash |= a.cmax >= a.own_hi;  // landed in a higher chunk's part
         parted_.listed += a.listed;
-        t.departed += a.departed; t.mass += a.mass;
-        t.cmin = std::min(t.cmin, a.cmin); t.cmax = std::max(t.cmax, a.cmax);
-        t.imin = std::min(t.imin, a.imin); t.imax = std::max(t.imax, a.imax);
+        t.merge(a);
         total += a.seconds; slowest = std::max(slowest, a.seconds);
     }
     if (!clash)
@@ -1809,7 +1817,7 @@ inline bool Simulation::advance_parted() {
         }
     departed_ = std::size_t(t.departed);
     if (departed_) remove_departed();
-    occupied_ = t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1};  // every cell written
+    occupied_ = landed(t);  // every cell written
     mass_in_ = t.mass;
     parts_known_ = t.departed == 0 && !clash && team == want;
     if (team != want) chunk_team_ = 0;
@@ -2505,9 +2513,7 @@ inline void Simulation::map_points([[maybe_unused]] bool after_update) {
             const Tally& a = map_tally_[std::size_t(u)];
             const long k0 = n * u / team;
             for (long d = 0; d < a.listed; ++d) map_point(std::size_t(deferred_[std::size_t(k0 + d)]));
-            t.mass += a.mass;
-            t.cmin = std::min(t.cmin, a.cmin); t.cmax = std::max(t.cmax, a.cmax);
-            t.imin = std::min(t.imin, a.imin); t.imax = std::max(t.imax, a.imax);
+            t.merge(a);
         }
     }
 #endif
@@ -2520,7 +2526,7 @@ inline void Simulation::map_points([[maybe_unused]] bool after_update) {
     tallied_team_ = 0;  // used once
     parts_known_ = false;  // not advance_parted's chunks
     mass_in_ = t.mass;
-    occupied_ = t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1};
+    occupied_ = landed(t);
 }
 
 // Net nodal force: each node gathers from its (up to) four cells, eq. 9 replaced by

@@ -570,6 +570,25 @@ bool same_points(const Points& a, const Points& b) {
            a.plastic_shear == b.plastic_shear && a.yielded == b.yielded;
 }
 
+// Two simulations of one scene after the same steps: the points and every cell and node
+// result, bit for bit. The cells' volumes too: a sum taken in another order may differ in
+// its last digit and the nodal increments not (they are made from it, rounded).
+bool same_state(const Simulation& a, const Simulation& b) {
+    return same_points(a.points(), b.points()) && a.cell_mass() == b.cell_mass() && a.cell_volume() == b.cell_volume() &&
+           a.du_x() == b.du_x() && a.du_y() == b.du_y() && a.kinetic_energy() == b.kinetic_energy() &&
+           a.max_du() == b.max_du() && a.mass_inside() == b.mass_inside() && a.mass_outflow() == b.mass_outflow();
+}
+
+// A little noise on the initial stresses (plus tension on sxx and syy), the same for
+// every call: points of one cell that start alike stay alike, and a sum of equal terms
+// would not show a change of order.
+void noisy_stresses(Points& p, double tension = 0) {
+    Noise noise;
+    for (std::size_t k = 0; k < p.size(); ++k) {
+        p.sxx[k] = tension + 100 * noise(); p.syy[k] = tension + 100 * noise(); p.sxy[k] = 100 * noise();
+    }
+}
+
 // A slope collapsing over the lattice's right edge: an elastic base and Mohr-Coulomb
 // with scatter and softening above, the interface through the middle of a cell row (the
 // row's cells go to one cluster each), ppc x ppc points per cell (3: runs of nine, two of four lanes and one
@@ -622,15 +641,9 @@ Exercised compare_scenes(const Scene& s, int threads, bool mix = false, double t
     Simulation wide(s), narrow(s);
     narrow.set_wide(false);
     if (mix) REQUIRE(wide.groups().size() == 2);
-    // A little noise on the initial stresses: points of one cell that start alike stay
-    // alike, and a sum of equal terms would not show a change of order.
-    Noise noise;
-    for (std::size_t k = 0; k < wide.points().size(); ++k) {
-        const double a = tension + 100 * noise(), b = tension + 100 * noise(), c = 100 * noise();
-        for (Points* p : {&wide.points(), &narrow.points()}) {
-            p->sxx[k] = a; p->syy[k] = b; p->sxy[k] = c;
-            if (mix && k % 5 == 2) p->group[k] = std::uint16_t(1 - p->group[k]);
-        }
+    for (Points* p : {&wide.points(), &narrow.points()}) {
+        noisy_stresses(*p, tension);
+        for (std::size_t k = 2; mix && k < p->size(); k += 5) p->group[k] = std::uint16_t(1 - p->group[k]);
     }
     CHECK(wide.wide());
     CHECK_FALSE(narrow.wide());
@@ -648,10 +661,7 @@ Exercised compare_scenes(const Scene& s, int threads, bool mix = false, double t
         wide.step(); narrow.step();
         if (p.size() == cells.size())
             for (std::size_t k = 0; k < p.size(); ++k) ex.crossings += p.cell[k] != cells[k];
-        same = same_points(wide.points(), narrow.points()) && wide.cell_mass() == narrow.cell_mass() &&
-               wide.du_x() == narrow.du_x() && wide.du_y() == narrow.du_y() &&
-               wide.kinetic_energy() == narrow.kinetic_energy() && wide.max_du() == narrow.max_du() &&
-               wide.mass_inside() == narrow.mass_inside();
+        same = same_state(wide, narrow);
     }
 #if defined(_OPENMP)
     omp_set_num_threads(before);
@@ -794,13 +804,7 @@ Simulation::PartedPass compare_threads(const Scene& s, int threads, bool shuffle
     for (std::size_t k = 0; k < n; ++k) order[k] = k;
     if (shuffle)
         for (std::size_t k = n - 1; k > 0; --k) std::swap(order[k], order[std::min(k, std::size_t(noise.r.uniform() * double(k + 1)))]);
-    for (Simulation* sim : {&one, &many}) {
-        Points& p = sim->points();
-        Noise stress;  // as in compare_scenes: a sum of equal terms would not show a change of order
-        for (std::size_t k = 0; k < n; ++k) {
-            p.sxx[k] = 100 * stress(); p.syy[k] = 100 * stress(); p.sxy[k] = 100 * stress();
-        }
-    }
+    for (Simulation* sim : {&one, &many}) noisy_stresses(sim->points());
     auto shuffle_points = [&](Points& p) {
         auto permute = [&](auto& v) {
             if (v.empty()) return;
@@ -825,12 +829,7 @@ Simulation::PartedPass compare_threads(const Scene& s, int threads, bool shuffle
         one.step();
         omp_set_num_threads(threads);
         many.step();
-        // The cells' volumes too: a sum taken in another order may differ in its last digit
-        // and the nodal increments not (they are made from it, rounded).
-        same = same_points(one.points(), many.points()) && one.cell_mass() == many.cell_mass() &&
-               one.cell_volume() == many.cell_volume() && one.du_x() == many.du_x() && one.du_y() == many.du_y() &&
-               one.kinetic_energy() == many.kinetic_energy() && one.mass_inside() == many.mass_inside() &&
-               one.mass_outflow() == many.mass_outflow();
+        same = same_state(one, many);
     }
     omp_set_num_threads(before);
     INFO(threads << " threads, " << std::string(shuffle ? "points shuffled" : "points in cell order") << std::string(jump ? ", the first point moved" : "") << std::string(wide ? "" : ", one point at a time"));
