@@ -94,6 +94,7 @@
 #define LPFDM_HPP
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -1096,6 +1097,32 @@ inline Diagnostics validate(const Scene& s) {
 
 // ----------------------------------------------------------- the cycle ---
 
+namespace detail {
+// Work shared by threads in team contiguous blocks, block u from was(u) to was(u + 1), took
+// seconds(u) each. When the slowest took more than 3 % above the mean, the inner edges
+// now[1 .. team-1] move halfway towards equal shares of the total time, the time of each
+// block taken as spread evenly over it (halfway: the times are those of one step, and
+// noisy). Returns whether they moved. The threads' results may not depend on the edges.
+// (3 %: with 10 %, two threads may stay a fifth apart; the eq. 13 loop of the elastic
+// bench scene stayed at 11.8 against 8.6 microseconds a step.)
+template <class T, class Was, class Seconds>
+bool balance(int team, const Was& was, const Seconds& seconds, T* now) {
+    double total = 0, slowest = 0;
+    for (int u = 0; u < team; ++u) { total += seconds(u); slowest = std::max(slowest, seconds(u)); }
+    if (!(slowest > 1.03 * total / team)) return false;
+    double before = 0;  // the time of blocks 0 .. u-1
+    int u = 0;
+    for (int j = 1; j < team; ++j) {
+        const double share = total * j / team;
+        while (u + 1 < team && before + seconds(u) < share) before += seconds(u++);
+        const double f = seconds(u) > 0 ? std::min(1.0, (share - before) / seconds(u)) : 0.5;
+        const T even = was(u) + T(f * double(was(u + 1) - was(u)));
+        now[j] = was(j) + (even - was(j)) / 2;
+    }
+    return true;
+}
+}  // namespace detail
+
 class Simulation {
 public:
     explicit Simulation(const Scene& scene) : sc_(scene) { setup(); }
@@ -1159,6 +1186,8 @@ public:
     // map again (a thread's points landed in a later thread's part).
     struct PartedPass { long steps = 0, listed = 0, clashes = 0; };
     const PartedPass& parted_pass() const { return parted_; }
+    // The lattice phases' loops by threads: how often their blocks of rows moved (by_rows).
+    long row_block_moves() const { return row_moves_; }
     double time() const { return step_ * sc_.dt_s; }                 // model time [s]
     double kinetic_energy() const { return ke_; }                     // nodal, at the last half step [J/m]
     double mass_inside() const { return mass_in_; }                   // [kg/m]
@@ -1251,6 +1280,7 @@ private:
     void create_points();
     void remove_departed();
     void clear_cells();
+    void clear_row(int j, int lo, int hi);
     template <bool Fused> void advance_points();
     bool advance_parted();
     // What a range of points gives map_to_lattice's bookkeeping: the cells and columns
@@ -1295,6 +1325,19 @@ private:
 #if LPFDM_WIDE
     template <class F> __attribute__((target("avx2"))) static void row_wide(const F& f, int j) { f(j, std::true_type{}); }
 #endif
+    // The lattice phases' loops over rows (by_rows), each with its own blocks of rows by thread.
+    enum RowLoop { kClearRows, kStrainRows, kSmearRows, kForceRows, kFillRows, kShiftRows, kCarryRows, kAdvanceRows, kEnergyRows, kRowLoops };
+    // Thread u's block of a loop's rows is rows[u] .. rows[u+1]-1, with edges at[u] as
+    // fractions of the loop's range (which changes from step to step) for team threads;
+    // seconds[u]: the time it took.
+    struct RowBlocks {
+        std::vector<double> at, seconds;
+        std::vector<int> rows;
+        int team = 0;
+    };
+    std::array<RowBlocks, kRowLoops> row_blocks_;
+    long row_moves_ = 0;
+    template <class F> void by_rows(RowLoop loop, int j0, int j1, bool par, const F& f);
     void map_point(std::size_t k);
     // The sums of eq. 7 and 8 of one cell: mass, volume and V sigma. A run of points that
     // stay in one cell adds to a local copy (kept in registers) and stores it once.
@@ -1404,7 +1447,8 @@ private:
         mohr_groups_ = false;
         for (const MaterialConstants* mc : group_consts_) mohr_groups_ = mohr_groups_ || mc->model == Model::MohrCoulomb;
     }
-    std::vector<double> row_ke_;                        // per node row: a fixed-order reduction
+    std::vector<double> row_ke_, row_du_;               // per node row: kinetic energy (a fixed-order sum), largest increment
+    std::vector<std::uint8_t> row_gained_;              // per node row: a node gained mass this step (nodal_forces)
     std::vector<UserModel> user_models_;
     Points p_;
     // nodes
@@ -1537,8 +1581,14 @@ inline void Simulation::setup() {
         chunk_at_.assign(map_tally_.size() + 1, 0);
         deferred_.assign(p_.size(), 0);
     }
+    for (RowBlocks& b : row_blocks_) {  // the lattice phases' blocks of rows (by_rows)
+        const std::size_t team = std::size_t(omp_get_max_threads());
+        b.at.assign(team + 1, 0.0); b.seconds.assign(team, 0.0); b.rows.assign(team + 1, 0);
+    }
 #endif
     row_ke_.assign(std::size_t(my_ + 1), 0.0);
+    row_du_.assign(std::size_t(my_ + 1), 0.0);
+    row_gained_.assign(std::size_t(my_ + 1), 0);
     map_to_lattice();
     strained_ = occupied_.grow(2, mx_, my_);
     live_nodes_ = {};
@@ -1629,6 +1679,45 @@ inline void Simulation::create_points() {
     for (std::size_t k = 0; k < p_.size(); ++k) mass0_ += groups_[p_.group[k]].mass;
 }
 
+// Rows j0 .. j1-1 of a lattice phase, f(j) for each, by threads when par. Each row writes
+// only its own nodes or cells, so which thread takes a row changes no number: thread u
+// takes a block of rows, and the blocks follow the threads' times (detail::balance), as
+// rows cost unequal amounts (eq. 12 costs more where nodes cross cells, a settling block's
+// upper rows a third more than its lower ones).
+template <class F>
+inline void Simulation::by_rows([[maybe_unused]] RowLoop loop, int j0, int j1, [[maybe_unused]] bool par, const F& f) {
+#if defined(_OPENMP)
+    RowBlocks& b = row_blocks_[loop];
+    const int cap = std::min(omp_get_max_threads(), int(b.seconds.size()));
+    if (par && cap > 1 && !omp_in_parallel()) {
+        const int n = j1 - j0;
+        int team = 1;
+        LPFDM_OMP(omp parallel num_threads(cap))
+        {
+            const int nt = omp_get_num_threads(), id = omp_get_thread_num();
+            const bool known = nt == b.team;  // else even blocks
+            auto edge = [&](int u) { return j0 + int((known ? b.at[std::size_t(u)] : double(u) / nt) * n + 0.5); };
+            const int a = edge(id), e = edge(id + 1);
+            const double t0 = omp_get_wtime();
+            for (int j = a; j < e; ++j) f(j);
+            b.seconds[std::size_t(id)] = omp_get_wtime() - t0;
+            b.rows[std::size_t(id)] = a;
+            if (id == 0) team = nt;
+        }
+        if (team != b.team) {
+            for (int u = 0; u <= team; ++u) b.at[std::size_t(u)] = double(u) / team;
+            b.team = team;
+        }
+        b.rows[std::size_t(team)] = j1;
+        if (n > 0)
+            row_moves_ += detail::balance(team, [&](int u) { return double(b.rows[std::size_t(u)] - j0) / n; },
+                                          [&](int u) { return b.seconds[std::size_t(u)]; }, b.at.data());
+        return;
+    }
+#endif
+    for (int j = j0; j < j1; ++j) f(j);
+}
+
 // eq. 5a-5f for every cell that a point or a compensated node may read, plus the
 // rotation of eq. 5f as an exact orthogonal matrix (Cayley form: no trigonometry).
 inline void Simulation::cell_strains() {
@@ -1685,8 +1774,7 @@ inline void Simulation::cell_strains() {
         }
     };
     auto row = [&](int j, auto wide) LPFDM_INLINE { detail::sweep(r.i0, r.i1, wide, [&](int i, auto tag) LPFDM_INLINE { cells(i, j, tag); }); };
-    LPFDM_OMP(omp parallel for schedule(static) if ((r.j1 - r.j0) * (r.i1 - r.i0) > 8192))
-    for (int j = r.j0; j < r.j1; ++j) each_row(row, j);
+    by_rows(kStrainRows, r.j0, r.j1, (r.j1 - r.j0) * (r.i1 - r.i0) > 8192, [&](int j) { each_row(row, j); });
 }
 
 // eq. 6 (one consult of the constitutive model per point), the Jaumann rotation by
@@ -1784,7 +1872,6 @@ inline bool Simulation::advance_parted() {
         lo = hi;
     }
     tallied_team_ = 0;
-    clear_cells();
     int team = 1;
     LPFDM_OMP(omp parallel num_threads(want))
     {
@@ -1795,6 +1882,10 @@ inline bool Simulation::advance_parted() {
         mine.own_lo = map_tally_[std::size_t(id)].own_lo;
         if (id + 1 < nt) mine.own_hi = map_tally_[std::size_t(id)].own_hi;  // the last chunk: every cell above
         mine.list_at = k0;
+        // The part's cells are this thread's alone: it clears them (clear_cells) itself.
+        if (!occupied_.empty())
+            for (int j = std::max(occupied_.j0, mine.own_lo / mx_), j1 = int(std::min<long>(occupied_.j1, mine.own_hi / mx_ + 1L)); j < j1; ++j)
+                clear_row(j, mine.own_lo, mine.own_hi);
         advance_range<true>(k0, k1, mine);
         mine.seconds = omp_get_wtime() - t0;
         map_tally_[std::size_t(id)] = mine;
@@ -1802,13 +1893,11 @@ inline bool Simulation::advance_parted() {
     }
     Tally t;
     bool clash = false;
-    double total = 0, slowest = 0;
     for (int u = 0; u < team; ++u) {
         const Tally& a = map_tally_[std::size_t(u)];
         clash |= a.cmax >= a.own_hi;  // landed in a higher chunk's part
         parted_.listed += a.listed;
         t.merge(a);
-        total += a.seconds; slowest = std::max(slowest, a.seconds);
     }
     if (!clash)
         for (int u = 0; u < team; ++u) {
@@ -1821,23 +1910,11 @@ inline bool Simulation::advance_parted() {
     mass_in_ = t.mass;
     parts_known_ = t.departed == 0 && !clash && team == want;
     if (team != want) chunk_team_ = 0;
-    if (parts_known_ && slowest > 1.1 * total / team) {
-        // The chunks took unequal times (points that cross cells or yield cost more, and they
-        // gather in parts of a scene): the next step's chunks are cut halfway towards equal
-        // shares of this step's time, each point of a chunk taken to cost the same. Halfway:
-        // the times are those of one step, and noisy.
-        double before = 0;  // the time of chunks 0 .. u-1
-        int u = 0;
-        for (int j = 1; j < team; ++j) {
-            const double share = total * j / team;
-            while (u + 1 < team && before + map_tally_[std::size_t(u)].seconds < share) before += map_tally_[std::size_t(u++)].seconds;
-            const Tally& a = map_tally_[std::size_t(u)];
-            const long k0 = a.list_at, k1 = u + 1 < team ? map_tally_[std::size_t(u + 1)].list_at : n;
-            const double f = a.seconds > 0 ? std::min(1.0, (share - before) / a.seconds) : 0.5;
-            const long even = k0 + long(f * double(k1 - k0)), was = map_tally_[std::size_t(j)].list_at;
-            chunk_at_[std::size_t(j)] = was + (even - was) / 2;
-        }
-    }
+    // The chunks took unequal times (points that cross cells or yield cost more, and they
+    // gather in parts of a scene): the next step's chunks follow the times.
+    if (parts_known_)
+        detail::balance(team, [&](int u) { return u < team ? map_tally_[std::size_t(u)].list_at : n; },
+                        [&](int u) { return map_tally_[std::size_t(u)].seconds; }, chunk_at_.data());
     ++parted_.steps;
     if (clash) {
         ++parted_.clashes;
@@ -2388,15 +2465,17 @@ inline void Simulation::remove_departed() {
 // here as sum V sigma and sum V; nodal_forces divides by max(L^2, sum V)).
 inline void Simulation::clear_cells() {
     if (occupied_.empty()) return;
-    const std::size_t n = std::size_t(occupied_.i1 - occupied_.i0);
     // Rows by threads: at a million points this is some 10 MB a step.
-    [[maybe_unused]] const bool par = !serial() && std::size_t(occupied_.j1 - occupied_.j0) * n > 8192;
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = occupied_.j0; j < occupied_.j1; ++j) {
-        const std::size_t c = std::size_t(cell(occupied_.i0, j));  // the row's cells c .. c + n - 1
-        for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) std::fill_n(v->data() + c, n, 0.0);
-        if (!carried_.empty()) std::fill_n(carried_.data() + c, n, Carried{});
-    }
+    [[maybe_unused]] const bool par = !serial() && long(occupied_.j1 - occupied_.j0) * (occupied_.i1 - occupied_.i0) > 8192;
+    by_rows(kClearRows, occupied_.j0, occupied_.j1, par, [&](int j) { clear_row(j, 0, std::numeric_limits<int>::max()); });
+}
+
+// The sums of row j's cells in occupied_'s columns, of those numbered lo .. hi-1.
+inline void Simulation::clear_row(int j, int lo, int hi) {
+    const int c0 = std::max(cell(occupied_.i0, j), lo), c1 = std::min(j * mx_ + occupied_.i1, hi);
+    if (c0 >= c1) return;
+    for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) std::fill(v->data() + c0, v->data() + c1, 0.0);
+    if (!carried_.empty()) std::fill(carried_.data() + c0, carried_.data() + c1, Carried{});
 }
 
 // eq. 7 and 8 for point k, into the cell it lies in; with ADVECT POINTS also the
@@ -2542,10 +2621,19 @@ inline void Simulation::nodal_forces() {
     const double* cm = cmass_.data();
     const double* cv = cvol_.data();
     double *nm = nmass_.data(), *nm_prev = nmass_prev_.data(), *fxn = fx_.data(), *fyn = fy_.data();
+    std::uint8_t* row_gained = row_gained_.data();
     const double gx = sc_.gravity_x, gy = sc_.gravity_y;
-    if (carried_.empty()) {  // only eq. 12 reads the previous masses
-        LPFDM_OMP(omp parallel for schedule(static) if (par))
-        for (int j = keep.j0; j < keep.j1; ++j) std::copy(nm + (j * (mx + 1) + keep.i0), nm + (j * (mx + 1) + keep.i1), nm_prev + (j * (mx + 1) + keep.i0));
+    // Only eq. 12 reads the previous masses: the nodes of nr keep theirs as the forces'
+    // loop below overwrites them, and it notes the rows where a node gained mass
+    // (compensate() visits only those); here the ring of keep around nr.
+    const bool keep_prev = carried_.empty();
+    if (keep_prev) {
+        auto copy = [&](int j, int i0, int i1) { std::copy(nm + (j * (mx + 1) + i0), nm + (j * (mx + 1) + i1), nm_prev + (j * (mx + 1) + i0)); };
+        for (int j = keep.j0; j < keep.j1; ++j) {
+            if (j < nr.j0 || j >= nr.j1) { copy(j, keep.i0, keep.i1); continue; }
+            copy(j, keep.i0, nr.i0);
+            copy(j, nr.i1, keep.i1);
+        }
     }
     // eq. 8 with the fill capped at one, applied once per cell (map_to_lattice clears it);
     // cell c, or the cells c .. c + 3 in the lanes of a vector T.
@@ -2558,8 +2646,7 @@ inline void Simulation::nodal_forces() {
         detail::store(sxx + c, xx * w); detail::store(syy + c, yy * w); detail::store(sxy + c, xy * w);
     };
     auto smear_row = [&](int j, auto wide) LPFDM_INLINE { detail::sweep(j * mx + oc.i0, j * mx + oc.i1, wide, smear); };
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = oc.j0; j < oc.j1; ++j) each_row(smear_row, j);
+    by_rows(kSmearRows, oc.j0, oc.j1, par, [&](int j) { each_row(smear_row, j); });
     const bool hourglass = !hgx_.empty();
     const double khg = hourglass ? sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s) : 0.0;
     // The node is corner [1] of cell (i, j), [2] of (i-1, j), [3] of (i, j-1) and [4] of
@@ -2569,7 +2656,7 @@ inline void Simulation::nodal_forces() {
     // Interior: a node with all four cells and no hourglass force, where the tests are
     // known true at compile time (the same sums in the same order).
     // T: node (i, j), or (interior only) the nodes i .. i + 3 in the lanes of a vector.
-    auto node_force = [&](int i, int j, auto interior, auto tag) LPFDM_INLINE {
+    auto node_force = [&](int i, int j, auto interior, auto tag, bool& gained) LPFDM_INLINE {
         using T = typename decltype(tag)::type;
         constexpr bool in = decltype(interior)::value;
         T fx{}, fy{}, m{};
@@ -2598,6 +2685,20 @@ inline void Simulation::nodal_forces() {
         }
         const int n = j * (mx + 1) + i;
         const T mn = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
+        if (keep_prev) {
+            T was;
+            detail::load(nm + n, was);
+            detail::store(nm_prev + n, was);
+            // Gained mass: compensate()'s test, in the lanes of a vector or not.
+            if constexpr (std::is_same_v<T, double>) {
+                gained = gained || !(was > 0 || mn == 0);
+            } else {
+#if LPFDM_WIDE
+                const T zero{};
+                gained = gained || !detail::all_lanes((was > zero) | (mn == zero));
+#endif
+            }
+        }
         detail::store(nm + n, mn);
         detail::store(fxn + n, fx + gx * mn);
         detail::store(fyn + n, fy + gy * mn);
@@ -2606,12 +2707,13 @@ inline void Simulation::nodal_forces() {
     auto force_row = [&](int j, auto wide) LPFDM_INLINE {
         const bool inner_row = j > 0 && j < my && !hourglass;
         const int ia = inner_row ? std::min(std::max(nr.i0, 1), nr.i1) : nr.i1, ib = inner_row ? std::max(ia, std::min(nr.i1, mx)) : nr.i1;
-        for (int i = nr.i0; i < ia; ++i) node_force(i, j, std::false_type{}, one);
-        detail::sweep(ia, ib, wide, [&](int i, auto tag) LPFDM_INLINE { node_force(i, j, std::true_type{}, tag); });
-        for (int i = ib; i < nr.i1; ++i) node_force(i, j, std::false_type{}, one);
+        bool gained = false;
+        for (int i = nr.i0; i < ia; ++i) node_force(i, j, std::false_type{}, one, gained);
+        detail::sweep(ia, ib, wide, [&](int i, auto tag) LPFDM_INLINE { node_force(i, j, std::true_type{}, tag, gained); });
+        for (int i = ib; i < nr.i1; ++i) node_force(i, j, std::false_type{}, one, gained);
+        row_gained[j] = gained;
     };
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = nr.j0; j < nr.j1; ++j) each_row(force_row, j);
+    by_rows(kForceRows, nr.j0, nr.j1, par, [&](int j) { each_row(force_row, j); });
 }
 
 // eq. 12: the increment carried by node k belonged to the material now at x_k - du_k;
@@ -2620,8 +2722,11 @@ inline void Simulation::compensate() {
     const Range nr{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     if (!carried_.empty()) { carried_increments(nr); return; }
     // Nodes that gained mass this step take the mean increment of their neighbours that
-    // had mass (read before those are compensated, so the order does not matter).
+    // had mass (read before those are compensated, so the order does not matter); only
+    // rows where nodal_forces() saw such a node.
     [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
+    long gaining = 0;
+    for (int j = nr.j0; j < nr.j1; ++j) gaining += row_gained_[std::size_t(j)];
     const int mx = mx_, my = my_;
     const double invL = invL_;
     const Range st = strained_;
@@ -2629,8 +2734,8 @@ inline void Simulation::compensate() {
     const double* nm = nmass_.data();
     const double* nm_prev = nmass_prev_.data();
     const CellStrain* cs = strain_.data();
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = nr.j0; j < nr.j1; ++j)
+    if (gaining) by_rows(kFillRows, nr.j0, nr.j1, gaining * (nr.i1 - nr.i0) > 8192, [&](int j) {
+        if (!row_gained_[std::size_t(j)]) return;
         for (int i = nr.i0; i < nr.i1; ++i) {
             const int n = j * (mx + 1) + i;
             if (nm_prev[n] > 0 || nm[n] == 0) continue;
@@ -2643,6 +2748,7 @@ inline void Simulation::compensate() {
                 }
             if (msum > 0) { ux_n[n] = sx / msum; uy_n[n] = sy / msum; }
         }
+    });
     // Node (i, j): eq. 12 one node at a time.
     auto shift = [&](int i, int j) LPFDM_INLINE {
         const int n = j * (mx + 1) + i;
@@ -2767,8 +2873,7 @@ inline void Simulation::compensate() {
             }
         });
     };
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = nr.j0; j < nr.j1; ++j) each_row(shift_row, j);
+    by_rows(kShiftRows, nr.j0, nr.j1, par, [&](int j) { each_row(shift_row, j); });
 }
 
 // ADVECT POINTS, in place of eq. 12: each node's increment is the mass-weighted mean of
@@ -2780,8 +2885,7 @@ inline void Simulation::compensate() {
 inline void Simulation::carried_increments(const Range& nr) {
     const double h = 0.5 * L_;
     [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = nr.j0; j < nr.j1; ++j)
+    by_rows(kCarryRows, nr.j0, nr.j1, par, [&](int j) {
         for (int i = nr.i0; i < nr.i1; ++i) {
             double px = 0, py = 0, m = 0;
             const bool left = i > 0, right = i < mx_, below = j > 0, above = j < my_;
@@ -2799,6 +2903,7 @@ inline void Simulation::carried_increments(const Range& nr) {
             const int n = node(i, j);
             if (m > 0) { dux_[n] = px / m; duy_[n] = py / m; }
         }
+    });
 }
 
 // eq. 13-14: du(t + dt/2) = du(t - dt/2) + dt^2/m (F - D), D = alpha |F| sgn(du).
@@ -2842,8 +2947,7 @@ inline void Simulation::integrate() {
         detail::sweep(n0 + ia, n0 + ib, wide, advance);
         for (int i = ib; i < nr.i1; ++i) idle(i);
     };
-    LPFDM_OMP(omp parallel for schedule(static) if (par))
-    for (int j = nr.j0; j < nr.j1; ++j) each_row(advance_row, j);
+    by_rows(kAdvanceRows, nr.j0, nr.j1, par, [&](int j) { each_row(advance_row, j); });
     integrated_ = nr;
     rx_ = ry_ = 0;
     for (const std::int32_t n : fixed_nodes_) {
@@ -2868,47 +2972,46 @@ inline void Simulation::integrate() {
         ws.shift_i = int(std::trunc(ws.dx * invL_ * (1 + 1e-12)));
         ws.shift_j = int(std::trunc(ws.dy * invL_ * (1 + 1e-12)));
     }
-    double* row_ke_of = row_ke_.data();
-    LPFDM_OMP(omp parallel for schedule(static) reduction(max : maxdu) if (par))
-    for (int j = nr.j0; j < nr.j1; ++j) {
-        // The kinetic energy of the row, summed in node order, and the largest increment
-        // (nodes with mass only); four nodes' terms at a time in the lanes of a vector.
-        // Defined here, inside the loop, so that it takes this thread's maxdu (the
-        // reduction's private copy), not the shared one.
-        auto energy_row = [&](int, auto wide) LPFDM_INLINE {
-            double row_ke = 0;
-            int n = j * (mx + 1) + nr.i0;
-            const int nend = j * (mx + 1) + nr.i1;
+    double *row_ke_of = row_ke_.data(), *row_du_of = row_du_.data();
+    // The kinetic energy of row j, summed in node order, and its largest increment (nodes
+    // with mass only); four nodes' terms at a time in the lanes of a vector.
+    auto energy_row = [&](int j, auto wide) LPFDM_INLINE {
+        double row_ke = 0, row_du = 0;
+        int n = j * (mx + 1) + nr.i0;
+        const int nend = j * (mx + 1) + nr.i1;
 #if LPFDM_WIDE
-            if constexpr (decltype(wide)::value) {
-                using detail::v4d;
-                v4d big{};
-                for (; n + 4 <= nend; n += 4) {
-                    v4d m, ux, uy, ax, ay;
-                    detail::load(nm + n, m); detail::load(ux_n + n, ux); detail::load(uy_n + n, uy);
-                    const auto full = m != 0;
-                    const v4d e = 0.5 * m * (ux * ux + uy * uy);
-                    for (int l = 0; l < 4; ++l) if (full[l]) row_ke += e[l];
-                    detail::abs_of(ux, ax); detail::abs_of(uy, ay);
-                    const v4d a = ax < ay ? ay : ax;  // std::max(ax, ay), lane by lane
-                    big = full && big < a ? a : big;
-                }
-                for (int l = 0; l < 4; ++l) maxdu = std::max(maxdu, big[l]);
+        if constexpr (decltype(wide)::value) {
+            using detail::v4d;
+            v4d big{};
+            for (; n + 4 <= nend; n += 4) {
+                v4d m, ux, uy, ax, ay;
+                detail::load(nm + n, m); detail::load(ux_n + n, ux); detail::load(uy_n + n, uy);
+                const auto full = m != 0;
+                const v4d e = 0.5 * m * (ux * ux + uy * uy);
+                for (int l = 0; l < 4; ++l) if (full[l]) row_ke += e[l];
+                detail::abs_of(ux, ax); detail::abs_of(uy, ay);
+                const v4d a = ax < ay ? ay : ax;  // std::max(ax, ay), lane by lane
+                big = full && big < a ? a : big;
             }
+            for (int l = 0; l < 4; ++l) row_du = std::max(row_du, big[l]);
+        }
 #else
-            (void)wide;
+        (void)wide;
 #endif
-            for (; n < nend; ++n) {
-                const double m = nm[n], ux = ux_n[n], uy = uy_n[n];
-                if (m == 0) continue;
-                row_ke += 0.5 * m * (ux * ux + uy * uy);
-                maxdu = std::max(maxdu, std::max(std::fabs(ux), std::fabs(uy)));
-            }
-            row_ke_of[j] = row_ke;
-        };
-        each_row(energy_row, j);
+        for (; n < nend; ++n) {
+            const double m = nm[n], ux = ux_n[n], uy = uy_n[n];
+            if (m == 0) continue;
+            row_ke += 0.5 * m * (ux * ux + uy * uy);
+            row_du = std::max(row_du, std::max(std::fabs(ux), std::fabs(uy)));
+        }
+        row_ke_of[j] = row_ke;
+        row_du_of[j] = row_du;
+    };
+    by_rows(kEnergyRows, nr.j0, nr.j1, par, [&](int j) { each_row(energy_row, j); });
+    for (int j = nr.j0; j < nr.j1; ++j) {
+        ke += row_ke_[std::size_t(j)];
+        maxdu = std::max(maxdu, row_du_[std::size_t(j)]);
     }
-    for (int j = nr.j0; j < nr.j1; ++j) ke += row_ke_[std::size_t(j)];
     ke_ = ke / dt2;
     max_du_ = maxdu;
     live_nodes_ = nodes_now.unite(wall_nodes);

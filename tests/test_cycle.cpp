@@ -218,6 +218,71 @@ TEST_CASE("eq. 12 where x_node - du_node lies on a cell edge: the mean strain of
     }
 }
 
+TEST_CASE("eq. 12: a node that gained mass takes its old neighbours' mean increment, by their last masses, also where the material left the box") {
+    // A base of material (cell rows 0-2) and a cell's worth of points that travel: from
+    // cell (8, 6) into (5, 4), then into (4, 3). Node n = (4, 4) then gains mass; of its
+    // eight neighbours, (3, 3) (4, 3) (5, 3) (5, 4) and (5, 5) had mass, and (5, 5) lies
+    // in the row above the new box of material (nodal_forces keeps the previous masses of
+    // that ring apart). Its increment is the mean of theirs weighted by the masses of the
+    // mapping before: (5, 5)'s came only from the travelling points. Then the same with x
+    // and y swapped: (5, 5) in the column right of the box.
+    for (const bool swap : {false, true}) {
+        auto at = [&](int a, int b) { return swap ? std::pair<int, int>{b, a} : std::pair<int, int>{a, b}; };
+        Scene s = swap ? block_scene(8, 10, 1.0, {0, 0, 3, 10}) : block_scene(10, 8, 1.0, {0, 0, 10, 3});
+        const auto [ti, tj] = at(8, 6);
+        s.clusters.push_back({1, Box{double(ti), double(tj), ti + 1.0, tj + 1.0}, 2, {}});
+        Simulation sim(s);
+        std::vector<std::size_t> travellers;
+        for (std::size_t k = 0; k < sim.points().size(); ++k)
+            if ((swap ? sim.points().x[k] : sim.points().y[k]) > 6) travellers.push_back(k);
+        REQUIRE(travellers.size() == 4);
+        auto move_to = [&](int a, int b) {  // the travellers by whole cells, keeping their place in the cell
+            const auto [ci, cj] = at(a, b);
+            Points& p = sim.points();
+            for (std::size_t k : travellers) {
+                p.x[k] += ci - std::floor(p.x[k]);
+                p.y[k] += cj - std::floor(p.y[k]);
+                p.cell[k] = sim.cell(ci, cj);
+            }
+            sim.map_to_lattice();
+        };
+        auto node = [&](int a, int b) { const auto [i, j] = at(a, b); return std::size_t(sim.node(i, j)); };
+        sim.nodal_forces();
+        move_to(5, 4);
+        sim.nodal_forces();
+        const std::vector<double> mass = sim.node_mass();  // the masses before the node gains
+        Noise noise;
+        for (auto* v : {&sim.du_x(), &sim.du_y()})
+            for (double& u : *v) u = 1e-3 * noise();
+        const std::vector<double> ux = sim.du_x(), uy = sim.du_y();
+        sim.cell_strains();
+        move_to(4, 3);
+        sim.nodal_forces();
+        const std::size_t n = node(4, 4);
+        CHECK(mass[n] == 0);
+        CHECK(sim.node_mass()[n] > 0);
+        double beyond = 0;  // the material's cells end at row (column) 3: node row 5 is outside the box
+        for (int b = 4; b < 8; ++b)
+            for (int a = 0; a < 10; ++a) {
+                const auto [i, j] = at(a, b);
+                beyond += sim.cell_mass()[std::size_t(sim.cell(i, j))];
+            }
+        CHECK(beyond == 0);
+        double sx = 0, sy = 0, m = 0;
+        int with_mass = 0;
+        for (int j = 3; j <= 5; ++j)  // in the order of eq. 12's sum: rows, then columns
+            for (int i = 3; i <= 5; ++i) {
+                const std::size_t q = std::size_t(sim.node(i, j));
+                if (mass[q] > 0) { sx += mass[q] * ux[q]; sy += mass[q] * uy[q]; m += mass[q]; ++with_mass; }
+            }
+        CHECK(with_mass == 5);
+        CHECK(mass[node(5, 5)] > 0);
+        sim.compensate();
+        CHECK(sim.du_x()[n] == sx / m);  // the same sums in the same order: to the bit
+        CHECK(sim.du_y()[n] == sy / m);
+    }
+}
+
 TEST_CASE("eq. 12 four nodes per AVX2 register: the one-node numbers, bit for bit, on edges and borders too") {
     // Random increments of five kinds: none (the node keeps it), a zero component or one
     // far below the node's coordinate's last digit (x_node - du_node on the edge of two or
@@ -697,6 +762,25 @@ END
     return s;
 }
 
+// A tower on a wide base: 22 200 points, a box of 130 x 75 cells, so that the lattice
+// phases go by threads too; rows of the tower cost eq. 12 and eq. 13 less than the base's
+// (most of their nodes hold no mass), so their blocks of rows move.
+Scene tower_on_base() {
+    const std::string deck = R"(
+GRID     140 80 0.25
+MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000
+CLUSTER  1  0 0  32.5 10
+CLUSTER  1  15 10  17.5 18.75
+FIX XY   0 0  35 0
+GRAVITY  0 -9.81
+STEP     1E-3 120
+END
+)";
+    Scene s;
+    REQUIRE(read_deck_text(deck, "tower", s).empty());
+    return s;
+}
+
 void compare_wide_and_narrow(int ppc, int threads, const std::string& extra = "", bool scatter = true, bool mix = false) {
     const Exercised ex = compare_scenes(collapsing_slope(ppc, extra, scatter), threads, mix);
     // Damping slows the collapse, and elastic points among the Mohr-Coulomb ones stiffen
@@ -880,4 +964,71 @@ TEST_CASE("threads in one pass over the points: the serial pass's numbers bit fo
     CHECK(compare_threads(slope, 2, true).listed > slope.steps * 1000);
     CHECK(compare_threads(slope, 2, false, true).clashes == 1);
 #endif
+}
+
+TEST_CASE("the lattice phases by threads: each row's numbers whatever thread takes it, and the blocks of rows follow the threads' times") {
+#if defined(_OPENMP)
+    const Scene tower = tower_on_base();
+    for (int threads : {2, 3}) CHECK(compare_threads(tower, threads, false).steps == tower.steps);
+    // The blocks did move: one thread against two, as above, on a run of its own.
+    const int before = omp_get_max_threads();
+    omp_set_num_threads(2);
+    Simulation sim(tower);
+    for (long k = 0; k < tower.steps; ++k) sim.step();
+    omp_set_num_threads(before);
+    MESSAGE("blocks of rows moved " << sim.row_block_moves() << " times in " << tower.steps << " steps");
+    CHECK(sim.row_block_moves() > 0);
+    // The step's kinetic energy and largest increment, gathered row by row: the same as
+    // summed here over every node with mass (the energy in node order, rows in row order).
+    double ke = 0, big = 0;
+    for (std::size_t n = 0; n < sim.node_mass().size(); ++n) {
+        const double m = sim.node_mass()[n], ux = sim.du_x()[n], uy = sim.du_y()[n];
+        if (m == 0) continue;
+        ke += 0.5 * m * (ux * ux + uy * uy);
+        big = std::max(big, std::max(std::fabs(ux), std::fabs(uy)));
+    }
+    CHECK(big > 0);
+    CHECK(sim.max_du() == big);
+    CHECK(sim.kinetic_energy() == doctest::Approx(ke / (tower.dt_s * tower.dt_s)).epsilon(1e-12));
+#endif
+}
+
+TEST_CASE("detail::balance: blocks of work cut halfway towards equal shares of the measured time") {
+    // Two blocks of 100 points; the first took 3 s, the second 1 s: a point of the first
+    // costs 0.03 s, so equal shares (2 s) end at point 66 (2 / 3 of the way); halfway from 100: 83.
+    long at[3] = {0, 100, 200};
+    const long was[3] = {0, 100, 200};
+    const double secs[2] = {3, 1};
+    auto w = [&](int u) { return was[u]; };
+    CHECK(detail::balance(2, w, [&](int u) { return secs[u]; }, at));
+    CHECK(at[0] == 0);
+    CHECK(at[1] == 83);
+    CHECK(at[2] == 200);
+    // Within 3 % of the mean: left alone.
+    const double close[2] = {1.02, 1.0};
+    at[1] = 100;
+    CHECK_FALSE(detail::balance(2, w, [&](int u) { return close[u]; }, at));
+    CHECK(at[1] == 100);
+    // Fractions (as by_rows keeps them): the share ends a third into the second block.
+    double f[3] = {0, 0.5, 1};
+    const double fw[3] = {0, 0.5, 1}, fs[2] = {1, 3};
+    CHECK(detail::balance(2, [&](int u) { return fw[u]; }, [&](int u) { return fs[u]; }, f));
+    CHECK(f[1] == doctest::Approx(0.5 + (0.5 + 0.5 / 3 - 0.5) / 2).epsilon(1e-15));
+    // Any team, any times (zeros too): the edges stay in order, the outer ones in place.
+    Random r{99};
+    long bad = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        const int team = 2 + int(r.uniform() * 7);
+        std::vector<long> e(static_cast<std::size_t>(team) + 1), now;
+        std::vector<double> t(static_cast<std::size_t>(team));
+        e[0] = long(r.uniform() * 50);
+        for (int u = 1; u <= team; ++u) e[std::size_t(u)] = e[std::size_t(u - 1)] + long(r.uniform() * 1000);
+        for (double& x : t) x = r.uniform() < 0.2 ? 0.0 : r.uniform();
+        now = e;
+        detail::balance(team, [&](int u) { return e[std::size_t(u)]; }, [&](int u) { return t[std::size_t(u)]; }, now.data());
+        bool ok = now.front() == e.front() && now.back() == e.back();
+        for (int u = 0; u < team; ++u) ok = ok && now[std::size_t(u)] <= now[std::size_t(u + 1)];
+        bad += !ok;
+    }
+    CHECK(bad == 0);
 }
