@@ -659,6 +659,13 @@ void noisy_stresses(Points& p, double tension = 0) {
 // row's cells go to one cluster each), ppc x ppc points per cell (3: runs of nine, two of four lanes and one
 // alone; 4: runs of four times four lanes), a fixed floor (cells with fixed edges) and a
 // wall pressing down on the crest. The paper's motion rule (the default).
+// The scene of a deck given as text (name: the file name its diagnostics would give).
+Scene scene_of(const std::string& deck, const char* name) {
+    Scene s;
+    REQUIRE(read_deck_text(deck, name, s).empty());
+    return s;
+}
+
 Scene collapsing_slope(int ppc, const std::string& extra = "", bool scatter = true) {
     const std::string deck = std::string(R"(
 GRID     60 24 0.25
@@ -672,8 +679,7 @@ GRAVITY  0 -9.81
 SEED     7
 STEP     3E-4 400
 )") + extra + "\nEND\n";
-    Scene s;
-    REQUIRE(read_deck_text(deck, "slope", s).empty());
+    Scene s = scene_of(deck, "slope");
     for (auto& c : s.clusters) c.ppc = ppc;
     if (!scatter) {  // the material's own strength for every point, and a tension cut-off
         s.materials[1].scatter = 0;
@@ -757,9 +763,7 @@ GRAVITY  100 -9.81         ! a strong pull to the right: the soft block shears o
 STEP     3E-4 400
 END
 )";
-    Scene s;
-    REQUIRE(read_deck_text(deck, "spread", s).empty());
-    return s;
+    return scene_of(deck, "spread");
 }
 
 // A tower on a wide base: 22 200 points, a box of 130 x 75 cells, so that the lattice
@@ -776,9 +780,7 @@ GRAVITY  0 -9.81
 STEP     1E-3 120
 END
 )";
-    Scene s;
-    REQUIRE(read_deck_text(deck, "tower", s).empty());
-    return s;
+    return scene_of(deck, "tower");
 }
 
 void compare_wide_and_narrow(int ppc, int threads, const std::string& extra = "", bool scatter = true, bool mix = false) {
