@@ -745,6 +745,7 @@ struct WallState {
 struct Range {  // half-open index box
     int i0 = 0, i1 = 0, j0 = 0, j1 = 0;
     bool empty() const { return i0 >= i1 || j0 >= j1; }
+    long size() const { return empty() ? 0 : long(i1 - i0) * (j1 - j0); }  // the cells or nodes it holds
     Range unite(const Range& o) const {
         if (empty()) return o;
         if (o.empty()) return *this;
@@ -1103,8 +1104,9 @@ namespace detail {
 // now[1 .. team-1] move halfway towards equal shares of the total time, the time of each
 // block taken as spread evenly over it (halfway: the times are those of one step, and
 // noisy). Returns whether they moved. The threads' results may not depend on the edges.
-// (3 %: with 10 %, two threads may stay a fifth apart; the eq. 13 loop of the elastic
-// bench scene stayed at 11.8 against 8.6 microseconds a step.)
+// (3 %: with 10 %, two threads may differ by a fifth of their mean time on every step;
+// the eq. 13 loop of the elastic bench scene averaged 11.8 against 8.6 microseconds a
+// step over 400 steps with 10 %, 9.1 against 9.1 with 3 %.)
 template <class T, class Was, class Seconds>
 bool balance(int team, const Was& was, const Seconds& seconds, T* now) {
     double total = 0, slowest = 0;
@@ -1186,7 +1188,8 @@ public:
     // map again (a thread's points landed in a later thread's part).
     struct PartedPass { long steps = 0, listed = 0, clashes = 0; };
     const PartedPass& parted_pass() const { return parted_; }
-    // The lattice phases' loops by threads: how often their blocks of rows moved (by_rows).
+    // The lattice phases' loops by threads: how often their blocks of rows were cut anew
+    // (the threads' times differed by more than 3 %; by_rows).
     long row_block_moves() const { return row_moves_; }
     double time() const { return step_ * sc_.dt_s; }                 // model time [s]
     double kinetic_energy() const { return ke_; }                     // nodal, at the last half step [J/m]
@@ -1289,7 +1292,7 @@ private:
         int cmin = std::numeric_limits<int>::max(), cmax = -1, imin = std::numeric_limits<int>::max(), imax = -1;
         double mass = 0;
         long departed = 0;
-        long listed = 0;  // threaded map_to_lattice: points whose sums wait for lower chunks
+        long listed = 0;  // with threads: points whose sums wait for other chunks' (deferred_[list_at ..])
         // The fused threaded pass (advance_parted): the cells own_lo .. own_hi-1 take this
         // chunk's sums directly; a point landing in any other cell is listed in
         // deferred_[list_at ..]. The defaults: every cell (the serial pass).
@@ -1337,8 +1340,19 @@ private:
     };
     std::array<RowBlocks, kRowLoops> row_blocks_;
     long row_moves_ = 0;
-    template <class F> void by_rows(RowLoop loop, int j0, int j1, bool par, const F& f);
+    template <class F> void by_rows(RowLoop loop, int j0, int j1, long work, const F& f);
     void map_point(std::size_t k);
+    // The points the team's chunks listed (deferred_[list_at ..] of each Tally), in chunk
+    // order: eq. 7, 8.
+    void add_listed(int team) {
+        for (int u = 0; u < team; ++u) {
+            const Tally& a = map_tally_[std::size_t(u)];
+            for (long d = 0; d < a.listed; ++d) map_point(std::size_t(deferred_[std::size_t(a.list_at + d)]));
+        }
+    }
+    // Node mass before and after this step's mapping: the node gained mass, and eq. 12 gives
+    // it its neighbours' mean increment (compensate; nodal_forces marks its row).
+    static bool gained_mass(double before, double now) { return !(before > 0 || now == 0); }
     // The sums of eq. 7 and 8 of one cell: mass, volume and V sigma. A run of points that
     // stay in one cell adds to a local copy (kept in registers) and stores it once.
     struct CellSums {
@@ -1679,17 +1693,18 @@ inline void Simulation::create_points() {
     for (std::size_t k = 0; k < p_.size(); ++k) mass0_ += groups_[p_.group[k]].mass;
 }
 
-// Rows j0 .. j1-1 of a lattice phase, f(j) for each, by threads when par. Each row writes
+// Rows j0 .. j1-1 of a lattice phase, f(j) for each, by threads when they visit more than
+// 8 192 cells or nodes in all (work; the lattice loops' threshold from the start). Each row writes
 // only its own nodes or cells, so which thread takes a row changes no number: thread u
 // takes a block of rows, and the blocks follow the threads' times (detail::balance), as
 // rows cost unequal amounts (eq. 12 costs more where nodes cross cells: the elastic bench
 // block's upper half of the rows 41 us a step, its lower half 32 us).
 template <class F>
-inline void Simulation::by_rows([[maybe_unused]] RowLoop loop, int j0, int j1, [[maybe_unused]] bool par, const F& f) {
+inline void Simulation::by_rows([[maybe_unused]] RowLoop loop, int j0, int j1, [[maybe_unused]] long work, const F& f) {
 #if defined(_OPENMP)
     RowBlocks& b = row_blocks_[loop];
     const int cap = std::min(omp_get_max_threads(), int(b.seconds.size()));
-    if (par && cap > 1 && !omp_in_parallel()) {
+    if (work > 8192 && cap > 1 && !omp_in_parallel()) {
         const int n = j1 - j0;
         int team = 1;
         LPFDM_OMP(omp parallel num_threads(cap))
@@ -1774,7 +1789,7 @@ inline void Simulation::cell_strains() {
         }
     };
     auto row = [&](int j, auto wide) LPFDM_INLINE { detail::sweep(r.i0, r.i1, wide, [&](int i, auto tag) LPFDM_INLINE { cells(i, j, tag); }); };
-    by_rows(kStrainRows, r.j0, r.j1, (r.j1 - r.j0) * (r.i1 - r.i0) > 8192, [&](int j) { each_row(row, j); });
+    by_rows(kStrainRows, r.j0, r.j1, r.size(), [&](int j) { each_row(row, j); });
 }
 
 // eq. 6 (one consult of the constitutive model per point), the Jaumann rotation by
@@ -1831,8 +1846,9 @@ inline void Simulation::advance_points() {
 // are cleared and made again by map_to_lattice (the points have moved already): the same
 // numbers either way, only slower. A part ends a row and two cells above the highest cell
 // the chunk's points lie in (known from the last step's pass, else looked up): beyond the
-// reach of a point that moves at most one cell. Returns false when it cannot
-// run (one thread, or ADVECT POINTS); step() then takes update_points and map_points.
+// reach of a point that moves at most one cell. Returns false when it cannot run (one
+// thread; ADVECT POINTS; more threads than at set-up, or 4 096 points or fewer then;
+// dynamic or nested teams); step() then takes update_points and map_points.
 inline bool Simulation::advance_parted() {
 #if defined(_OPENMP)
     const long n = long(p_.size());
@@ -1899,11 +1915,7 @@ inline bool Simulation::advance_parted() {
         parted_.listed += a.listed;
         t.merge(a);
     }
-    if (!clash)
-        for (int u = 0; u < team; ++u) {
-            const Tally& a = map_tally_[std::size_t(u)];
-            for (long d = 0; d < a.listed; ++d) map_point(std::size_t(deferred_[std::size_t(a.list_at + d)]));  // eq. 7, 8
-        }
+    if (!clash) add_listed(team);
     departed_ = std::size_t(t.departed);
     if (departed_) remove_departed();
     occupied_ = landed(t);  // every cell written
@@ -2466,8 +2478,7 @@ inline void Simulation::remove_departed() {
 inline void Simulation::clear_cells() {
     if (occupied_.empty()) return;
     // Rows by threads: at a million points this is some 10 MB a step.
-    [[maybe_unused]] const bool par = !serial() && long(occupied_.j1 - occupied_.j0) * (occupied_.i1 - occupied_.i0) > 8192;
-    by_rows(kClearRows, occupied_.j0, occupied_.j1, par, [&](int j) { clear_row(j, 0, std::numeric_limits<int>::max()); });
+    by_rows(kClearRows, occupied_.j0, occupied_.j1, occupied_.size(), [&](int j) { clear_row(j, 0, std::numeric_limits<int>::max()); });
 }
 
 // The sums of row j's cells in occupied_'s columns, of those numbered lo .. hi-1.
@@ -2586,14 +2597,11 @@ inline void Simulation::map_points([[maybe_unused]] bool after_update) {
                 map_chunk<false>(k0, k1, id, listed, mass);
             a.mass = mass;
             a.listed = listed;
+            a.list_at = k0;
             if (id == 0) team = nt;
         }
-        for (int u = 0; u < team; ++u) {
-            const Tally& a = map_tally_[std::size_t(u)];
-            const long k0 = n * u / team;
-            for (long d = 0; d < a.listed; ++d) map_point(std::size_t(deferred_[std::size_t(k0 + d)]));
-            t.merge(a);
-        }
+        add_listed(team);
+        for (int u = 0; u < team; ++u) t.merge(map_tally_[std::size_t(u)]);
     }
 #endif
     if (team == 1)
@@ -2615,7 +2623,6 @@ inline void Simulation::nodal_forces() {
     const Range nr{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     const double inv2L = 0.5 * invL_, L2 = L_ * L_;
     const Range keep = nr.grow(1, mx_ + 1, my_ + 1);  // compensate() asks which nodes are new
-    [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
     const int mx = mx_, my = my_;
     double *sxx = svxx_.data(), *syy = svyy_.data(), *sxy = svxy_.data();
     const double* cm = cmass_.data();
@@ -2646,7 +2653,7 @@ inline void Simulation::nodal_forces() {
         detail::store(sxx + c, xx * w); detail::store(syy + c, yy * w); detail::store(sxy + c, xy * w);
     };
     auto smear_row = [&](int j, auto wide) LPFDM_INLINE { detail::sweep(j * mx + oc.i0, j * mx + oc.i1, wide, smear); };
-    by_rows(kSmearRows, oc.j0, oc.j1, par, [&](int j) { each_row(smear_row, j); });
+    by_rows(kSmearRows, oc.j0, oc.j1, oc.size(), [&](int j) { each_row(smear_row, j); });
     const bool hourglass = !hgx_.empty();
     const double khg = hourglass ? sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s) : 0.0;
     // The node is corner [1] of cell (i, j), [2] of (i-1, j), [3] of (i, j-1) and [4] of
@@ -2689,9 +2696,9 @@ inline void Simulation::nodal_forces() {
             T was;
             detail::load(nm + n, was);
             detail::store(nm_prev + n, was);
-            // Gained mass: compensate()'s test, in the lanes of a vector or not.
+            // gained_mass, in the lanes of a vector or not.
             if constexpr (std::is_same_v<T, double>) {
-                gained = gained || !(was > 0 || mn == 0);
+                gained = gained || gained_mass(was, mn);
             } else {
 #if LPFDM_WIDE
                 const T zero{};
@@ -2713,7 +2720,7 @@ inline void Simulation::nodal_forces() {
         for (int i = ib; i < nr.i1; ++i) node_force(i, j, std::false_type{}, one, gained);
         row_gained[j] = gained;
     };
-    by_rows(kForceRows, nr.j0, nr.j1, par, [&](int j) { each_row(force_row, j); });
+    by_rows(kForceRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(force_row, j); });
 }
 
 // eq. 12: the increment carried by node k belonged to the material now at x_k - du_k;
@@ -2724,7 +2731,6 @@ inline void Simulation::compensate() {
     // Nodes that gained mass this step take the mean increment of their neighbours that
     // had mass (read before those are compensated, so the order does not matter); only
     // rows where nodal_forces() saw such a node.
-    [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
     long gaining = 0;
     for (int j = nr.j0; j < nr.j1; ++j) gaining += row_gained_[std::size_t(j)];
     const int mx = mx_, my = my_;
@@ -2734,11 +2740,11 @@ inline void Simulation::compensate() {
     const double* nm = nmass_.data();
     const double* nm_prev = nmass_prev_.data();
     const CellStrain* cs = strain_.data();
-    if (gaining) by_rows(kFillRows, nr.j0, nr.j1, gaining * (nr.i1 - nr.i0) > 8192, [&](int j) {
+    if (gaining) by_rows(kFillRows, nr.j0, nr.j1, gaining * (nr.i1 - nr.i0), [&](int j) {
         if (!row_gained_[std::size_t(j)]) return;
         for (int i = nr.i0; i < nr.i1; ++i) {
             const int n = j * (mx + 1) + i;
-            if (nm_prev[n] > 0 || nm[n] == 0) continue;
+            if (!gained_mass(nm_prev[n], nm[n])) continue;
             double sx = 0, sy = 0, msum = 0;
             for (int qj = std::max(0, j - 1); qj <= std::min(my, j + 1); ++qj)
                 for (int qi = std::max(0, i - 1); qi <= std::min(mx, i + 1); ++qi) {
@@ -2873,7 +2879,7 @@ inline void Simulation::compensate() {
             }
         });
     };
-    by_rows(kShiftRows, nr.j0, nr.j1, par, [&](int j) { each_row(shift_row, j); });
+    by_rows(kShiftRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(shift_row, j); });
 }
 
 // ADVECT POINTS, in place of eq. 12: each node's increment is the mass-weighted mean of
@@ -2884,8 +2890,7 @@ inline void Simulation::compensate() {
 // what eq. 12 gives to first order in E.
 inline void Simulation::carried_increments(const Range& nr) {
     const double h = 0.5 * L_;
-    [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
-    by_rows(kCarryRows, nr.j0, nr.j1, par, [&](int j) {
+    by_rows(kCarryRows, nr.j0, nr.j1, nr.size(), [&](int j) {
         for (int i = nr.i0; i < nr.i1; ++i) {
             double px = 0, py = 0, m = 0;
             const bool left = i > 0, right = i < mx_, below = j > 0, above = j < my_;
@@ -2913,7 +2918,6 @@ inline void Simulation::integrate() {
     const Range nr = nodes_now.unite(live_nodes_);
     const double dt2 = sc_.dt_s * sc_.dt_s, alpha = sc_.damping;
     double ke = 0, maxdu = 0;
-    [[maybe_unused]] const bool par = (nr.j1 - nr.j0) * (nr.i1 - nr.i0) > 8192;
     const int mx = mx_;
     double *ux_n = dux_.data(), *uy_n = duy_.data(), *nm = nmass_.data(), *fxn = fx_.data(), *fyn = fy_.data();
     // Node n of the nodes this step's cells touch, or the nodes n .. n + 3 in the lanes of
@@ -2947,7 +2951,7 @@ inline void Simulation::integrate() {
         detail::sweep(n0 + ia, n0 + ib, wide, advance);
         for (int i = ib; i < nr.i1; ++i) idle(i);
     };
-    by_rows(kAdvanceRows, nr.j0, nr.j1, par, [&](int j) { each_row(advance_row, j); });
+    by_rows(kAdvanceRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(advance_row, j); });
     integrated_ = nr;
     rx_ = ry_ = 0;
     for (const std::int32_t n : fixed_nodes_) {
@@ -3007,7 +3011,7 @@ inline void Simulation::integrate() {
         row_ke_of[j] = row_ke;
         row_du_of[j] = row_du;
     };
-    by_rows(kEnergyRows, nr.j0, nr.j1, par, [&](int j) { each_row(energy_row, j); });
+    by_rows(kEnergyRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(energy_row, j); });
     for (int j = nr.j0; j < nr.j1; ++j) {
         ke += row_ke_[std::size_t(j)];
         maxdu = std::max(maxdu, row_du_[std::size_t(j)]);
