@@ -1284,10 +1284,6 @@ private:
     void remove_departed();
     void clear_cells();
     void clear_row(int j, int lo, int hi);
-    void smear_row(const Range& oc, int j, int lo, int hi);
-    // The cell sums are already smeared (eq. 8): the threaded point pass did it, part by
-    // part, and nodal_forces does not.
-    bool smeared_ = false;
     template <bool Fused> void advance_points();
     bool advance_parted();
     // What a range of points gives map_to_lattice's bookkeeping: the cells and columns
@@ -1346,15 +1342,12 @@ private:
     long row_moves_ = 0;
     template <class F> void by_rows(RowLoop loop, int j0, int j1, long work, const F& f);
     void map_point(std::size_t k);
-    // The points the chunks first .. team-1 listed (deferred_[list_at ..] of each Tally) that
-    // lie in the cells lo .. hi-1, in chunk order: eq. 7, 8.
-    void add_listed(int team, int first = 0, int lo = 0, int hi = std::numeric_limits<int>::max()) {
-        for (int u = first; u < team; ++u) {
+    // The points the team's chunks listed (deferred_[list_at ..] of each Tally), in chunk
+    // order: eq. 7, 8.
+    void add_listed(int team) {
+        for (int u = 0; u < team; ++u) {
             const Tally& a = map_tally_[std::size_t(u)];
-            for (long d = 0; d < a.listed; ++d) {
-                const std::size_t k = std::size_t(deferred_[std::size_t(a.list_at + d)]);
-                if (p_.cell[k] >= lo && p_.cell[k] < hi) map_point(k);
-            }
+            for (long d = 0; d < a.listed; ++d) map_point(std::size_t(deferred_[std::size_t(a.list_at + d)]));
         }
     }
     // Node mass before and after this step's mapping: the node gained mass, and eq. 12 gives
@@ -1846,14 +1839,12 @@ inline void Simulation::advance_points() {
 // update_points and map_to_lattice in one pass by threads (without ADVECT POINTS). Thread u
 // moves the points of its chunk (a contiguous range) and adds those landing in its part
 // of the cells (own_lo .. own_hi-1 of its Tally; the parts follow one another in cell
-// order) directly; a point landing in another part is listed. When every chunk is
-// through, each thread adds the listed points that lie in its part, in chunk order, and
-// smears its part's sums (eq. 8, which nodal_forces then skips). Each cell sum then takes
-// its terms in point order, the same as the serial pass, unless a chunk landed in a
-// higher chunk's part: that higher chunk's points went in first. Every thread sees that
-// from the chunks' tallies, and then the step's sums are cleared and made again by
-// map_to_lattice after the pass (the points have moved already): the same numbers either
-// way, only slower. A part ends a row and two cells above the highest cell
+// order) directly; a point landing in another part is listed, and the lists are added
+// after the pass in chunk order. Each cell sum then takes its terms in point order, the
+// same as the serial pass, unless a chunk landed in a higher chunk's part: that higher
+// chunk's points went in first. That is checked after the pass, and then the step's sums
+// are cleared and made again by map_to_lattice (the points have moved already): the same
+// numbers either way, only slower. A part ends a row and two cells above the highest cell
 // the chunk's points lie in (known from the last step's pass, else looked up): beyond the
 // reach of a point that moves at most one cell. Returns false when it cannot run (one
 // thread; ADVECT POINTS; more threads than at set-up, or 4 096 points or fewer then;
@@ -1915,26 +1906,6 @@ inline bool Simulation::advance_parted() {
         mine.seconds = omp_get_wtime() - t0;
         map_tally_[std::size_t(id)] = mine;
         if (id == 0) team = nt;
-        // Every chunk is through. Unless a chunk landed in a higher chunk's part (a clash,
-        // below), a listed point lies in a lower chunk's part: this thread adds those that
-        // lie in its part, from the higher chunks' lists in chunk order (as add_listed after
-        // the pass would), and then smears its part's sums (eq. 8; nodal_forces would).
-        LPFDM_OMP(omp barrier)
-        const double t1 = omp_get_wtime();
-        Tally all;
-        bool clashed = false;
-        for (int u = 0; u < nt; ++u) {
-            const Tally& a = map_tally_[std::size_t(u)];
-            clashed |= a.cmax >= a.own_hi;
-            all.merge(a);
-        }
-        if (!clashed) {
-            add_listed(nt, id + 1, mine.own_lo, mine.own_hi);
-            const Range oc = landed(all);
-            for (int j = std::max(oc.j0, mine.own_lo / mx_), j1 = int(std::min<long>(oc.j1, mine.own_hi / mx_ + 1L)); j < j1; ++j)
-                smear_row(oc, j, mine.own_lo, mine.own_hi);
-        }
-        map_tally_[std::size_t(id)].seconds += omp_get_wtime() - t1;  // read after the region only
     }
     Tally t;
     bool clash = false;
@@ -1944,7 +1915,7 @@ inline bool Simulation::advance_parted() {
         parted_.listed += a.listed;
         t.merge(a);
     }
-    smeared_ = !clash;
+    if (!clash) add_listed(team);
     departed_ = std::size_t(t.departed);
     if (departed_) remove_departed();
     occupied_ = landed(t);  // every cell written
@@ -2505,7 +2476,6 @@ inline void Simulation::remove_departed() {
 // eq. 7 (cell mass) and eq. 8 (stress smeared over the cell, sum V sigma / L^2; kept
 // here as sum V sigma and sum V; nodal_forces divides by max(L^2, sum V)).
 inline void Simulation::clear_cells() {
-    smeared_ = false;
     if (occupied_.empty()) return;
     // Rows by threads: at a million points this is some 10 MB a step.
     by_rows(kClearRows, occupied_.j0, occupied_.j1, occupied_.size(), [&](int j) { clear_row(j, 0, std::numeric_limits<int>::max()); });
@@ -2517,26 +2487,6 @@ inline void Simulation::clear_row(int j, int lo, int hi) {
     if (c0 >= c1) return;
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) std::fill(v->data() + c0, v->data() + c1, 0.0);
     if (!carried_.empty()) std::fill(carried_.data() + c0, carried_.data() + c1, Carried{});
-}
-
-// eq. 8 with the fill capped at one (the sums become the stresses nodal_forces needs,
-// already divided by 2L): row j's cells in oc's columns, of those numbered lo .. hi-1;
-// each cell once a step, after its sums are complete. Cell c, or the cells c .. c + 3 in
-// the lanes of a vector T.
-inline void Simulation::smear_row(const Range& oc, int j, int lo, int hi) {
-    const int c0 = std::max(j * mx_ + oc.i0, lo), c1 = std::min(j * mx_ + oc.i1, hi);
-    if (c0 >= c1) return;
-    const double inv2L = 0.5 * invL_, L2 = L_ * L_;
-    const double* cv = cvol_.data();
-    double *sxx = svxx_.data(), *syy = svyy_.data(), *sxy = svxy_.data();
-    auto smear = [&](int c, auto tag) LPFDM_INLINE {
-        using T = typename decltype(tag)::type;
-        T v, xx, yy, xy;
-        detail::load(cv + c, v); detail::load(sxx + c, xx); detail::load(syy + c, yy); detail::load(sxy + c, xy);
-        const T one = T{} + 1, w = inv2L * (v > L2 ? L2 / v : one);
-        detail::store(sxx + c, xx * w); detail::store(syy + c, yy * w); detail::store(sxy + c, xy * w);
-    };
-    each_row([&](int, auto wide) LPFDM_INLINE { detail::sweep(c0, c1, wide, smear); }, j);
 }
 
 // eq. 7 and 8 for point k, into the cell it lies in; with ADVECT POINTS also the
@@ -2671,10 +2621,12 @@ inline void Simulation::map_points([[maybe_unused]] bool after_update) {
 // node gathers rather than cells scattering, so the sum has one fixed order.
 inline void Simulation::nodal_forces() {
     const Range nr{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
+    const double inv2L = 0.5 * invL_, L2 = L_ * L_;
     const Range keep = nr.grow(1, mx_ + 1, my_ + 1);  // compensate() asks which nodes are new
     const int mx = mx_, my = my_;
     double *sxx = svxx_.data(), *syy = svyy_.data(), *sxy = svxy_.data();
     const double* cm = cmass_.data();
+    const double* cv = cvol_.data();
     double *nm = nmass_.data(), *nm_prev = nmass_prev_.data(), *fxn = fx_.data(), *fyn = fy_.data();
     std::uint8_t* row_gained = row_gained_.data();
     const double gx = sc_.gravity_x, gy = sc_.gravity_y;
@@ -2690,10 +2642,18 @@ inline void Simulation::nodal_forces() {
             copy(j, nr.i1, keep.i1);
         }
     }
-    // eq. 8, once per cell (map_to_lattice clears it), unless the point pass did it.
+    // eq. 8 with the fill capped at one, applied once per cell (map_to_lattice clears it);
+    // cell c, or the cells c .. c + 3 in the lanes of a vector T.
     const Range oc = occupied_;
-    if (!smeared_) by_rows(kSmearRows, oc.j0, oc.j1, oc.size(), [&](int j) { smear_row(oc, j, 0, std::numeric_limits<int>::max()); });
-    smeared_ = false;
+    auto smear = [&](int c, auto tag) LPFDM_INLINE {
+        using T = typename decltype(tag)::type;
+        T v, xx, yy, xy;
+        detail::load(cv + c, v); detail::load(sxx + c, xx); detail::load(syy + c, yy); detail::load(sxy + c, xy);
+        const T one = T{} + 1, w = inv2L * (v > L2 ? L2 / v : one);
+        detail::store(sxx + c, xx * w); detail::store(syy + c, yy * w); detail::store(sxy + c, xy * w);
+    };
+    auto smear_row = [&](int j, auto wide) LPFDM_INLINE { detail::sweep(j * mx + oc.i0, j * mx + oc.i1, wide, smear); };
+    by_rows(kSmearRows, oc.j0, oc.j1, oc.size(), [&](int j) { each_row(smear_row, j); });
     const bool hourglass = !hgx_.empty();
     const double khg = hourglass ? sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s) : 0.0;
     // The node is corner [1] of cell (i, j), [2] of (i-1, j), [3] of (i, j-1) and [4] of
