@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # make bench: particle-steps per second on the named benchmark scenes, 1 and 2 threads
 # (their runs interleaved), median of 5 runs (with min and max), the ratio of the two
-# medians, peak memory, bytes per point and the time split by phase. With git history, the same scenes also run on the plain serial loop the
-# optimised cycle replaced (BEFORE, default the commit that introduced the benchmark's
-# predecessor), side by side, and the ratio is printed; and the same program with the
+# medians, peak memory, bytes per point and the time split by phase. With git history,
+# the same scenes also run on the plain serial loop the optimised cycle replaced
+# (BEFORE, default the commit that introduced the benchmark's predecessor), side by
+# side, and the ratio is printed; and the same program with the
 # points, cells and nodes one at a time instead of four per AVX2 register (--no-avx2),
 # with that ratio.
 #   bash tools/bench.sh [EXE] [RUNS]
