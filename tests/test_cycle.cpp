@@ -654,11 +654,6 @@ void noisy_stresses(Points& p, double tension = 0) {
     }
 }
 
-// A slope collapsing over the lattice's right edge: an elastic base and Mohr-Coulomb
-// with scatter and softening above, the interface through the middle of a cell row (the
-// row's cells go to one cluster each), ppc x ppc points per cell (3: runs of nine, two of four lanes and one
-// alone; 4: runs of four times four lanes), a fixed floor (cells with fixed edges) and a
-// wall pressing down on the crest. The paper's motion rule (the default).
 // The scene of a deck given as text (name: the file name its diagnostics would give).
 Scene scene_of(const std::string& deck, const char* name) {
     Scene s;
@@ -666,6 +661,11 @@ Scene scene_of(const std::string& deck, const char* name) {
     return s;
 }
 
+// A slope collapsing over the lattice's right edge: an elastic base and Mohr-Coulomb
+// with scatter and softening above, the interface through the middle of a cell row (the
+// row's cells go to one cluster each), ppc x ppc points per cell (3: runs of nine, two of four lanes and one
+// alone; 4: runs of four times four lanes), a fixed floor (cells with fixed edges) and a
+// wall pressing down on the crest. The paper's motion rule (the default).
 Scene collapsing_slope(int ppc, const std::string& extra = "", bool scatter = true) {
     const std::string deck = std::string(R"(
 GRID     60 24 0.25
