@@ -33,9 +33,12 @@ const char* kUsage =
     "                --set DAMPING.ALPHA=0 (CARD.PARAM; MATERIAL and WALL by id, CLUSTER and FIX by\n"
     "                their order in the deck from 1); may be given several times\n"
     "  --threads N   use N threads (default 1, or OMP_NUM_THREADS; the output is the same for any N)\n"
+    "  --kernel K    the code that runs the cycle (the same output with each):\n"
+    "                fast       the default: threads, four values per AVX2 register where the processor has it\n"
+    "                scalar     fast, one value at a time (no AVX2)\n"
+    "                reference  the plain cycle, every cell, point and node, one thread: the definition\n"
     "  --profile     print the time of each phase of the cycle, peak memory and bytes per point\n"
-    "  --no-avx2     run points, cells and nodes one at a time, not four per AVX2 register (the\n"
-    "                same output; for speed comparisons)\n"
+    "  --no-avx2     the same as --kernel scalar\n"
     "  -q            quiet: no progress line and no summary\n"
     "  --help        this text\n"
     "  --version     the version\n"
@@ -46,7 +49,8 @@ struct Options {
     std::string deck, outdir = ".";
     long refine = 1, steps = 0;
     long long seed = -1;
-    bool quiet = false, profile = false, no_avx2 = false;
+    bool quiet = false, profile = false;
+    lpfdm::Kernel kernel = lpfdm::Kernel::Fast;
     long threads = 0;
     std::vector<std::pair<std::string, double>> settings;
 };
@@ -102,7 +106,7 @@ int main(int argc, char** argv) {
         if (s == "--version") { std::printf("lpfdm %s\n", lpfdm::kVersion); return 0; }
         if (s == "-q") { opt.quiet = true; continue; }
         if (s == "--profile") { opt.profile = true; continue; }
-        if (s == "--no-avx2") { opt.no_avx2 = true; continue; }
+        if (s == "--no-avx2") { opt.kernel = lpfdm::Kernel::Scalar; continue; }
         if (s == "-o") {
             const char* d = value();
             if (!d) return usage_error("-o needs a directory");
@@ -123,6 +127,12 @@ int main(int argc, char** argv) {
             const char* d = value();
             if (!d || !parse_long(d, 1, 1024, v)) return usage_error("--threads needs a whole number from 1 to 1024");
             opt.threads = long(v);
+        } else if (s == "--kernel") {
+            const std::string d = a + 1 < argc ? argv[++a] : "";
+            if (d == "fast") opt.kernel = lpfdm::Kernel::Fast;
+            else if (d == "scalar") opt.kernel = lpfdm::Kernel::Scalar;
+            else if (d == "reference") opt.kernel = lpfdm::Kernel::Reference;
+            else return usage_error("--kernel needs fast, scalar or reference");
         } else if (s == "--set") {
             const char* d = value();
             const std::string kv = d ? d : "";
@@ -187,9 +197,8 @@ int main(int argc, char** argv) {
 #else
     const int nthreads = 1;
 #endif
-    lpfdm::Simulation sim(scene);
+    lpfdm::Simulation sim(scene, opt.kernel);
     sim.set_profiling(opt.profile);
-    if (opt.no_avx2) sim.set_wide(false);
     std::vector<OutFile> outs;
     for (const auto& o : sim.scene().outputs) {
         OutFile of;
@@ -301,7 +310,8 @@ int main(int argc, char** argv) {
         getrusage(RUSAGE_SELF, &ru);
         double total = 0;
         for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
-        const char* lanes = !sim.wide() ? "points, cells and nodes one at a time"
+        const char* lanes = sim.kernel() == lpfdm::Kernel::Reference ? "the reference cycle, one thread"
+                            : !sim.wide() ? "points, cells and nodes one at a time"
                             : sim.scene().motion == lpfdm::Motion::Paper ? "points, cells and nodes four per AVX2 register"
                                                                           : "cells and nodes four per AVX2 register, points one at a time";
         std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, %s\n", nthreads,

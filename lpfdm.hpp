@@ -453,6 +453,17 @@ inline StrainIncrement cell_strain(const double* ux, const double* uy, int n1, i
     cell_strain(ux, uy, n1, row, h, e.xx, e.yy, e.xy, e.yx);
     return e;
 }
+// HOURGLASS (not in the paper): the checkerboard part h = (+1, -1, -1, +1)/4 of a cell's
+// nodal increments, the one pattern eq. 5 cannot see.
+template <class T>
+LPFDM_INLINE inline void checkerboard_mode(const double* ux, const double* uy, int n1, int row, T& gx, T& gy) {
+    const int n2 = n1 + 1, n3 = n1 + row, n4 = n3 + 1;
+    T ux1, ux2, ux3, ux4, uy1, uy2, uy3, uy4;
+    detail::load(ux + n1, ux1); detail::load(ux + n2, ux2); detail::load(ux + n3, ux3); detail::load(ux + n4, ux4);
+    detail::load(uy + n1, uy1); detail::load(uy + n2, uy2); detail::load(uy + n3, uy3); detail::load(uy + n4, uy4);
+    gx = 0.25 * (ux1 - ux2 - ux3 + ux4);
+    gy = 0.25 * (uy1 - uy2 - uy3 + uy4);
+}
 
 // Rotates the in-plane stress with the material (Jaumann); invariants are kept exactly.
 // T: one value, or the lanes of a vector (the same operations in every lane).
@@ -463,6 +474,106 @@ LPFDM_INLINE inline void rotate_stress(T& xx, T& yy, T& xy, double c2, double s2
     xx = pm + ar; yy = pm - ar; xy = br;
 }
 inline void rotate_stress(Stress& s, double c2, double s2) { rotate_stress(s.xx, s.yy, s.xy, c2, s2); }
+
+// The rest of the paper's equations, one function each, written once: the reference
+// cycle (Simulation::step_reference) calls them one value at a time, the fast kernel
+// calls the same functions, with T one value or the four lanes of an AVX2 register
+// (the same operations in the same order in every lane: the same numbers bit for bit).
+
+// eq. 7a/7b: where a point at (x0, y0) of the cell whose node [1] lies at (xi, yj) and
+// moved by (ux1, uy1) goes: the affine map of the cell's strain about node [1].
+template <class T>
+LPFDM_INLINE inline void move_point_paper(const T& x0, const T& y0, const StrainIncrement& e, double xi, double yj, double ux1, double uy1, T& x, T& y) {
+    const T dx = x0 - xi, dy = y0 - yj;
+    x = x0 + e.xx * dx + e.xy * dy + ux1;
+    y = y0 + e.yy * dy + e.yx * dx + uy1;
+}
+// MOTION CENTRE: the map of eq. 7a/7b about the cell centre, moved by the mean (umx, umy)
+// of the four nodal increments (mirror-symmetric). d: the point's own increment.
+template <class T>
+LPFDM_INLINE inline void move_point_centre(const T& x0, const T& y0, const StrainIncrement& e, double xi, double yj, double L, double umx, double umy, T& x, T& y, T& dx_out, T& dy_out) {
+    const T cx = (x0 - xi) - 0.5 * L, cy = (y0 - yj) - 0.5 * L;
+    x = x0 + e.xx * cx + e.xy * cy + umx;
+    y = y0 + e.yy * cy + e.yx * cx + umy;
+    dx_out = e.xx * cx + e.xy * cy + umx;
+    dy_out = e.yy * cy + e.yx * cx + umy;
+}
+// MOTION BILINEAR: the four nodal increments (ux[0..3], uy[0..3] of nodes [1]..[4])
+// interpolated by the cell's bilinear shape functions, as in MPM.
+template <class T>
+LPFDM_INLINE inline void move_point_bilinear(const T& x0, const T& y0, double xi, double yj, double invL, const double* ux, const double* uy, T& x, T& y, T& dx_out, T& dy_out) {
+    const T u = (x0 - xi) * invL, v = (y0 - yj) * invL;
+    const T w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
+    x = x0 + w1 * ux[0] + w2 * ux[1] + w3 * ux[2] + w4 * ux[3];
+    y = y0 + w1 * uy[0] + w2 * uy[1] + w3 * uy[2] + w4 * uy[3];
+    dx_out = w1 * ux[0] + w2 * ux[1] + w3 * ux[2] + w4 * ux[3];
+    dy_out = w1 * uy[0] + w2 * uy[1] + w3 * uy[2] + w4 * uy[3];
+}
+
+// eq. 8: the factor that turns a cell's sum V sigma into the stress the nodal forces
+// use, already divided by 2L (b = +-1/2L): 1/L^2 (the paper) times L^2, or 1 / sum V
+// where the points pack more than the cell's area (see "Choices" in the manual).
+// (Vectors go out through references: a function returning one would have another ABI
+// without AVX, GCC warns.)
+template <class T>
+LPFDM_INLINE inline void smear_weight(const T& sum_vol, double L2, double inv2L, T& w) {
+    const T one = T{} + 1;
+    w = inv2L * (sum_vol > L2 ? L2 / sum_vol : one);
+}
+
+// The nodal force from one cell (eq. 9 as the exact transpose of eq. 5, virtual work):
+// F[a] = -L^2 (sigma_xx b_x[a] + sigma_xy b_y[a], sigma_xy b_x[a] + sigma_yy b_y[a]),
+// b = (+-1, +-1) / 2L. Corner: which node [1]..[4] of the cell the node is. (xx, yy, xy):
+// the cell's sum V sigma times smear_weight.
+template <int Corner, class T>
+LPFDM_INLINE inline void add_cell_force(const T& xx, const T& yy, const T& xy, T& fx, T& fy) {
+    if constexpr (Corner == 1) { fx += xx + xy; fy += xy + yy; }       // b = (-1, -1)
+    else if constexpr (Corner == 2) { fx += xy - xx; fy += yy - xy; }  // b = (+1, -1)
+    else if constexpr (Corner == 3) { fx += xx - xy; fy += xy - yy; }  // b = (-1, +1)
+    else { fx -= xx + xy; fy -= xy + yy; }                             // b = (+1, +1)
+}
+
+// eq. 12a/12b: the increment (ux, uy) a node carried belonged to material that has since
+// strained by (exx, eyy, exy, eyx): compensated.
+template <class T>
+LPFDM_INLINE inline void compensate_increment(T& ux, T& uy, const T& exx, const T& eyy, const T& exy, const T& eyx) {
+    const T cx = ux * (1 - exx) - uy * exy;  // eq. 12a
+    const T cy = uy * (1 - eyy) - ux * eyx;  // eq. 12b
+    ux = cx; uy = cy;
+}
+
+namespace detail {
+#if LPFDM_WIDE
+// Four doubles (and four lane masks) as GCC/Clang vectors: AVX2 registers inside a
+// function built for AVX2.
+typedef double v4d __attribute__((vector_size(32)));
+typedef long long v4m __attribute__((vector_size(32)));
+// The lanes (i, j, k, l) of a and b side by side (0-3 of a, 4-7 of b).
+#if defined(__clang__)
+#define LPFDM_SHUFFLE(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
+#else
+#define LPFDM_SHUFFLE(a, b, i, j, k, l) __builtin_shuffle(a, b, ::lpfdm::detail::v4m{i, j, k, l})
+#endif
+// True when every lane of a comparison's mask is set.
+LPFDM_INLINE inline bool all_lanes(const v4m& m) { return (m[0] & m[1] & m[2] & m[3]) != 0; }
+// True when no lane of a comparison's mask is set.
+LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { return (m[0] | m[1] | m[2] | m[3]) == 0; }
+// a = |v| lane by lane (the sign bit cleared, as std::fabs does).
+LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7fffffffffffffffLL); }
+#endif
+LPFDM_INLINE inline void abs_of(double v, double& a) { a = std::fabs(v); }
+}  // namespace detail
+
+// eq. 13-14: du(t + dt/2) = du(t - dt/2) + dt^2 / m (F - D), with local non-viscous
+// damping D = alpha |F| sgn(du) and sgn(0) = 0, along one axis.
+template <class T>
+LPFDM_INLINE inline void damped_increment(const T& u0, const T& f, const T& m, double dt2, double alpha, T& u) {
+    const T zero{}, unit = zero + 1;
+    const T sgn = u0 > 0 ? unit : (u0 < 0 ? -unit : zero);
+    T abs_f;
+    detail::abs_of(f, abs_f);
+    u = u0 + dt2 / m * (f - alpha * abs_f * sgn);  // eq. 13, 14
+}
 
 // Strength of one Mohr-Coulomb point at this moment.
 struct MohrStrength {
@@ -760,22 +871,6 @@ struct Range {  // half-open index box
 namespace detail {
 
 #if LPFDM_WIDE
-// Four doubles (and four lane masks) as GCC/Clang vectors: AVX2 registers inside a
-// function built for AVX2.
-typedef double v4d __attribute__((vector_size(32)));
-typedef long long v4m __attribute__((vector_size(32)));
-// The lanes (i, j, k, l) of a and b side by side (0-3 of a, 4-7 of b).
-#if defined(__clang__)
-#define LPFDM_SHUFFLE(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
-#else
-#define LPFDM_SHUFFLE(a, b, i, j, k, l) __builtin_shuffle(a, b, ::lpfdm::detail::v4m{i, j, k, l})
-#endif
-// True when every lane of a comparison's mask is set.
-LPFDM_INLINE inline bool all_lanes(const v4m& m) { return (m[0] & m[1] & m[2] & m[3]) != 0; }
-// True when no lane of a comparison's mask is set.
-LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { return (m[0] | m[1] | m[2] | m[3]) == 0; }
-// a = |v| lane by lane (the sign bit cleared, as std::fabs does).
-LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7fffffffffffffffLL); }
 // eq. 7, 8 (CellSums::add) for four points of one group, of volume vol and stress (sxx,
 // syy, sxy) in the lanes, into acc = (sum V, sum V sxx, sum V syy, sum V sxy): each
 // point's terms made in lanes (V = min(vol, vol0)), turned into one register per point
@@ -862,7 +957,6 @@ __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v
     return __builtin_ia32_movmskpd256(v4d(inside | shear)) | __builtin_ia32_movmskpd256(v4d(shear)) << 4;
 }
 #endif
-LPFDM_INLINE inline void abs_of(double v, double& a) { a = std::fabs(v); }
 // f(i, Tag<T>) for i = i0 .. i1 - 1: with Wide (std::true_type, inside a function built for
 // AVX2) four at a time in the lanes of a vector (T = v4d), the rest one at a time.
 template <class Wide, class F>
@@ -1125,30 +1219,50 @@ bool balance(int team, const Was& was, const Seconds& seconds, T* now) {
 }
 }  // namespace detail
 
+// Which code runs the cycle, chosen once, when a Simulation is made:
+//   Reference  the plain cycle (Simulation::step_reference): every cell, point and node,
+//              one value at a time, one thread. The definition of a step.
+//   Fast       the same cycle over the occupied part of the lattice only, by threads
+//              (OpenMP), and four values per AVX2 register where the processor has it.
+//   Scalar     Fast without AVX2.
+// All three give the same numbers, bit for bit (tests/test_reference.cpp).
+enum class Kernel : std::uint8_t { Fast, Scalar, Reference };
+inline const char* kernel_name(Kernel k) { return k == Kernel::Reference ? "reference" : k == Kernel::Scalar ? "scalar" : "fast"; }
+
 class Simulation {
 public:
-    explicit Simulation(const Scene& scene) : sc_(scene) { setup(); }
+    explicit Simulation(const Scene& scene, Kernel kernel = Kernel::Fast) : kernel_(kernel), sc_(scene) {
+        wide_ = kernel == Kernel::Fast && have_wide();
+        setup();
+    }
 
     // One LPFDM cycle (paper section 2), one function per phase.
     void step() {
         if (profiling_) { step_profiled(); return; }
+        if (kernel_ == Kernel::Reference) { step_reference(); return; }
         cell_strains();    // eq. 5a-5f
-        if (serial()) {
-            advance_points<true>();  // update_points and map_to_lattice in one pass
-        } else if (!advance_parted()) {  // the same, by threads
-            update_points();   // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b
-            map_points(true);  // map_to_lattice: eq. 7, 8 (the lattice is back at its original position)
-        }
+        point_pass();      // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b; eq. 7, 8
         nodal_forces();    // virtual work transpose of eq. 5, gravity eq. 10
         compensate();      // eq. 12
         integrate();       // eq. 13-14, fixed nodes, moving walls
         ++step_;
     }
+    // The same step by the reference cycle, whatever the kernel (see Kernel).
+    void step_reference() {
+        reference_cell_strains();  // eq. 5a-5f
+        reference_points();        // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b; eq. 7, 8
+        reference_nodal_forces();  // eq. 8, virtual work transpose of eq. 5, gravity eq. 10
+        reference_compensate();    // eq. 12
+        reference_integrate();     // eq. 13-14, fixed nodes, moving walls
+        ++step_;
+    }
+    Kernel kernel() const { return kernel_; }
 
-    // Wall-clock seconds spent in each phase of step() while profiling is on.
-    static constexpr int kPhases = 6;
+    // Wall-clock seconds spent in each phase of step() while profiling is on: the phases
+    // of the kernel that runs.
+    static constexpr int kPhases = 5;
     static const char* phase_name(int k) {
-        static const char* names[kPhases] = {"cell_strains", "update_points", "map_to_lattice", "nodal_forces", "compensate", "integrate"};
+        static const char* names[kPhases] = {"cell_strains", "points", "nodal_forces", "compensate", "integrate"};
         return names[k];
     }
     void set_profiling(bool on) { profiling_ = on; }                 // time each phase from now on
@@ -1162,7 +1276,7 @@ public:
         return false;
 #endif
     }
-    void set_wide(bool on) { wide_ = on && have_wide(); }
+    void set_wide(bool on) { wide_ = on && have_wide() && kernel_ != Kernel::Reference; }
     bool wide() const { return wide_; }
     const double* phase_seconds() const { return phase_s_; }          // kPhases entries, in step order
     // Bytes the point arrays hold per point (capacity, all arrays).
@@ -1430,25 +1544,64 @@ private:
     }
     void step_profiled() {
         using clock = std::chrono::steady_clock;
+        const bool ref = kernel_ == Kernel::Reference;
         // A switch, not an array of member pointers: g++ 12 -O1 with ASan and UBSan
         // together miscompiles the indexed member-pointer call (a wild index, a crash).
         for (int k = 0; k < kPhases; ++k) {
             const auto t0 = clock::now();
             switch (k) {
-            case 0: cell_strains(); break;
-            case 1: update_points(); break;
-            case 2: map_points(true); break;
-            case 3: nodal_forces(); break;
-            case 4: compensate(); break;
-            default: integrate(); break;
+            case 0: ref ? reference_cell_strains() : cell_strains(); break;
+            case 1: ref ? reference_points() : point_pass(); break;
+            case 2: ref ? reference_nodal_forces() : nodal_forces(); break;
+            case 3: ref ? reference_compensate() : compensate(); break;
+            default: ref ? reference_integrate() : integrate(); break;
             }
             phase_s_[k] += std::chrono::duration<double>(clock::now() - t0).count();
         }
         ++step_;
     }
+    // The fast kernel's point phase: update_points and map_to_lattice in one pass (by
+    // threads: advance_parted), or the two passes where that cannot run.
+    void point_pass() {
+        if (serial()) {
+            advance_points<true>();
+        } else if (!advance_parted()) {
+            update_points();   // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b
+            map_points(true);  // map_to_lattice: eq. 7, 8 (the lattice is back at its original position)
+        }
+    }
+    // The reference cycle's phases, in step order.
+    void reference_cell_strains();
+    void reference_points();
+    void reference_nodal_forces();
+    void reference_compensate();
+    void reference_integrate();
+    // eq. 6 for point k in a cell of strain increment e and rotation (rc, rs).
+    void consult_model(std::size_t k, const MaterialConstants& mc, const StrainIncrement& e, double rc, double rs, Stress& s);
+    // The strength of Mohr-Coulomb point k now: its own c and N_phi (scatter) or its
+    // material's, cohesion softened once it has yielded.
+    MohrStrength strength_of(const MaterialConstants& mc, std::size_t k) const {
+        const bool own = !p_.c0.empty();
+        const double c0 = own ? p_.c0[k] : mc.c;
+        MohrStrength st;
+        st.n_phi = own ? p_.n_phi[k] : mc.n_phi;
+        st.sqrt_n_phi = own ? p_.sqrt_n_phi[k] : mc.sqrt_n_phi;
+        st.c = p_.yielded[k] ? c0 * (1 - mc.soften) : c0;
+        st.n_psi = std::min(mc.n_psi, st.n_phi);
+        st.tension = mc.tension;
+        return st;
+    }
+    // eq. 12's look-up: the strain increments of the cell holding the lattice point (fx, fy)
+    // (in cells), the mean of two or four cells where it lies on their common edge or
+    // corner; cells outside the lattice (in the fast kernel: outside the strained box) do
+    // not count. False when no cell counts.
+    bool strain_at(double fx, double fy, double& exx, double& eyy, double& exy, double& eyx) const;
+    Range impose_supports();
+    void carried_row(int j, int i0, int i1);
+    Kernel kernel_ = Kernel::Fast;
     bool profiling_ = false;
-    double phase_s_[kPhases] = {0, 0, 0, 0, 0, 0};
-    bool wide_ = have_wide();  // the AVX2 version of the point loop and lattice phases (LPFDM_WIDE)
+    double phase_s_[kPhases] = {0, 0, 0, 0, 0};
+    bool wide_ = false;  // the AVX2 version of the point loop and lattice phases (LPFDM_WIDE)
 
     Scene sc_;
     int mx_ = 0, my_ = 0;
@@ -1693,6 +1846,235 @@ inline void Simulation::create_points() {
     for (std::size_t k = 0; k < p_.size(); ++k) mass0_ += groups_[p_.group[k]].mass;
 }
 
+// ---------------------------------------------------- the reference cycle ---
+//
+// One LPFDM step (paper section 2) as plainly as it can be written: one loop per phase
+// over every cell, point and node, one value at a time, one thread. It is the definition
+// of a step: the fast kernel below visits only the occupied part of the lattice, runs
+// threads and AVX2 lanes, and gives the same numbers bit for bit (tests/test_reference.cpp
+// runs every deck both ways). The equations themselves are the free functions above
+// (cell_strain, jaumann_rotation, elastic_increment, mohr_coulomb_return, move_point_*,
+// CellSums::add, smear_weight, add_cell_force, compensate_increment, damped_increment),
+// which both kernels call.
+
+// 1. eq. 5a-5f: each cell's strain increments and rotation from its four nodes' increments.
+inline void Simulation::reference_cell_strains() {
+    for (int j = 0; j < my_; ++j)
+        for (int i = 0; i < mx_; ++i) {
+            const int c = cell(i, j);
+            CellStrain& s = strain_[std::size_t(c)];
+            s = CellStrain{};  // an empty cell: no strain and no rotation (see eq. 12 in the manual)
+            if (!hgx_.empty()) hgx_[std::size_t(c)] = hgy_[std::size_t(c)] = 0;
+            if (!(cmass_[std::size_t(c)] > 0)) continue;
+            const StrainIncrement e = strain_of_cell(i, j);  // eq. 5a-5d
+            s.xx = e.xx; s.yy = e.yy; s.xy = e.xy; s.yx = e.yx;
+            jaumann_rotation(e.theta(), s.rc, s.rs);  // eq. 5e, 5f
+            if (!hgx_.empty()) checkerboard_mode(dux_.data(), duy_.data(), node(i, j), mx_ + 1, hgx_[std::size_t(c)], hgy_[std::size_t(c)]);
+        }
+}
+
+// eq. 6: the stress of point k after its cell's strain increment e: the old stress turns
+// with the material (Jaumann: (rc, rs) the cosine and sine of twice eq. 5f's rotation),
+// then the constitutive model adds its increment (Hooke's law, then the Mohr-Coulomb
+// return if the trial lies outside the yield surface; or the user's model).
+inline void Simulation::consult_model(std::size_t k, const MaterialConstants& mc, const StrainIncrement& e, double rc, double rs, Stress& s) {
+    rotate_stress(s, rc, rs);
+    if (mc.model == Model::User) { user_consult(mc, k, e, s); return; }
+    elastic_increment(mc, e, s);  // the elastic trial
+    if (mc.model != Model::MohrCoulomb) return;
+    const MohrResult r = mohr_coulomb_return(mc, strength_of(mc, k), s);
+    if (r.mode != MohrResult::Elastic) record_yield(k, r.d_gamma_p);
+}
+
+// 2. The points, in storage order: eq. 6 and the volume change with the strain of the cell
+// each lies in; eq. 7a/7b moves it with that cell; then, the lattice back at its original
+// position, eq. 7 and 8 add its mass and V sigma to the cell it lies in now. A point that
+// left the lattice leaves the cycle (its mass becomes outflow).
+inline void Simulation::reference_points() {
+    for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) std::fill(v->begin(), v->end(), 0.0);
+    std::fill(carried_.begin(), carried_.end(), Carried{});
+    const double X = mx_ * L_, Y = my_ * L_;
+    double mass = 0;
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const int c = p_.cell[k], ci = c % mx_, cj = c / mx_;
+        const CellStrain& ce = strain_[std::size_t(c)];
+        const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
+        const Group& g = groups_[p_.group[k]];
+        Stress s{p_.sxx[k], p_.syy[k], p_.sxy[k], p_.szz[k]};
+        consult_model(k, *group_consts_[p_.group[k]], e, ce.rc, ce.rs, s);  // eq. 6
+        p_.sxx[k] = s.xx; p_.syy[k] = s.yy; p_.sxy[k] = s.xy; p_.szz[k] = s.zz;
+        p_.vol[k] *= 1 + e.xx + e.yy;  // V (1 + d_eps_xx + d_eps_yy)
+
+        // eq. 7a/7b (or MOTION CENTRE, BILINEAR); (dx, dy): the point's own increment.
+        const double xi = ci * L_, yj = cj * L_, x0 = p_.x[k], y0 = p_.y[k];
+        const int n1 = node(ci, cj), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
+        const double ux[4] = {dux_[n1], dux_[n2], dux_[n3], dux_[n4]}, uy[4] = {duy_[n1], duy_[n2], duy_[n3], duy_[n4]};
+        double x = 0, y = 0, dx = 0, dy = 0;
+        if (sc_.motion == Motion::Paper) {
+            move_point_paper(x0, y0, e, xi, yj, ux[0], uy[0], x, y);
+        } else if (sc_.motion == Motion::Centre) {
+            const double umx = 0.25 * (ux[0] + ux[1] + ux[2] + ux[3]), umy = 0.25 * (uy[0] + uy[1] + uy[2] + uy[3]);
+            move_point_centre(x0, y0, e, xi, yj, L_, umx, umy, x, y, dx, dy);
+        } else {
+            move_point_bilinear(x0, y0, xi, yj, invL_, ux, uy, x, y, dx, dy);
+        }
+        // A cell edge fixed across is impermeable: a point stops on it, inside its cell.
+        const std::uint8_t fe = fixed_edges_[std::size_t(c)];
+        if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
+        if ((fe & kEdgeTop) && y >= (cj + 1) * L_) y = edge_below(cj + 1);
+        if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
+        if ((fe & kEdgeRight) && x >= (ci + 1) * L_) x = edge_below(ci + 1);
+        p_.x[k] = x; p_.y[k] = y;
+
+        if (!(x >= 0 && x < X && y >= 0 && y < Y)) { p_.cell[k] = -1; continue; }  // left the lattice
+        const int ni = std::min(mx_ - 1, int(x * invL_)), nj = std::min(my_ - 1, int(y * invL_)), cn = cell(ni, nj);
+        p_.cell[k] = cn;
+        if (!carried_.empty()) carry_to(cn, ni, nj, g.mass, x, y, dx, dy, e);  // ADVECT POINTS
+        add_to_cell(std::size_t(cn), g.mass, std::min(p_.vol[k], g.vol0), s.xx, s.yy, s.xy);  // eq. 7, 8
+        mass += g.mass;
+    }
+    remove_departed();
+    mass_in_ = mass;
+}
+
+// 3. Nodal forces: eq. 8 smears each cell's sum V sigma; each node gathers the force of
+// its (up to) four cells by the transpose of eq. 5, and gravity on its lumped mass, a
+// quarter of each neighbouring cell's mass (eq. 10).
+inline void Simulation::reference_nodal_forces() {
+    const double L2 = L_ * L_, inv2L = 0.5 * invL_;
+    for (std::size_t c = 0; c < cmass_.size(); ++c) {
+        double w;
+        smear_weight(cvol_[c], L2, inv2L, w);  // eq. 8
+        svxx_[c] *= w; svyy_[c] *= w; svxy_[c] *= w;
+    }
+    const double khg = sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s);
+    for (int j = 0; j <= my_; ++j)
+        for (int i = 0; i <= mx_; ++i) {
+            double fx = 0, fy = 0, m = 0;
+            const bool right = i < mx_, left = i > 0, above = j < my_, below = j > 0;
+            const int c = j * mx_ + i;  // cell (i, j): the node is its [1], [2] of c - 1, [3] of c - mx, [4] of c - mx - 1
+            auto cell_force = [&](int a, auto corner) {
+                add_cell_force<decltype(corner)::value>(svxx_[std::size_t(a)], svyy_[std::size_t(a)], svxy_[std::size_t(a)], fx, fy);
+                m += cmass_[std::size_t(a)];
+            };
+            if (right && above) cell_force(c, std::integral_constant<int, 1>{});
+            if (left && above) cell_force(c - 1, std::integral_constant<int, 2>{});
+            if (right && below) cell_force(c - mx_, std::integral_constant<int, 3>{});
+            if (left && below) cell_force(c - mx_ - 1, std::integral_constant<int, 4>{});
+            if (!hgx_.empty()) {  // HOURGLASS: F[a] = -kappa (M_J / 4) q_J h[a] / dt^2
+                auto hg = [&](int a, double h) {
+                    fx -= khg * cmass_[std::size_t(a)] * hgx_[std::size_t(a)] * h;
+                    fy -= khg * cmass_[std::size_t(a)] * hgy_[std::size_t(a)] * h;
+                };
+                if (right && above) hg(c, 1);
+                if (left && above) hg(c - 1, -1);
+                if (right && below) hg(c - mx_, -1);
+                if (left && below) hg(c - mx_ - 1, 1);
+            }
+            const std::size_t n = std::size_t(node(i, j));
+            const double mn = 0.25 * m;  // eq. 10
+            nmass_prev_[n] = nmass_[n];
+            nmass_[n] = mn;
+            fx_[n] = fx + sc_.gravity_x * mn;
+            fy_[n] = fy + sc_.gravity_y * mn;
+        }
+}
+
+inline bool Simulation::strain_at(double fxs, double fys, double& exx, double& eyy, double& exy, double& eyx) const {
+    int ci = int(fxs), cj = int(fys);  // floor without a library call (|du| < L/2)
+    ci -= fxs < ci; cj -= fys < cj;
+    // On a cell edge (a zero component of du) the cells on both sides share the look-up,
+    // so that a mirror-symmetric motion stays symmetric.
+    const int ci0 = fxs == ci ? ci - 1 : ci, cj0 = fys == cj ? cj - 1 : cj;
+    auto inside = [&](int a, int b) { return a >= 0 && b >= 0 && a < mx_ && b < my_; };
+    if (ci0 == ci && cj0 == cj) {  // one cell
+        if (!inside(ci, cj)) return false;
+        const CellStrain& e = strain_[std::size_t(cell(ci, cj))];
+        exx = e.xx; eyy = e.yy; exy = e.xy; eyx = e.yx;
+        return true;
+    }
+    exx = eyy = exy = eyx = 0;
+    double w = 0;
+    auto add = [&](int a, int b) {
+        if (!inside(a, b)) return;
+        const CellStrain& e = strain_[std::size_t(cell(a, b))];
+        exx += e.xx; eyy += e.yy; exy += e.xy; eyx += e.yx; w += 1;
+    };
+    add(ci0, cj0);
+    if (ci0 != ci) add(ci, cj0);
+    if (cj0 != cj) { add(ci0, cj); if (ci0 != ci) add(ci, cj); }
+    if (w == 0) return false;
+    if (w == 2 || w == 4) {  // x / 2 and x * 0.5 are the same number
+        const double iw = w == 2 ? 0.5 : 0.25;
+        exx *= iw; eyy *= iw; exy *= iw; eyx *= iw;
+    } else if (w > 1) {
+        exx /= w; eyy /= w; exy /= w; eyx /= w;
+    }
+    return true;
+}
+
+// 4. eq. 12: the increment each node carries belonged to the material now at
+// x_node - du_node; it is compensated by the strain increments of the cell found there.
+// A node that gained mass this step takes the mass-weighted mean increment of its
+// neighbours that had mass (see the manual). ADVECT POINTS replaces all of this.
+inline void Simulation::reference_compensate() {
+    if (!carried_.empty()) {
+        for (int j = 0; j <= my_; ++j) carried_row(j, 0, mx_ + 1);
+        return;
+    }
+    for (int j = 0; j <= my_; ++j)
+        for (int i = 0; i <= mx_; ++i) {
+            const std::size_t n = std::size_t(node(i, j));
+            if (!gained_mass(nmass_prev_[n], nmass_[n])) continue;
+            double sx = 0, sy = 0, msum = 0;
+            for (int qj = std::max(0, j - 1); qj <= std::min(my_, j + 1); ++qj)
+                for (int qi = std::max(0, i - 1); qi <= std::min(mx_, i + 1); ++qi) {
+                    const std::size_t q = std::size_t(node(qi, qj));
+                    const double mq = nmass_prev_[q];
+                    if (mq > 0) { sx += mq * dux_[q]; sy += mq * duy_[q]; msum += mq; }
+                }
+            if (msum > 0) { dux_[n] = sx / msum; duy_[n] = sy / msum; }
+        }
+    for (int j = 0; j <= my_; ++j)
+        for (int i = 0; i <= mx_; ++i) {
+            const std::size_t n = std::size_t(node(i, j));
+            double ux = dux_[n], uy = duy_[n], exx, eyy, exy, eyx;
+            if ((ux == 0 && uy == 0) || nmass_prev_[n] == 0) continue;
+            if (!strain_at(i - ux * invL_, j - uy * invL_, exx, eyy, exy, eyx)) continue;
+            compensate_increment(ux, uy, exx, eyy, exy, eyx);  // eq. 12a, 12b
+            dux_[n] = ux; duy_[n] = uy;
+        }
+}
+
+// 5. eq. 13-14 at every node with mass (a node without mass does not move), then fixed
+// directions and moving walls; the kinetic energy summed by rows, in node order.
+inline void Simulation::reference_integrate() {
+    const double dt2 = sc_.dt_s * sc_.dt_s;
+    for (std::size_t n = 0; n < nmass_.size(); ++n) {
+        if (nmass_[n] == 0) { dux_[n] = duy_[n] = 0; continue; }
+        damped_increment(dux_[n], fx_[n], nmass_[n], dt2, sc_.damping, dux_[n]);  // eq. 13, 14
+        damped_increment(duy_[n], fy_[n], nmass_[n], dt2, sc_.damping, duy_[n]);
+    }
+    integrated_ = {0, mx_ + 1, 0, my_ + 1};
+    impose_supports();
+    double ke = 0, maxdu = 0;
+    for (int j = 0; j <= my_; ++j) {
+        double row_ke = 0;
+        for (int i = 0; i <= mx_; ++i) {
+            const std::size_t n = std::size_t(node(i, j));
+            const double m = nmass_[n], ux = dux_[n], uy = duy_[n];
+            if (m == 0) continue;
+            row_ke += 0.5 * m * (ux * ux + uy * uy);
+            maxdu = std::max(maxdu, std::max(std::fabs(ux), std::fabs(uy)));
+        }
+        ke += row_ke;
+    }
+    ke_ = ke / dt2;
+    max_du_ = maxdu;
+}
+
+// --------------------------------------------------------- the fast kernel ---
+
 // Rows j0 .. j1-1 of a lattice phase, f(j) for each, by threads when they visit more than
 // 8 192 cells or nodes in all (work; the lattice loops' threshold from the start). Each row writes
 // only its own nodes or cells, so which thread takes a row changes no number: thread u
@@ -1779,11 +2161,8 @@ inline void Simulation::cell_strains() {
 #endif
         }
         if (hourglass) {  // the checkerboard part h = (+1, -1, -1, +1)/4 that eq. 5 cannot see
-            const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
-            T ux1, ux2, ux3, ux4, uy1, uy2, uy3, uy4;
-            detail::load(ux + n1, ux1); detail::load(ux + n2, ux2); detail::load(ux + n3, ux3); detail::load(ux + n4, ux4);
-            detail::load(uy + n1, uy1); detail::load(uy + n2, uy2); detail::load(uy + n3, uy3); detail::load(uy + n4, uy4);
-            const T gx = 0.25 * (ux1 - ux2 - ux3 + ux4), gy = 0.25 * (uy1 - uy2 - uy3 + uy4);
+            T gx, gy;
+            checkerboard_mode(ux, uy, n1, mx + 1, gx, gy);
             detail::store(hgx + c, full ? gx : zero);
             detail::store(hgy + c, full ? gy : zero);
         }
@@ -2035,13 +2414,6 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
         rotate_stress(xx, yy, xy, rc, rs);  // Jaumann: the old stress turns with the material
         xx += de.xx; yy += de.yy; xy += de.xy; zz += de.zz;  // eq. 6
     };
-    // eq. 7a/7b: a point at (x0, y0) of the cell with node [1] at (xi, yj), which moved by
-    // (ux1, uy1), moves to (x, y).
-    auto paper_motion = [](const auto& x0, const auto& y0, auto& x, auto& y, const StrainIncrement& e, double xi, double yj, double ux1, double uy1) LPFDM_INLINE {
-        const auto dx = x0 - xi, dy = y0 - yj;
-        x = x0 + e.xx * dx + e.xy * dy + ux1;
-        y = y0 + e.yy * dy + e.yx * dx + uy1;
-    };
     int cprev = -2, iprev = -2, jprev = -2;
     // Cell c's column ci and row cj; the next cell of the row (the usual case) without an
     // integer division.
@@ -2099,7 +2471,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             vol *= 1 + e.xx + e.yy;
             detail::load(px + k, x0); detail::load(py + k, y0);
             const int n1 = node(ci, cj);
-            paper_motion(x0, y0, x, y, e, cols[ci].at, rows[cj].at, dux_[n1], duy_[n1]);  // eq. 7a/7b
+            move_point_paper(x0, y0, e, cols[ci].at, rows[cj].at, dux_[n1], duy_[n1], x, y);  // eq. 7a/7b
             const double uc0 = cols[ci].lo, uc1 = cols[ci].hi, vc0 = rows[cj].lo, vc1 = rows[cj].hi;
             const v4d u = x * invL, v = y * invL;
             if (!detail::all_lanes((u >= v4d{uc0, uc0, uc0, uc0}) & (u < v4d{uc1, uc1, uc1, uc1}) & (v >= v4d{vc0, vc0, vc0, vc0}) & (v < v4d{vc1, vc1, vc1, vc1}))) break;
@@ -2248,23 +2620,13 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 // the lanes of a vector (the same operations in the same order in every lane).
                 // d: the point's own increment (ADVECT POINTS only).
                 auto moved = [&](const auto& x0, const auto& y0, auto& x, auto& y, auto& ddx, auto& ddy) LPFDM_INLINE {
-                    [[maybe_unused]] const auto dx = x0 - xi, dy = y0 - yj;
                     if constexpr (M == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
-                        paper_motion(x0, y0, x, y, e, xi, yj, ux1, uy1);
+                        move_point_paper(x0, y0, e, xi, yj, ux1, uy1, x, y);
                     } else if constexpr (M == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
-                        const auto cx = dx - 0.5 * L, cy = dy - 0.5 * L;
-                        x = x0 + e.xx * cx + e.xy * cy + umx;
-                        y = y0 + e.yy * cy + e.yx * cx + umy;
-                        if constexpr (Carry) { ddx = e.xx * cx + e.xy * cy + umx; ddy = e.yy * cy + e.yx * cx + umy; }
+                        move_point_centre(x0, y0, e, xi, yj, L, umx, umy, x, y, ddx, ddy);
                     } else {  // bilinear shape functions of the cell
-                        const auto u = dx * invL, v = dy * invL;
-                        const auto w1 = (1 - u) * (1 - v), w2 = u * (1 - v), w3 = (1 - u) * v, w4 = u * v;
-                        x = x0 + w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
-                        y = y0 + w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
-                        if constexpr (Carry) {
-                            ddx = w1 * ux1 + w2 * ux2 + w3 * ux3 + w4 * ux4;
-                            ddy = w1 * uy1 + w2 * uy2 + w3 * uy3 + w4 * uy4;
-                        }
+                        const double ux[4] = {ux1, ux2, ux3, ux4}, uy[4] = {uy1, uy2, uy3, uy4};
+                        move_point_bilinear(x0, y0, xi, yj, invL, ux, uy, x, y, ddx, ddy);
                     }
                 };
                 // Point q, now at (x, y): its new cell, min(m - 1, int(x / L)) (the run's own cell
@@ -2649,7 +3011,8 @@ inline void Simulation::nodal_forces() {
         using T = typename decltype(tag)::type;
         T v, xx, yy, xy;
         detail::load(cv + c, v); detail::load(sxx + c, xx); detail::load(syy + c, yy); detail::load(sxy + c, xy);
-        const T one = T{} + 1, w = inv2L * (v > L2 ? L2 / v : one);
+        T w;
+        smear_weight(v, L2, inv2L, w);  // eq. 8
         detail::store(sxx + c, xx * w); detail::store(syy + c, yy * w); detail::store(sxy + c, xy * w);
     };
     auto smear_row = [&](int j, auto wide) LPFDM_INLINE { detail::sweep(j * mx + oc.i0, j * mx + oc.i1, wide, smear); };
@@ -2672,10 +3035,10 @@ inline void Simulation::nodal_forces() {
         // The stresses and mass of cell a.
         T xx, yy, xy, ma;
         auto at = [&](int a) LPFDM_INLINE { detail::load(sxx + a, xx); detail::load(syy + a, yy); detail::load(sxy + a, xy); detail::load(cm + a, ma); };
-        if (right && above) { at(c); fx += xx + xy; fy += xy + yy; m += ma; }
-        if (left && above) { at(c - 1); fx += xy - xx; fy += yy - xy; m += ma; }
-        if (right && below) { at(c - mx); fx += xx - xy; fy += xy - yy; m += ma; }
-        if (left && below) { at(c - mx - 1); fx -= xx + xy; fy -= xy + yy; m += ma; }
+        if (right && above) { at(c); add_cell_force<1>(xx, yy, xy, fx, fy); m += ma; }
+        if (left && above) { at(c - 1); add_cell_force<2>(xx, yy, xy, fx, fy); m += ma; }
+        if (right && below) { at(c - mx); add_cell_force<3>(xx, yy, xy, fx, fy); m += ma; }
+        if (left && below) { at(c - mx - 1); add_cell_force<4>(xx, yy, xy, fx, fy); m += ma; }
         if constexpr (!in) if (hourglass) {
             // HOURGLASS: a viscous force on the zero-energy mode only, F[a] = -kappa
             // (M_J / 4) q_J h[a] / dt^2. It is orthogonal to every affine increment
@@ -2804,8 +3167,9 @@ inline void Simulation::compensate() {
                 exx /= w; eyy /= w; exy /= w; eyx /= w;
             }
         }
-        ux_n[n] = ux * (1 - exx) - uy * exy;  // eq. 12a
-        uy_n[n] = uy * (1 - eyy) - ux * eyx;  // eq. 12b
+        double cx = ux, cy = uy;
+        compensate_increment(cx, cy, exx, eyy, exy, eyx);  // eq. 12a, 12b
+        ux_n[n] = cx; uy_n[n] = cy;
     };
     // Nodes i .. i + 3 of row j in the lanes of a vector, when each lane is one that shift
     // leaves alone or one whose x_node - du_node lies in a strained cell, or on the edge of
@@ -2871,8 +3235,8 @@ inline void Simulation::compensate() {
                     const v4d iw = hx & hy ? zero + 0.25 : zero + 0.5;
                     exx = edge ? xx * iw : exx; eyy = edge ? yy * iw : eyy; exy = edge ? xy * iw : exy; eyx = edge ? yx * iw : eyx;
                 }
-                const v4d sx = ux * (1 - exx) - uy * exy;  // eq. 12a
-                const v4d sy = uy * (1 - eyy) - ux * eyx;  // eq. 12b
+                v4d sx = ux, sy = uy;
+                compensate_increment(sx, sy, exx, eyy, exy, eyx);  // eq. 12a, 12b
                 detail::store(ux_n + n, idle ? ux : sx);
                 detail::store(uy_n + n, idle ? uy : sy);
 #endif
@@ -2889,9 +3253,12 @@ inline void Simulation::compensate() {
 // field (translation, rigid rotation, uniform strain) comes back as d(x_node) - E d_point:
 // what eq. 12 gives to first order in E.
 inline void Simulation::carried_increments(const Range& nr) {
+    by_rows(kCarryRows, nr.j0, nr.j1, nr.size(), [&](int j) { carried_row(j, nr.i0, nr.i1); });
+}
+inline void Simulation::carried_row(int j, int i0, int i1) {
     const double h = 0.5 * L_;
-    by_rows(kCarryRows, nr.j0, nr.j1, nr.size(), [&](int j) {
-        for (int i = nr.i0; i < nr.i1; ++i) {
+    {
+        for (int i = i0; i < i1; ++i) {
             double px = 0, py = 0, m = 0;
             const bool left = i > 0, right = i < mx_, below = j > 0, above = j < my_;
             auto add = [&](int ci, int cj, double rx, double ry) {
@@ -2908,7 +3275,7 @@ inline void Simulation::carried_increments(const Range& nr) {
             const int n = node(i, j);
             if (m > 0) { dux_[n] = px / m; duy_[n] = py / m; }
         }
-    });
+    }
 }
 
 // eq. 13-14: du(t + dt/2) = du(t - dt/2) + dt^2/m (F - D), D = alpha |F| sgn(du).
@@ -2930,13 +3297,11 @@ inline void Simulation::integrate() {
         if constexpr (one)
             if (m == 0) { ux_n[n] = uy_n[n] = 0; return; }  // no mass, no motion
         detail::load(fxn + n, fx); detail::load(fyn + n, fy); detail::load(ux_n + n, ux0); detail::load(uy_n + n, uy0);
-        const T zero{}, unit = zero + 1;
-        const T sx = ux0 > 0 ? unit : (ux0 < 0 ? -unit : zero), sy = uy0 > 0 ? unit : (uy0 < 0 ? -unit : zero);  // sign of the increment
-        T ax, ay;
-        detail::abs_of(fx, ax); detail::abs_of(fy, ay);
-        T ux = ux0 + dt2 / m * (fx - alpha * ax * sx);  // eq. 13, 14
-        T uy = uy0 + dt2 / m * (fy - alpha * ay * sy);
+        T ux, uy;
+        damped_increment(ux0, fx, m, dt2, alpha, ux);  // eq. 13, 14
+        damped_increment(uy0, fy, m, dt2, alpha, uy);
         if constexpr (!one) {  // no mass, no motion
+            const T zero{};
             const auto moving = m != 0;
             ux = moving ? ux : zero; uy = moving ? uy : zero;
         }
@@ -2953,29 +3318,7 @@ inline void Simulation::integrate() {
     };
     by_rows(kAdvanceRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(advance_row, j); });
     integrated_ = nr;
-    rx_ = ry_ = 0;
-    for (const std::int32_t n : fixed_nodes_) {
-        if (fixed_[n] & kFixX) { dux_[n] = 0; rx_ -= fx_[n]; }
-        if (fixed_[n] & kFixY) { duy_[n] = 0; ry_ -= fy_[n]; }
-    }
-    Range wall_nodes{};
-    for (std::size_t w = 0; w < walls_.size(); ++w) {
-        WallState& ws = walls_[w];
-        const Wall& spec = sc_.walls[w];
-        ws.fx = ws.fy = 0;
-        for (std::size_t q = 0; q < ws.base_i.size(); ++q) {
-            const int i = ws.base_i[q] + ws.shift_i, j = ws.base_j[q] + ws.shift_j;
-            if (i < 0 || j < 0 || i > mx_ || j > my_) continue;
-            const int n = node(i, j);
-            if (!(fixed_[n] & kFixX)) { dux_[n] = spec.vx * sc_.dt_s; ws.fx -= fx_[n]; }
-            if (!(fixed_[n] & kFixY)) { duy_[n] = spec.vy * sc_.dt_s; ws.fy -= fy_[n]; }
-            wall_nodes = wall_nodes.unite({i, i + 1, j, j + 1});
-        }
-        // Travel after this increment; whole cells travelled move the wall to the next line.
-        ws.dx += spec.vx * sc_.dt_s; ws.dy += spec.vy * sc_.dt_s;
-        ws.shift_i = int(std::trunc(ws.dx * invL_ * (1 + 1e-12)));
-        ws.shift_j = int(std::trunc(ws.dy * invL_ * (1 + 1e-12)));
-    }
+    const Range wall_nodes = impose_supports();
     double *row_ke_of = row_ke_.data(), *row_du_of = row_du_.data();
     // The kinetic energy of row j, summed in node order, and its largest increment (nodes
     // with mass only); four nodes' terms at a time in the lanes of a vector.
@@ -3019,6 +3362,36 @@ inline void Simulation::integrate() {
     ke_ = ke / dt2;
     max_du_ = maxdu;
     live_nodes_ = nodes_now.unite(wall_nodes);
+}
+
+// Fixed directions, then moving walls (paper section 3), imposed on the increments eq. 13
+// made; the reactions are what the supports exert on the material (minus the net nodal
+// force they cancel). Returns the nodes the walls drove.
+inline Range Simulation::impose_supports() {
+    rx_ = ry_ = 0;
+    for (const std::int32_t n : fixed_nodes_) {
+        if (fixed_[n] & kFixX) { dux_[n] = 0; rx_ -= fx_[n]; }
+        if (fixed_[n] & kFixY) { duy_[n] = 0; ry_ -= fy_[n]; }
+    }
+    Range wall_nodes{};
+    for (std::size_t w = 0; w < walls_.size(); ++w) {
+        WallState& ws = walls_[w];
+        const Wall& spec = sc_.walls[w];
+        ws.fx = ws.fy = 0;
+        for (std::size_t q = 0; q < ws.base_i.size(); ++q) {
+            const int i = ws.base_i[q] + ws.shift_i, j = ws.base_j[q] + ws.shift_j;
+            if (i < 0 || j < 0 || i > mx_ || j > my_) continue;
+            const int n = node(i, j);
+            if (!(fixed_[n] & kFixX)) { dux_[n] = spec.vx * sc_.dt_s; ws.fx -= fx_[n]; }
+            if (!(fixed_[n] & kFixY)) { duy_[n] = spec.vy * sc_.dt_s; ws.fy -= fy_[n]; }
+            wall_nodes = wall_nodes.unite({i, i + 1, j, j + 1});
+        }
+        // Travel after this increment; whole cells travelled move the wall to the next line.
+        ws.dx += spec.vx * sc_.dt_s; ws.dy += spec.vy * sc_.dt_s;
+        ws.shift_i = int(std::trunc(ws.dx * invL_ * (1 + 1e-12)));
+        ws.shift_j = int(std::trunc(ws.dy * invL_ * (1 + 1e-12)));
+    }
+    return wall_nodes;
 }
 
 // The largest unbalanced force (free directions) over the mean gross force of the nodes
