@@ -11,7 +11,7 @@ SAN       = $(SAN_OPT) -g1 -fsanitize=address,undefined,float-cast-overflow -fno
 PACKAGES  = libeigen3-dev libfmt-dev doctest-dev gnuplot-nox
 TESTS     = $(wildcard tests/test_*.cpp)
 
-.PHONY: all deps test demo figures verify fuzz bench clean help
+.PHONY: all deps test-deps test demo figures verify fuzz bench clean help
 all: lpfdm
 
 help:
@@ -25,19 +25,26 @@ help:
 	@echo "make clean    remove what the build made"
 
 # Missing Debian packages are installed when running as root; otherwise the exact
-# command is printed and the build stops.
+# command is printed and the build stops. The tests also need clang and its libFuzzer
+# runtime (the fuzzing smoke of the deck reader).
+TEST_PACKAGES = clang libclang-rt-14-dev
+define install_missing
+missing=""; for p in $(1); do \
+  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "ok installed" || missing="$$missing $$p"; \
+done; \
+if [ -n "$$missing" ]; then \
+  if [ "$$(id -u)" = 0 ]; then \
+    echo "installing:$$missing"; \
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing >/dev/null || exit 1; \
+  else \
+    echo "missing Debian packages:$$missing"; echo "run: sudo apt-get install$$missing"; exit 1; \
+  fi; \
+fi
+endef
 deps:
-	@missing=""; for p in $(PACKAGES); do \
-	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "ok installed" || missing="$$missing $$p"; \
-	done; \
-	if [ -n "$$missing" ]; then \
-	  if [ "$$(id -u)" = 0 ]; then \
-	    echo "installing:$$missing"; \
-	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing >/dev/null || exit 1; \
-	  else \
-	    echo "missing Debian packages:$$missing"; echo "run: sudo apt-get install$$missing"; exit 1; \
-	  fi; \
-	fi
+	@$(call install_missing,$(PACKAGES))
+test-deps:
+	@$(call install_missing,$(PACKAGES) $(TEST_PACKAGES))
 
 lpfdm: lpfdm.cpp lpfdm.hpp | deps
 	$(CXX) $(WARN) $(CXXFLAGS) $(OMP) -o $@ lpfdm.cpp $(LIBS)
@@ -68,7 +75,7 @@ build/lpfdm-san: lpfdm.cpp lpfdm.hpp | deps
 	@mkdir -p build
 	$(CXX) $(WARN) -Werror $(SAN) $(OMP) -o $@ lpfdm.cpp $(LIBS)
 
-test: | deps
+test: | test-deps
 	@$(MAKE) --no-print-directory -j$$(nproc) build/tests build/tests-san lpfdm build/lpfdm-san
 	@bash tests/run.sh
 

@@ -1,0 +1,199 @@
+// The reference cycle is the definition of a step: every fast kernel must give its
+// numbers bit for bit. Every deck of decks/ and tests/decks/ (the good ones), shortened,
+// runs with the reference kernel and with the fast kernel with AVX2 on and off and with
+// 1, 2 and 3 threads; at every frame the point table and the history rows (as the program
+// writes them) and the bits of every point, cell and node array must be equal.
+#include "../lpfdm.hpp"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
+using namespace lpfdm;
+
+namespace {
+
+// What a run left at each frame: the program's text output, and one digest per array.
+struct Trace {
+    std::string tables;                                        // point frames and history rows
+    std::vector<std::pair<std::string, std::uint64_t>> arrays; // "step name" -> FNV-1a of the bits
+};
+
+std::uint64_t fnv1a(const void* data, std::size_t n) {
+    std::uint64_t h = 1469598103934665603ull;
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) { h ^= b[i]; h *= 1099511628211ull; }
+    return h;
+}
+template <class V>
+void digest(Trace& t, long step, const char* name, const V& v) {
+    t.arrays.push_back({std::to_string(step) + " " + name, fnv1a(v.data(), v.size() * sizeof(v[0]))});
+}
+
+std::string read_all(std::FILE* f) {
+    std::string s;
+    std::rewind(f);
+    char buf[65536];
+    for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) s.append(buf, n);
+    return s;
+}
+
+void set_threads([[maybe_unused]] int n) {
+#if defined(_OPENMP)
+    omp_set_num_threads(n);
+#endif
+}
+
+// steps steps of the scene with kernel k on `threads` threads; a frame every `every` steps.
+Trace run(const Scene& s, Kernel k, int threads, long steps, long every, const UserModel& user = nullptr, int user_mat = 0) {
+    set_threads(threads);
+    Simulation sim(s, k);
+    if (user) sim.set_user_model(user_mat, user);
+    Trace t;
+    std::FILE* f = std::tmpfile();
+    REQUIRE(f);
+    write_history_header(f, sim, "deck");
+    bool first = true;
+    for (long n = 1; n <= steps; ++n) {
+        sim.step();
+        write_history_row(f, sim);
+        if (n % every != 0 && n != steps) continue;
+        write_points_frame(f, sim, first);
+        first = false;
+        const Points& p = sim.points();
+        digest(t, n, "x", p.x); digest(t, n, "y", p.y);
+        digest(t, n, "sxx", p.sxx); digest(t, n, "syy", p.syy); digest(t, n, "sxy", p.sxy); digest(t, n, "szz", p.szz);
+        digest(t, n, "vol", p.vol); digest(t, n, "cell", p.cell); digest(t, n, "id", p.id);
+        digest(t, n, "plastic_shear", p.plastic_shear); digest(t, n, "yielded", p.yielded);
+        digest(t, n, "du_x", sim.du_x()); digest(t, n, "du_y", sim.du_y());
+        digest(t, n, "force_x", sim.force_x()); digest(t, n, "force_y", sim.force_y());
+        digest(t, n, "node_mass", sim.node_mass()); digest(t, n, "cell_mass", sim.cell_mass()); digest(t, n, "cell_volume", sim.cell_volume());
+        const double scalars[] = {sim.kinetic_energy(), sim.mass_inside(), sim.mass_outflow(), sim.max_du(), sim.reaction_x(), sim.reaction_y()};
+        t.arrays.push_back({std::to_string(n) + " scalars", fnv1a(scalars, sizeof scalars)});
+        if (!sim.healthy()) break;  // where the program stops
+    }
+    t.tables = read_all(f);
+    std::fclose(f);
+    set_threads(1);
+    return t;
+}
+
+// The first frame and array at which two traces differ ("" if none).
+std::string first_difference(const Trace& a, const Trace& b) {
+    for (std::size_t i = 0; i < std::min(a.arrays.size(), b.arrays.size()); ++i)
+        if (a.arrays[i] != b.arrays[i]) return "step and array " + a.arrays[i].first;
+    if (a.arrays.size() != b.arrays.size()) return "number of frames";
+    if (a.tables != b.tables) {
+        std::size_t i = 0;
+        while (i < a.tables.size() && i < b.tables.size() && a.tables[i] == b.tables[i]) ++i;
+        return "tables, at byte " + std::to_string(i);
+    }
+    return "";
+}
+
+// Every fast kernel (AVX2 on and off, 1, 2 and 3 threads) against the reference.
+void compare_kernels(const std::string& name, const Scene& s, long steps, const UserModel& user = nullptr, int user_mat = 0) {
+    const long every = std::max(1L, steps / 4);
+    const Trace ref = run(s, Kernel::Reference, 1, steps, every, user, user_mat);
+    CHECK_MESSAGE(ref.tables.size() > 100, name);
+    for (Kernel k : {Kernel::Fast, Kernel::Scalar})
+        for (int threads : {1, 2, 3}) {
+            const Trace fast = run(s, k, threads, steps, every, user, user_mat);
+            const std::string diff = first_difference(ref, fast);
+            INFO(name << ": kernel " << kernel_name(k) << ", " << threads << " thread(s), " << steps << " steps: differs at " << diff);
+            CHECK(diff.empty());
+        }
+}
+
+// The decks a user can run: decks/*.deck and the good decks of tests/decks.
+std::vector<std::filesystem::path> runnable_decks() {
+    std::vector<std::filesystem::path> v;
+    for (const char* dir : {"decks", "tests/decks"})
+        for (const auto& e : std::filesystem::directory_iterator(dir)) {
+            const std::string f = e.path().filename().string();
+            if (e.path().extension() != ".deck" || f.rfind("bad_", 0) == 0 || f.rfind("fuzz_", 0) == 0) continue;
+            v.push_back(e.path());
+        }
+    std::sort(v.begin(), v.end());
+    return v;
+}
+
+// Steps for a scene of n points: about 3e5 particle-steps a run (the sanitizer build
+// runs this too), at least 12 and at most the deck's.
+long steps_for(const Scene& s) {
+    const double n = std::max(1.0, count_points(s));
+    return std::min(s.steps, std::max(12L, long(3e5 / n)));
+}
+
+}  // namespace
+
+// Every deck with at most (big: more than) 20 000 points.
+void compare_decks(bool big) {
+    const auto decks = runnable_decks();
+    REQUIRE(decks.size() >= 20);
+    int ran = 0;
+    for (const auto& path : decks) {
+        Scene s;
+        const Diagnostics d = read_deck(path.string(), s);
+        REQUIRE_MESSAGE(d.empty(), path.string());
+        REQUIRE_MESSAGE(validate(s).empty(), path.string());
+        if ((count_points(s) > 20000) != big) continue;
+        compare_kernels(path.string(), s, steps_for(s));
+        ++ran;
+    }
+    CHECK(ran >= (big ? 3 : 15));
+}
+
+TEST_CASE("every deck: the fast kernels (AVX2 on and off, 1, 2 and 3 threads) give the reference cycle's bits at every frame") {
+    compare_decks(false);
+}
+
+// The benchmark and threads decks: 65 000 to 131 000 points, the ones whose lattice loops
+// and point pass run by threads. Not in the sanitizer build (minutes there).
+TEST_CASE("every deck of more than 20 000 points: the same bits [slow]") {
+    compare_decks(true);
+}
+
+TEST_CASE("the options no shipped deck uses, on a flowing column and a hopper: the same bits") {
+    for (const char* deck : {"decks/verify_collapse.deck", "decks/verify_hopper.deck"}) {
+        Scene base;
+        REQUIRE(read_deck(deck, base).empty());
+        const long steps = std::max(40L, steps_for(base));
+        for (Motion m : {Motion::Centre, Motion::Bilinear}) {
+            Scene s = base;
+            s.motion = m;
+            compare_kernels(std::string(deck) + (m == Motion::Centre ? " MOTION CENTRE" : " MOTION BILINEAR"), s, steps);
+            s.advect = Advect::Points;
+            compare_kernels(std::string(deck) + " ADVECT POINTS", s, steps);
+        }
+        Scene h = base;
+        h.hourglass = 0.05;
+        compare_kernels(std::string(deck) + " HOURGLASS", h, steps);
+    }
+}
+
+TEST_CASE("a user constitutive model (eq. 6's signature) runs the same in every kernel") {
+    Scene s;
+    REQUIRE(read_deck("decks/verify_collapse.deck", s).empty());
+    // A material of its own: elastic up to a cap on the shear stress (a crude Tresca).
+    const int mat = s.materials.front().id;
+    const double G = s.materials.front().shear(), lam = s.materials.front().bulk() - 2 * G / 3;
+    auto tresca = [G, lam](const StrainIncrement& e, Stress& st, PointState& ps) {
+        st.xx += (lam + 2 * G) * e.xx + lam * e.yy;
+        st.yy += lam * e.xx + (lam + 2 * G) * e.yy;
+        st.zz += lam * (e.xx + e.yy);
+        st.xy += G * e.gamma();
+        const double cap = 2e3;
+        if (std::fabs(st.xy) > cap) { ps.plastic_shear += (std::fabs(st.xy) - cap) / G; ps.yielded = true; st.xy = st.xy > 0 ? cap : -cap; }
+    };
+    compare_kernels("user model", s, std::max(40L, steps_for(s)), tresca, mat);
+}
