@@ -1,32 +1,69 @@
 // lpfdm.hpp — Lagrangian Particle Finite Difference Method (Konagai & Johansson, 2001)
 // for 2D plane-strain large deformations of soil. One header, C++17.
 //
-// WHAT IT DOES
+// WHAT IT IS
 //   Unconnected material points carry every Lagrangian quantity (stress, volume,
-//   strength, plastic strain) across a fixed square lattice. Each step runs FLAC's
-//   explicit cycle on the lattice, moves the points with the lattice, and resets the
-//   lattice. No global matrix, no iteration. Equation numbers in comments (// eq. 5a)
-//   are those of the paper.
+//   strength, plastic strain) across a fixed square lattice of cells of side L. Each step
+//   runs FLAC's explicit cycle on the lattice, moves the points with it, and resets the
+//   lattice: no global matrix, no iteration. Equation numbers (// eq. 5a) are the paper's.
 //
 // USE
-//   #include "lpfdm.hpp"                        // needs Eigen-free C++17 only (+fmt for I/O)
-//   lpfdm::Scene s;                             // build in code ...
+//   #include "lpfdm.hpp"                        // C++17 only (+ fmt for the deck reader)
+//   lpfdm::Scene s;                             // build in code, or lpfdm::read_deck("x.deck", s)
 //   s.mx = 40; s.my = 24; s.cell_m = 0.5;       //   lattice: 40 x 24 cells of 0.5 m
 //   s.materials.push_back(lpfdm::Material::elastic(1, 2e7, 0.25, 2000));
 //   s.clusters.push_back({1, {0, 0, 20, 12}, 2});       // mat, box [m], 2x2 points/cell
 //   s.fixes.push_back({lpfdm::kFixX | lpfdm::kFixY, {0, 0, 20, 0}});
 //   s.gravity_y = -9.81; s.damping = 0.8; s.dt_s = 1e-3; s.steps = 6000;
-//   // ... or read a deck:  lpfdm::Scene s; auto diags = lpfdm::read_deck("col.deck", s);
 //   auto diags = lpfdm::validate(s);            // empty when the scene can run
-//   lpfdm::Simulation sim(s);                   // points created, nothing allocated later
+//   lpfdm::Simulation sim(s);                   // points made here; nothing allocated later
 //   for (long n = 0; n < s.steps; ++n) sim.step();
 //   const lpfdm::Points& p = sim.points();      // p.x[k], p.syy[k], ... (structure of arrays)
-//   A constitutive model of your own: sim.set_user_model(mat_id, callable) where the
-//   callable has eq. 6's signature  void(const StrainIncrement&, Stress&, PointState&).
+//   Your own eq. 6: sim.set_user_model(mat_id, f), f(const StrainIncrement&, Stress&, PointState&).
+//
+// KERNELS (chosen once: Simulation sim(s, lpfdm::Kernel::Reference))
+//   Reference  Simulation::step_reference: the plain cycle, every cell, point and node,
+//              one value at a time, one thread. Read this one: it is the definition.
+//   Fast       (default) the same cycle on the occupied cells only, by threads (OpenMP,
+//              -fopenmp) and four values per AVX2 register when the processor has it.
+//   Scalar     Fast without AVX2.
+//   All give the same numbers, bit for bit, on every deck (tests/test_reference.cpp).
 //
 // CONFIGURATION (define before including)
-//   LPFDM_NO_IO   leave out the deck reader and the writers; the rest needs only the
-//                 C++17 standard library (no fmt, no exceptions on the hot path).
+//   LPFDM_NO_IO    leave out the deck reader and the writers (then no fmt is needed)
+//   LPFDM_NO_WIDE  leave out the AVX2 version (so does any build with -mfma)
+//
+// THE PAPER'S EQUATIONS, AND THE FUNCTION THAT COMPUTES EACH
+//   eq. 5a-5d  cell strain increments from nodal increments     cell_strain
+//   eq. 5e-5f  shear strain, rotation; the Jaumann rotation     StrainIncrement::gamma, theta,
+//                                                               jaumann_rotation, rotate_stress
+//   eq. 6      a point's stress: the model, once a step          Simulation::consult_model
+//              elastic (Hooke, plane strain)                    elastic_change, elastic_increment
+//              Mohr-Coulomb return (FLAC's, closed form)         mohr_coulomb_return
+//              each point's strength (scatter, softening)       Simulation::strength_of
+//   eq. 7a-7b  point motion with its cell                        move_point_paper (MOTION CENTRE:
+//                                                               move_point_centre, BILINEAR: _bilinear)
+//   eq. 7      cell mass; eq. 8 cell stress sum V sigma          CellSums::add
+//   eq. 8      the division by L^2 (capped, see below)           smear_weight
+//   eq. 9      nodal force, as the transpose of eq. 5            add_cell_force
+//   eq. 10     lumped node mass, gravity                         Simulation::reference_nodal_forces
+//   eq. 11-14  the increment with local damping                  damped_increment
+//   eq. 12     compensation of the carried increment             compensate_increment,
+//                                                               Simulation::strain_at
+//   the cycle  steps 1-5 in order                                Simulation::step_reference
+//   boundaries fixed directions, moving walls (section 3)        Simulation::impose_supports
+//
+// THE REFERENCE CYCLE, one step (Simulation::step_reference, about 250 lines)
+//   1 reference_cell_strains  eq. 5 in every cell with mass, and its rotation
+//   2 reference_points        per point: eq. 6, volume, eq. 7a/7b, then eq. 7-8 into
+//                             the cell it lands in; points leaving the lattice leave
+//   3 reference_nodal_forces  eq. 8, the transpose of eq. 5, eq. 10
+//   4 reference_compensate    eq. 12 (or ADVECT POINTS)
+//   5 reference_integrate     eq. 13-14, fixed nodes, moving walls, kinetic energy
+//
+// SECTIONS OF THIS FILE, in order: types; numerics; materials and the equations;
+// lattice and points; checks; the cycle (Simulation; the reference cycle; the fast
+// kernel); deck reader; writers. Decks, options and output: decks/README.md.
 //
 // CHOICES WHERE THE PAPER IS OPEN (each is tested in tests/)
 //   * Nodal forces are the exact transpose of eq. 5 (virtual work), not the printed
@@ -3673,7 +3710,7 @@ inline double param_or(const std::vector<CardReader::Param>& ps, const char* nam
 
 }  // namespace detail
 
-// Parses a deck (design §3) into scene: every card, field and parameter checked, each
+// Parses a deck (decks/README.md) into scene: every card, field and parameter checked, each
 // problem reported with file:line:column. The scene as a whole is checked by validate().
 inline Diagnostics parse_deck_text(const std::string& text, const std::string& file, Scene& sc) {
     using namespace detail;
@@ -3920,7 +3957,7 @@ inline Diagnostics read_deck(const std::string& path, Scene& sc) {
 
 // -------------------------------------------------------------- writers ---
 
-// Point table (design §4): one frame; frames are separated by two blank lines.
+// Point table: one frame; frames are separated by two blank lines.
 inline void write_points_header(std::FILE* f, const Simulation& sim, const std::string& deck) {
     fmt::print(f, "# lpfdm {} point table\n# deck: {}\n# title: {}\n", kVersion, deck, sim.scene().title);
     fmt::print(f, "# units: m, Pa (tension positive); lattice {} x {} cells of {} m\n", sim.mx(), sim.my(), sim.cell_size());
@@ -3942,7 +3979,7 @@ inline void write_points_frame(std::FILE* f, const Simulation& sim, bool first) 
     std::fwrite(b.data(), 1, b.size(), f);
 }
 
-// History (design §4): step time ke mass_in mass_out, per wall fx fy dx dy, then more.
+// History: step time ke mass_in mass_out, per wall fx fy dx dy, then more.
 inline void write_history_header(std::FILE* f, const Simulation& sim, const std::string& deck) {
     fmt::print(f, "# lpfdm {} history\n# deck: {}\n# title: {}\n", kVersion, deck, sim.scene().title);
     fmt::print(f, "# units: s, J/m, kg/m, N/m, m; wall force = force the wall exerts on the material\n");

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Deck-level checks of the program (design §3: a bad deck stops before the first step
+# Deck-level checks of the program (a bad deck stops before the first step
 # with "deckfile:line:column: error: message", a non-zero exit status and no output).
 #
 # usage: tests/check_decks.sh EXE

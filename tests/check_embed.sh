@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Embedding check (issue 8): lpfdm.hpp compiles with LPFDM_NO_IO using only the C++17
+# Embedding check: lpfdm.hpp compiles with LPFDM_NO_IO using only the C++17
 # standard library (and Eigen, if present), with fmt out of reach, and tools/embed_example.cpp
 # builds a scene in code, steps it, reads it back and plugs in a user constitutive model.
 #

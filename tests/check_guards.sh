@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Program-level checks of the run guards (README: exit status, output files):
+# Program-level checks of the run guards (decks/README.md: exit status, output files):
 #   - SIGINT: exit status 130, the last frame and a history row written, the tables
 #     renamed from NAME.part and ending with a "# run interrupted" comment;
 #   - a run killed without warning leaves only NAME.part files, never a table that

@@ -1,5 +1,5 @@
 // The LPFDM cycle's identities (eq. 5, the virtual-work forces, eq. 10, 12, 13-14)
-// and the elastic column against its closed-form answers (design notes §5).
+// and the elastic column against its closed-form answers (closed form).
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -426,7 +426,7 @@ TEST_CASE("local damping takes energy out: a ringing column's kinetic-energy pea
     for (std::size_t k = 2; k < peaks.size(); k += 2) CHECK(peaks[k] <= peaks[k - 2] * (1 + 1e-9));
 }
 
-// --- the confined elastic column (design notes §5) ---
+// --- the confined elastic column (closed form) ---
 
 namespace {
 
@@ -568,7 +568,7 @@ double checkerboard_left(double kappa, int n) {
 
 TEST_CASE("checkerboard increments: eq. 5 does not see them; HOURGLASS takes them out") {
     // Every cell of the block sees zero strain from the pattern (+1, -1, -1, +1): the paper's
-    // cycle has no force against it and keeps it (design notes §6 found a third left after
+    // cycle has no force against it and keeps it (a plain implementation was measured to keep a third after
     // 40 000 steps). The viscous remedy removes about kappa of it each step.
     const double kept = checkerboard_left(0.0, 2000), damped = checkerboard_left(0.1, 200);
     MESSAGE("checkerboard energy left: " << kept << " after 2000 steps without HOURGLASS, " << damped << " after 200 steps with 0.1");

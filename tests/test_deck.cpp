@@ -1,4 +1,4 @@
-// The deck reader (design §3): every card into the Scene, every lexical rule, and
+// The deck reader: every card into the Scene, every lexical rule, and
 // every error with the line and column it is reported at. Each test is a small deck
 // read as if from the file "t.deck".
 #include <doctest/doctest.h>
@@ -237,7 +237,7 @@ TEST_CASE("deck: END ends the deck; the cards after it are not read") {
     CHECK(s.materials.size() == 1);
 }
 
-TEST_CASE("deck: every card of design §3 in one scene") {
+TEST_CASE("deck: every card of the deck language (decks/README.md) in one scene") {
     const Scene s = read_ok(
         "TITLE  Sand heap pushed by a wall\n"
         "GRID   40 24 0.5\n"

@@ -1,4 +1,4 @@
-// Hard numerical cases (issue 7): each scene runs long enough to show trouble and
+// Hard numerical cases: each scene runs long enough to show trouble and
 // asserts finite values, the exact mass balance, and energy that never grows without a
 // source. What each case measured is printed (doctest MESSAGE, shown with -s).
 //

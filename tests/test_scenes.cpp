@@ -1,5 +1,5 @@
 // Whole scenes from decks/ with known outcomes: vertical cuts below and above the
-// critical height (design notes §5), and the cliff of the paper's Fig. 5.
+// critical height (closed form), and the cliff of the paper's Fig. 5.
 #include <doctest/doctest.h>
 
 #include <cmath>

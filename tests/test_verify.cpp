@@ -1,8 +1,8 @@
 // The coarse rung of every verification case of `make verify` (tools/verify.sh), each
-// against its reference (design notes §5), with the tolerance the coarsest lattice
+// against its reference (closed form), with the tolerance the coarsest lattice
 // allows and the reason for it. The full ladder (--refine 1, 2, 4; 1x1, 2x2, 4x4
-// points per cell) is `make verify`; the numbers it measured are in the README's
-// "Speed and accuracy" section.
+// points per cell) is `make verify`; the numbers it measured are in tests/README.md
+// (the verification ladder).
 #include <doctest/doctest.h>
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 # Confined elastic column at rest under self-weight: compares the last frame of a point
-# table with the closed-form column (design notes §5), evaluated at each point's
+# table with the closed-form column (closed form), evaluated at each point's
 # initial height Y (a point keeps the weight of the material above it, so in the
 # material's own coordinates sigma_yy = -rho g (H - Y) holds exactly, also at large strain).
 #   settlement of a point at Y, with the stress updated from strain increments of the
