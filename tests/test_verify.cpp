@@ -186,8 +186,8 @@ TEST_CASE("verify: confined column at 1 % strain: stress and settlement high by 
     // Eq. 8 divides the points' sum of V sigma by the cell area L^2; compressed points fill
     // less than L^2 of a cell they do not leave, so the point stress that balances the
     // weight is higher by up to the volumetric strain (rho g H / M = 0.98 % at the base),
-    // and the column is softer by as much. This does not vanish with refinement (see the
-    // README's "Speed and accuracy"): only with the strain.
+    // and the column is softer by as much. This does not vanish with refinement (see
+    // tests/README.md): only with the strain.
     CHECK(c.syy_l2 < c.representation + c.strain);
     CHECK(c.settlement_err > 0);
     CHECK(c.settlement_err < 1.5 * c.strain);
