@@ -861,7 +861,9 @@ using UserModel = std::function<void(const StrainIncrement&, Stress&, PointState
 
 // ------------------------------------------------------ lattice, points ---
 
-// Points as a structure of arrays, sized once per scene.
+// Points as a structure of arrays, sized once per scene. Every array in use has one
+// entry per point; each_array is the one list of them (allocation, removal of points
+// that left, memory estimates and counts go through it).
 struct Points {
     std::vector<double> x, y, sxx, syy, sxy, szz, vol;
     std::vector<std::int32_t> cell, id;     // cell: the cell holding (x, y); a program that moves a point sets both
@@ -871,9 +873,33 @@ struct Points {
     std::vector<std::uint8_t> yielded;
     // Only when some material scatters: intact cohesion, N_phi and sqrt(N_phi) of each
     // point (the root taken once, not per step; a program that changes n_phi sets both).
-    // Every array in use has one entry per point.
     std::vector<double> c0, n_phi, sqrt_n_phi;
+    // Scratch of the fast kernel's threaded point pass, not state: the points each thread
+    // lists for adding after the pass (with threads), and for ADVECT POINTS a listed
+    // point's own increment and the cell it left.
+    std::vector<std::int32_t> listed;
+    std::vector<double> carry_dx, carry_dy;
+    std::vector<std::int32_t> carry_from;
+
     std::size_t size() const { return x.size(); }
+    // Which scenes hold an array: every one, with a Mohr-Coulomb material, with scatter,
+    // with more than one thread, with ADVECT POINTS and threads.
+    enum Use : std::uint8_t { kAlways, kPlastic, kScatter, kThreads, kCarry };
+    // f(name, array, use, state) for every array above, in this order; state: part of a
+    // point's state (not scratch).
+    template <class F> void each_array(F&& f) { visit(*this, f); }
+    template <class F> void each_array(F&& f) const { visit(*this, f); }
+
+private:
+    template <class P, class F> static void visit(P& p, F& f) {
+        f("x", p.x, kAlways, true); f("y", p.y, kAlways, true);
+        f("sxx", p.sxx, kAlways, true); f("syy", p.syy, kAlways, true); f("sxy", p.sxy, kAlways, true); f("szz", p.szz, kAlways, true);
+        f("vol", p.vol, kAlways, true); f("cell", p.cell, kAlways, true); f("id", p.id, kAlways, true); f("group", p.group, kAlways, true);
+        f("plastic_shear", p.plastic_shear, kPlastic, true); f("yielded", p.yielded, kPlastic, true);
+        f("c0", p.c0, kScatter, true); f("n_phi", p.n_phi, kScatter, true); f("sqrt_n_phi", p.sqrt_n_phi, kScatter, true);
+        f("listed", p.listed, kThreads, false);
+        f("carry_dx", p.carry_dx, kCarry, false); f("carry_dy", p.carry_dy, kCarry, false); f("carry_from", p.carry_from, kCarry, false);
+    }
 };
 
 // Points of one material and one initial spacing share a mass and constants.
@@ -1040,16 +1066,31 @@ inline double stable_dt(const Scene& s) {
     return dt;
 }
 
-// Bytes the arrays of a scene will take (for the memory check before anything is allocated).
-inline double estimate_bytes(const Scene& s, double points) {
-    const double cells = double(s.mx) * s.my, nodes = (s.mx + 1.0) * (s.my + 1.0);
+// Whether the points of scene s hold the arrays of use u (threads: the run has more than
+// one thread).
+inline bool uses(const Scene& s, Points::Use u, bool threads) {
     bool plastic = false, scatter = false;
     for (const auto& m : s.materials) {
         plastic |= m.model == Model::MohrCoulomb;
         scatter |= m.scatter > 0;
     }
-    const double per_point = 7 * 8 + 3 * 4 + (plastic ? 9 : 0) + (scatter ? 16 : 0);
-    return cells * (4 * 8 + 6 * 8) + nodes * (5 * 8 + 1) + points * per_point;
+    switch (u) {
+    case Points::kPlastic: return plastic;
+    case Points::kScatter: return scatter;
+    case Points::kThreads: return threads;
+    case Points::kCarry: return threads && s.advect == Advect::Points;
+    default: return true;
+    }
+}
+
+// Bytes the arrays of a scene will take (for the memory check before anything is allocated).
+inline double estimate_bytes(const Scene& s, double points) {
+    const double cells = double(s.mx) * s.my, nodes = (s.mx + 1.0) * (s.my + 1.0);
+    double per_point = 0;  // the arrays the scene's points will hold (threads' scratch counted: at most 4 bytes)
+    Points().each_array([&](const char*, const auto& v, Points::Use u, bool) {
+        if (uses(s, u, true)) per_point += double(sizeof(v[0]));
+    });
+    return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * per_point;
 }
 
 // Number of points the clusters create (cells claimed by a later cluster count once).
@@ -1320,10 +1361,7 @@ public:
     double bytes_per_point() const {
         const double n = double(std::max<std::size_t>(1, p_.size()));
         double b = 0;
-        for (const auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol, &p_.plastic_shear, &p_.c0, &p_.n_phi, &p_.sqrt_n_phi}) b += double(v->capacity()) * 8;
-        b += double(p_.cell.capacity() + p_.id.capacity()) * 4 + double(p_.group.capacity()) * 2 + double(p_.yielded.capacity());
-        b += double(pdx_.capacity() + pdy_.capacity()) * 8 + double(pfrom_.capacity()) * 4;  // ADVECT POINTS only
-        b += double(deferred_.capacity()) * 4;  // with threads only
+        p_.each_array([&](const char*, const auto& v, Points::Use, bool) { b += double(v.capacity() * sizeof(v[0])); });
         return b / n;
     }
 
@@ -1423,8 +1461,8 @@ public:
     // The phases of step(), in order; public so that tests and lessons can step
     // through one cycle. Normal use calls step().
     void cell_strains();
-    void update_points();
-    void map_to_lattice() { map_points(false); }
+    void update_points() { point_pass(); }  // eq. 6, 7a/7b, and (in the same pass) eq. 7, 8
+    void map_to_lattice() { map_points(); }
     void nodal_forces();
     void compensate();
     void integrate();
@@ -1435,7 +1473,7 @@ private:
     void remove_departed();
     void clear_cells();
     void clear_row(int j, int lo, int hi);
-    template <bool Fused> void advance_points();
+    void advance_points();
     bool advance_parted();
     // What a range of points gives map_to_lattice's bookkeeping: the cells and columns
     // they landed in, their mass, how many left the lattice.
@@ -1443,10 +1481,10 @@ private:
         int cmin = std::numeric_limits<int>::max(), cmax = -1, imin = std::numeric_limits<int>::max(), imax = -1;
         double mass = 0;
         long departed = 0;
-        long listed = 0;  // with threads: points whose sums wait for other chunks' (deferred_[list_at ..])
+        long listed = 0;  // with threads: points whose sums wait for other chunks' (p_.listed[list_at ..])
         // The fused threaded pass (advance_parted): the cells own_lo .. own_hi-1 take this
         // chunk's sums directly; a point landing in any other cell is listed in
-        // deferred_[list_at ..]. The defaults: every cell (the serial pass).
+        // p_.listed[list_at ..]. The defaults: every cell (the serial pass).
         int own_lo = 0, own_hi = std::numeric_limits<int>::max();
         long list_at = 0;
         double seconds = 0;  // the time the chunk took (advance_parted balances the chunks)
@@ -1461,11 +1499,11 @@ private:
     Range landed(const Tally& t) const { return t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1}; }
     // Points per block of the AVX2 point loop with a Mohr-Coulomb material (run_points).
     static constexpr long kConsultBlock = 256;
-    template <bool Fused> void advance_range(long k0, long k1, Tally& t);
-    template <bool Fused, Motion M, bool Carry> void advance_run(long k0, long k1, Tally& t);
-    template <bool Fused, Motion M, bool Carry, bool Wide> LPFDM_INLINE void run_points(long k0, long k1, Tally& t);
+    void advance_range(long k0, long k1, Tally& t);
+    template <Motion M, bool Carry> void advance_run(long k0, long k1, Tally& t);
+    template <Motion M, bool Carry, bool Wide> LPFDM_INLINE void run_points(long k0, long k1, Tally& t);
 #if LPFDM_WIDE
-    template <bool Fused> __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Tally& t);
+    __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Tally& t);
 #endif
     // Row j of a lattice phase: f(j, std::false_type), or f(j, std::true_type) built for
     // AVX2 (f inlined into row_wide) when the AVX2 version is on, so that f may work
@@ -1493,12 +1531,12 @@ private:
     long row_moves_ = 0;
     template <class F> void by_rows(RowLoop loop, int j0, int j1, long work, const F& f);
     void map_point(std::size_t k);
-    // The points the team's chunks listed (deferred_[list_at ..] of each Tally), in chunk
+    // The points the team's chunks listed (p_.listed[list_at ..] of each Tally), in chunk
     // order: eq. 7, 8.
     void add_listed(int team) {
         for (int u = 0; u < team; ++u) {
             const Tally& a = map_tally_[std::size_t(u)];
-            for (long d = 0; d < a.listed; ++d) map_point(std::size_t(deferred_[std::size_t(a.list_at + d)]));
+            for (long d = 0; d < a.listed; ++d) map_point(std::size_t(p_.listed[std::size_t(a.list_at + d)]));
         }
     }
     // Node mass before and after this step's mapping: the node gained mass, and eq. 12 gives
@@ -1536,13 +1574,7 @@ private:
         a.add(m, v, sxx, syy, sxy);
         store_sums(c, a);
     }
-    // map_to_lattice; after_update: called by step() right after update_points, so the
-    // chunks' cell ranges that update_points found still hold (nothing changed the points).
-    void map_points(bool after_update);
-    template <bool Wide> LPFDM_INLINE void map_chunk(long k0, long k1, int id, long& listed, double& mass);
-#if LPFDM_WIDE
-    __attribute__((target("avx2"))) void map_chunk_wide(long k0, long k1, int id, long& listed, double& mass);
-#endif
+    void map_points();
     void plastic_correction(const MaterialConstants& mc, std::size_t q, const detail::MohrTrial& t, Stress& s);
     // Point q was returned to the yield surface with plastic shear increment d_gamma_p.
     void record_yield(std::size_t q, double d_gamma_p) {
@@ -1597,15 +1629,10 @@ private:
         }
         ++step_;
     }
-    // The fast kernel's point phase: update_points and map_to_lattice in one pass (by
-    // threads: advance_parted), or the two passes where that cannot run.
+    // The fast kernel's point phase: eq. 6, 7a/7b and eq. 7, 8 in one pass, by threads
+    // (advance_parted) or by one.
     void point_pass() {
-        if (serial()) {
-            advance_points<true>();
-        } else if (!advance_parted()) {
-            update_points();   // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b
-            map_points(true);  // map_to_lattice: eq. 7, 8 (the lattice is back at its original position)
-        }
+        if (serial() || !advance_parted()) advance_points();
     }
     // The reference cycle's phases, in step order.
     void reference_cell_strains();
@@ -1674,19 +1701,15 @@ private:
     std::vector<CellStrain> strain_;
     std::vector<double> hgx_, hgy_;                        // hourglass increment per cell (HOURGLASS only)
     // ADVECT POINTS only: per cell, sum m (d - E r) and sum m E of the points that landed in
-    // it (r from the cell centre); per point, its increment d and the cell it came from.
+    // it (r from the cell centre).
     // One record per cell, not six arrays: bench_elastic with ADVECT POINTS ran 400 steps
     // in 3.2 s with six arrays (all starting at the same offset in their pages), 2.15 s
     // with one record; 1.8 s with eq. 12.
     struct Carried { double px = 0, py = 0, qxx = 0, qxy = 0, qyx = 0, qyy = 0; };
     std::vector<Carried> carried_;
-    std::vector<double> pdx_, pdy_;
-    std::vector<std::int32_t> pfrom_;
-    // Threaded map_to_lattice only: per thread its chunk's cells, mass and list length,
-    // and per point room for the lists.
+    // The threaded point pass only: per thread its chunk's cells, mass and list length
+    // (the lists themselves are Points::listed).
     std::vector<Tally> map_tally_;
-    std::vector<std::int32_t> deferred_;
-    int tallied_team_ = 0;  // > 0: update_points left map_tally_ for that many chunks
     // advance_parted: thread u's chunk of the points, chunk_at_[u] .. chunk_at_[u + 1] - 1,
     // for chunk_team_ threads; parts_known_: map_tally_ holds the last pass's chunks (from
     // list_at) and the cells their points lie in now.
@@ -1773,17 +1796,13 @@ inline void Simulation::setup() {
         walls_.push_back(std::move(ws));
     }
     create_points();
-    if (sc_.advect == Advect::Points) {
-        pdx_.assign(p_.size(), 0.0); pdy_.assign(p_.size(), 0.0);
-        pfrom_.assign(p_.cell.begin(), p_.cell.end());
-    }
     for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
     find_mohr_groups();
 #if defined(_OPENMP)
-    if (omp_get_max_threads() > 1 && p_.size() > 4096) {  // the threaded map_to_lattice's room
+    if (omp_get_max_threads() > 1 && p_.size() > 4096) {  // the threaded point pass's room
         map_tally_.resize(std::size_t(omp_get_max_threads()));
         chunk_at_.assign(map_tally_.size() + 1, 0);
-        deferred_.assign(p_.size(), 0);
+        p_.each_array([&](const char*, auto& v, Points::Use u, bool state) { if (!state && uses(sc_, u, true)) v.assign(p_.size(), {}); });
     }
     for (RowBlocks& b : row_blocks_) {  // the lattice phases' blocks of rows (by_rows)
         const std::size_t team = std::size_t(omp_get_max_threads());
@@ -1839,12 +1858,8 @@ inline void Simulation::create_points() {
         groups_.push_back({keys[g].first, mq, mq / sc_.materials[std::size_t(keys[g].first)].rho});
     }
 
-    bool plastic = false, scatter = false;
-    for (const auto& k : consts_) { plastic |= k.model == Model::MohrCoulomb; scatter |= k.scatter; }
-    for (auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol}) v->reserve(npoints);
-    p_.cell.reserve(npoints); p_.id.reserve(npoints); p_.group.reserve(npoints);
-    if (plastic) { p_.plastic_shear.reserve(npoints); p_.yielded.reserve(npoints); }
-    if (scatter) { p_.c0.reserve(npoints); p_.n_phi.reserve(npoints); p_.sqrt_n_phi.reserve(npoints); }
+    const bool plastic = uses(sc_, Points::kPlastic, false), scatter = uses(sc_, Points::kScatter, false);
+    p_.each_array([&](const char*, auto& v, Points::Use u, bool state) { if (state && uses(sc_, u, false)) v.reserve(npoints); });
 
     Random rng(sc_.seed);
     for (int j = 0; j < my_; ++j)
@@ -2208,51 +2223,21 @@ inline void Simulation::cell_strains() {
     by_rows(kStrainRows, r.j0, r.j1, r.size(), [&](int j) { each_row(row, j); });
 }
 
-// eq. 6 (one consult of the constitutive model per point), the Jaumann rotation by
-// eq. 5f, the volume change, and the motion of eq. 7a/7b about node [1] of the cell.
-inline void Simulation::update_points() { advance_points<false>(); }
-
-// The points' phase; Fused also does map_to_lattice's sums in the same pass (serial
-// runs: one read of the points instead of two; the sums are taken in the same order).
-template <bool Fused>
+// The points' phase by one thread: eq. 6 (one consult of the constitutive model per
+// point), the Jaumann rotation by eq. 5f, the volume change, the motion of eq. 7a/7b,
+// and eq. 7 and 8 into the cell each point lands in, in one pass (reference_points
+// does the same, one point at a time; this pass takes runs of points sharing a cell).
 inline void Simulation::advance_points() {
-    tallied_team_ = 0;
-    if constexpr (Fused) clear_cells();
-    const long n = long(p_.size());
+    clear_cells();
     Tally t;
-    if constexpr (Fused) {
-        advance_range<true>(0, n, t);
-    } else {
-        long departed = 0;
-        int team = 1;
-        // User models may not be thread-safe: they are consulted from one thread.
-        LPFDM_OMP(omp parallel reduction(+ : departed) if (n > 4096 && user_models_.empty()))
-        {
-#if defined(_OPENMP)
-            const long nt = omp_get_num_threads(), id = omp_get_thread_num();
-#else
-            const long nt = 1, id = 0;
-#endif
-            Tally mine;
-            advance_range<false>(n * id / nt, n * (id + 1) / nt, mine);
-            departed += mine.departed;
-            if (id < long(map_tally_.size())) map_tally_[std::size_t(id)] = mine;
-            if (id == 0) team = int(nt);
-        }
-        t.departed = departed;
-        // map_to_lattice may take each chunk's cells from here, unless points were removed
-        // (the chunks then cover other points).
-        tallied_team_ = departed == 0 && team > 1 && team <= int(map_tally_.size()) ? team : 0;
-    }
+    advance_range(0, long(p_.size()), t);
     departed_ = std::size_t(t.departed);
     if (departed_) remove_departed();
-    if constexpr (Fused) {
-        mass_in_ = t.mass;
-        occupied_ = landed(t);
-    }
+    mass_in_ = t.mass;
+    occupied_ = landed(t);
 }
 
-// update_points and map_to_lattice in one pass by threads (without ADVECT POINTS). Thread u
+// advance_points by threads. Thread u
 // moves the points of its chunk (a contiguous range) and adds those landing in its part
 // of the cells (own_lo .. own_hi-1 of its Tally; the parts follow one another in cell
 // order) directly; a point landing in another part is listed, and the lists are added
@@ -2262,16 +2247,18 @@ inline void Simulation::advance_points() {
 // are cleared and made again by map_to_lattice (the points have moved already): the same
 // numbers either way, only slower. A part ends a row and two cells above the highest cell
 // the chunk's points lie in (known from the last step's pass, else looked up): beyond the
-// reach of a point that moves at most one cell. Returns false when it cannot run (one
-// thread; ADVECT POINTS; more threads than at set-up, or 4 096 points or fewer then;
-// dynamic or nested teams); step() then takes update_points and map_points.
+// reach of a point that moves at most one cell. With ADVECT POINTS each point also keeps
+// the increment it carries and the cell it left (Points::carry_*), for a listed point and
+// for the mapping made again. Returns false when it cannot run (one thread; more threads
+// than at set-up, or 4 096 points or fewer then; dynamic or nested teams); point_pass
+// then takes advance_points.
 inline bool Simulation::advance_parted() {
 #if defined(_OPENMP)
     const long n = long(p_.size());
     const int want = std::min(omp_get_max_threads(), omp_get_thread_limit());
     // A team smaller than asked for (dynamic teams, or inside another parallel region) would
-    // make parts for threads that do not come: the two passes then.
-    if (!pdx_.empty() || want < 2 || want > int(map_tally_.size()) || omp_get_dynamic() || omp_in_parallel()) return false;
+    // make parts for threads that do not come: one thread then (advance_points).
+    if (want < 2 || want > int(map_tally_.size()) || omp_get_dynamic() || omp_in_parallel()) return false;
     if (chunk_team_ != want) {  // a new thread count: even chunks
         for (int u = 0; u <= want; ++u) chunk_at_[std::size_t(u)] = n * u / want;
         chunk_team_ = want;
@@ -2303,7 +2290,6 @@ inline bool Simulation::advance_parted() {
         map_tally_[std::size_t(u)].own_hi = hi;
         lo = hi;
     }
-    tallied_team_ = 0;
     int team = 1;
     LPFDM_OMP(omp parallel num_threads(want))
     {
@@ -2318,7 +2304,7 @@ inline bool Simulation::advance_parted() {
         if (!occupied_.empty())
             for (int j = std::max(occupied_.j0, mine.own_lo / mx_), j1 = int(std::min<long>(occupied_.j1, mine.own_hi / mx_ + 1L)); j < j1; ++j)
                 clear_row(j, mine.own_lo, mine.own_hi);
-        advance_range<true>(k0, k1, mine);
+        advance_range(k0, k1, mine);
         mine.seconds = omp_get_wtime() - t0;
         map_tally_[std::size_t(id)] = mine;
         if (id == 0) team = nt;
@@ -2346,7 +2332,7 @@ inline bool Simulation::advance_parted() {
     ++parted_.steps;
     if (clash) {
         ++parted_.clashes;
-        map_points(false);
+        map_points();
     }
     return true;
 #else
@@ -2357,23 +2343,22 @@ inline bool Simulation::advance_parted() {
 // Points k0 .. k1-1. The points are stored cell by cell and mostly stay so (they are
 // created that way and cross a cell edge rarely), so the loop walks runs of points that
 // share a cell: the cell's strain, rotation, nodes and elastic stress increment are
-// read once per run. Fused: the sums of the run's cell are kept in registers while its
+// read once per run. The sums of the run's cell are kept in registers while its
 // points stay in it and written back when the run ends; every sum still takes its terms
 // in point order, so the result is the same bit for bit as a plain loop over points.
 // Requires p_.cell[k] to be the cell holding (x[k], y[k]) (as after every step).
 // One instantiation per motion rule and transfer, so the loop holds only what it uses.
-template <bool Fused>
 inline void Simulation::advance_range(long k0, long k1, Tally& t) {
-    const bool carry = !pdx_.empty();
+    const bool carry = sc_.advect == Advect::Points;
 #if LPFDM_WIDE
     // The AVX2 version for the paper's motion rule only (the default, and every shipped
     // deck's): each version of this loop adds a fifth to the build time of the tests.
-    if (wide_ && sc_.motion == Motion::Paper) { advance_run_wide<Fused>(k0, k1, t); return; }
+    if (wide_ && sc_.motion == Motion::Paper) { advance_run_wide(k0, k1, t); return; }
 #endif
     switch (sc_.motion) {
-    case Motion::Paper: advance_run<Fused, Motion::Paper, false>(k0, k1, t); break;  // ADVECT POINTS refuses PAPER
-    case Motion::Centre: carry ? advance_run<Fused, Motion::Centre, true>(k0, k1, t) : advance_run<Fused, Motion::Centre, false>(k0, k1, t); break;
-    case Motion::Bilinear: carry ? advance_run<Fused, Motion::Bilinear, true>(k0, k1, t) : advance_run<Fused, Motion::Bilinear, false>(k0, k1, t); break;
+    case Motion::Paper: advance_run<Motion::Paper, false>(k0, k1, t); break;  // ADVECT POINTS refuses PAPER
+    case Motion::Centre: carry ? advance_run<Motion::Centre, true>(k0, k1, t) : advance_run<Motion::Centre, false>(k0, k1, t); break;
+    case Motion::Bilinear: carry ? advance_run<Motion::Bilinear, true>(k0, k1, t) : advance_run<Motion::Bilinear, false>(k0, k1, t); break;
     }
 }
 
@@ -2396,17 +2381,16 @@ inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q,
     if (plastic) { p_.plastic_shear[q] = ps.plastic_shear; p_.yielded[q] = ps.yielded; }
 }
 
-template <bool Fused, Motion M, bool Carry>
-inline void Simulation::advance_run(long k0, long k1, Tally& tally) { run_points<Fused, M, Carry, false>(k0, k1, tally); }
+template <Motion M, bool Carry>
+inline void Simulation::advance_run(long k0, long k1, Tally& tally) { run_points<M, Carry, false>(k0, k1, tally); }
 #if LPFDM_WIDE
-template <bool Fused>
-__attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Tally& tally) { run_points<Fused, Motion::Paper, false, true>(k0, k1, tally); }
+__attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Tally& tally) { run_points<Motion::Paper, false, true>(k0, k1, tally); }
 #endif
 
-template <bool Fused, Motion M, bool Carry, bool Wide>
+template <Motion M, bool Carry, bool Wide>
 LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) {
     Tally t = tally;  // a local: kept in registers (stores through the cell arrays could alias a reference)
-    // Fused: the cells this chunk adds to directly (all of them in the serial pass); a point
+    // The cells this chunk adds to directly (all of them in the serial pass); a point
     // landing in any other is listed (advance_parted).
     const int own_lo = t.own_lo;
     const unsigned own_n = unsigned(t.own_hi) - unsigned(t.own_lo);
@@ -2422,6 +2406,10 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
     double* __restrict pvol = p_.vol.data();
     std::int32_t* __restrict pcell = p_.cell.data();
     const std::uint16_t* __restrict pgroup = p_.group.data();
+    // ADVECT POINTS with threads: each point's increment and the cell it left.
+    double* carry_dx = p_.carry_dx.empty() ? nullptr : p_.carry_dx.data();
+    double* carry_dy = p_.carry_dy.empty() ? nullptr : p_.carry_dy.data();
+    std::int32_t* carry_from = p_.carry_from.empty() ? nullptr : p_.carry_from.data();
     const int mx = mx_, my = my_;
     const double L = L_, invL = invL_, X = mx * L, Y = my * L;
     const bool single = groups_.size() == 1;
@@ -2469,7 +2457,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
     // The usual run of an elastic scene with 2 x 2 points per cell: four points of one cell
     // (a run of four, or the first four of a longer run) of one elastic group, in a cell with
     // no fixed edge, that all stay in it. From point k on, such fours one after another, each
-    // in registers and stored (Fused: and added to the cell's sums, eq. 7 and 8) only once
+    // in registers and stored (and added to the cell's sums, eq. 7 and 8) only once
     // all four are known to stay. At the first four that is not one, nothing of it is stored
     // and its first index is returned, for the general code of runs() below, which makes the
     // same numbers: the same expressions in the same order, and a run split in two gives the
@@ -2495,7 +2483,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 if (gw != std::uint64_t(g) * 0x0001000100010001ULL) break;
             }
             const MaterialConstants& mc = *gconsts[g];
-            if (mc.model != Model::Elastic || fixed[c] || (Fused && !owned(c))) break;
+            if (mc.model != Model::Elastic || fixed[c] || !owned(c)) break;
             int ci, cj;
             locate(c, ci, cj);
             const CellStrain& ce = strain_[std::size_t(c)];
@@ -2515,7 +2503,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
             detail::store(psxx + k, xx); detail::store(psyy + k, yy); detail::store(psxy + k, xy);
             detail::store(pszz + k, zz); detail::store(pvol + k, vol);
             detail::store(px + k, x); detail::store(py + k, y);
-            if constexpr (Fused) {
+            {
                 CellSums sums = cell_sums(std::size_t(c));
                 sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, xx, yy, xy, mass);  // eq. 7, 8
                 store_sums(std::size_t(c), sums);
@@ -2636,7 +2624,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
 
             if constexpr (S != kTrial) {
                 // eq. 7a/7b, about node [1] of the cell; then eq. 7 and 8 into the cell each point
-                // lands in. Fused: the sums of cell c stay in registers while its points stay in it.
+                // lands in. The sums of cell c stay in registers while its points stay in it.
                 const std::uint8_t fe = fixed_edges_[std::size_t(c)];
                 // A point of a cell in the last column or row takes the full test below: x < X
                 // does not follow from x / L < m there (Span).
@@ -2648,8 +2636,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 if constexpr (M != Motion::Paper) { ux2 = dux_[n2]; uy2 = duy_[n2]; ux3 = dux_[n3]; uy3 = duy_[n3]; ux4 = dux_[n4]; uy4 = duy_[n4]; }
                 if constexpr (M == Motion::Centre) { umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4); }
                 CellSums sums{0, 0, 0, 0, 0};
-                const bool own = !Fused || owned(c);  // Fused: the sums of cell c are this chunk's to add
-                if (Fused && own) sums = cell_sums(std::size_t(c));
+                const bool own = owned(c);  // the sums of cell c are this chunk's to add
+                if (own) sums = cell_sums(std::size_t(c));
                 bool stayed = false;
                 int g = one_group ? pgroup[k] : -1;
                 double gm = one_group ? groups_[std::size_t(g)].mass : 0, gv0 = one_group ? groups_[std::size_t(g)].vol0 : 0;
@@ -2667,7 +2655,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                     }
                 };
                 // Point q, now at (x, y): its new cell, min(m - 1, int(x / L)) (the run's own cell
-                // in the usual case), and eq. 7 and 8 into it. Fused: the sums of cell c stay in
+                // in the usual case), and eq. 7 and 8 into it. The sums of cell c stay in
                 // registers while its points stay in it.
                 auto land = [&](long q, double x, double y, double ddx, double ddy, auto one) LPFDM_INLINE {
                     (void)ddx; (void)ddy;
@@ -2682,30 +2670,24 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                         ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
                         pcell[q] = cn;
                     }
-                    if constexpr ((Carry || Fused) && !decltype(one)::value) {
+                    if constexpr (!decltype(one)::value) {
                         if (pgroup[q] != g) { g = pgroup[q]; gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0; }
                     }
-                    if constexpr (Carry) {
-                        if constexpr (Fused) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
-                        else { pdx_[std::size_t(q)] = ddx; pdy_[std::size_t(q)] = ddy; pfrom_[std::size_t(q)] = c; }
+                    if constexpr (Carry) {  // ADVECT POINTS: the increment field the point brings to cell cn
+                        if (owned(cn)) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
+                        if (carry_dx) { carry_dx[q] = ddx; carry_dy[q] = ddy; carry_from[q] = c; }  // threads: map_point may add it later
                     }
-                    if constexpr (!Fused) {  // the cells this chunk's points landed in (map_to_lattice)
-                        if (cn == c) stayed = true;
-                        else { t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn); t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni); }
+                    const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
+                    if (cn == c && own) {
+                        sums.add(gm, vk, sxx, syy, sxy);  // eq. 7, 8
+                        stayed = true;
+                    } else {
+                        if (owned(cn)) add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
+                        else p_.listed[std::size_t(t.list_at + t.listed++)] = std::int32_t(q);  // another chunk's cell
+                        t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
+                        t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
                     }
-                    if constexpr (Fused) {
-                        const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
-                        if (cn == c && own) {
-                            sums.add(gm, vk, sxx, syy, sxy);  // eq. 7, 8
-                            stayed = true;
-                        } else {
-                            if (owned(cn)) add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
-                            else deferred_[std::size_t(t.list_at + t.listed++)] = std::int32_t(q);  // another chunk's cell
-                            t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
-                            t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
-                        }
-                        t.mass += gm;
-                    }
+                    t.mass += gm;
                 };
                 // Points q0 .. kend-1 one at a time, in four versions: with or without fixed edges,
                 // one group or several.
@@ -2750,7 +2732,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                                 continue;
                             }
                             stayed = true;
-                            if constexpr (Fused) {
+                            {
                                 v4d vol, sxx, syy, sxy;
                                 detail::load(pvol + q0, vol); detail::load(psxx + q0, sxx); detail::load(psyy + q0, syy); detail::load(psxy + q0, sxy);
                                 sums.add_four(gm, gv0, vol, sxx, syy, sxy, t.mass);  // eq. 7, 8
@@ -2762,7 +2744,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 if (fe) one_group ? motion(q0, std::true_type{}, std::true_type{}) : motion(q0, std::true_type{}, std::false_type{});
                 else one_group ? motion(q0, std::false_type{}, std::true_type{}) : motion(q0, std::false_type{}, std::false_type{});
                 if (stayed) {
-                    if constexpr (Fused) store_sums(std::size_t(c), sums);
+                    store_sums(std::size_t(c), sums);
                     t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
                     t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
                 }
@@ -2847,28 +2829,17 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
 inline void Simulation::remove_departed() {
     std::size_t w = 0;
     const std::size_t n = p_.size();
-    const bool plastic = !p_.plastic_shear.empty(), scatter = !p_.c0.empty();
     for (std::size_t k = 0; k < n; ++k) {
         if (p_.cell[k] < 0) {
             // A non-finite point also lands here; keep it so the guard can name it.
             if (std::isfinite(p_.x[k]) && std::isfinite(p_.y[k])) { mass_out_ += groups_[p_.group[k]].mass; continue; }
             p_.cell[k] = 0;
         }
-        if (w != k) {
-            for (auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol}) (*v)[w] = (*v)[k];
-            p_.cell[w] = p_.cell[k]; p_.id[w] = p_.id[k]; p_.group[w] = p_.group[k];
-            if (plastic) { p_.plastic_shear[w] = p_.plastic_shear[k]; p_.yielded[w] = p_.yielded[k]; }
-            if (scatter) { p_.c0[w] = p_.c0[k]; p_.n_phi[w] = p_.n_phi[k]; p_.sqrt_n_phi[w] = p_.sqrt_n_phi[k]; }
-            if (!pdx_.empty()) { pdx_[w] = pdx_[k]; pdy_[w] = pdy_[k]; pfrom_[w] = pfrom_[k]; }
-        }
+        if (w != k) p_.each_array([&](const char*, auto& v, Points::Use, bool) { if (!v.empty()) v[w] = v[k]; });
         ++w;
     }
     // Shrinking keeps capacity: no allocation.
-    for (auto* v : {&p_.x, &p_.y, &p_.sxx, &p_.syy, &p_.sxy, &p_.szz, &p_.vol}) v->resize(w);
-    p_.cell.resize(w); p_.id.resize(w); p_.group.resize(w);
-    if (plastic) { p_.plastic_shear.resize(w); p_.yielded.resize(w); }
-    if (scatter) { p_.c0.resize(w); p_.n_phi.resize(w); p_.sqrt_n_phi.resize(w); }
-    if (!pdx_.empty()) { pdx_.resize(w); pdy_.resize(w); pfrom_.resize(w); }
+    p_.each_array([&](const char*, auto& v, Points::Use, bool) { if (!v.empty()) v.resize(w); });
     departed_ = 0;
 }
 
@@ -2895,121 +2866,25 @@ inline void Simulation::map_point(std::size_t k) {
     const Group& g = groups_[p_.group[k]];
     const double m = g.mass, v = std::min(p_.vol[k], g.vol0);
     add_to_cell(std::size_t(c), m, v, p_.sxx[k], p_.syy[k], p_.sxy[k]);  // eq. 7, 8
-    if (!pdx_.empty()) {
-        const int f = pfrom_[k];
-        carry_to(c, c % mx_, c / mx_, m, p_.x[k], p_.y[k], pdx_[k], pdy_[k], {strain_[f].xx, strain_[f].yy, strain_[f].xy, strain_[f].yx});
+    if (!p_.carry_dx.empty()) {
+        const int f = p_.carry_from[k];
+        carry_to(c, c % mx_, c / mx_, m, p_.x[k], p_.y[k], p_.carry_dx[k], p_.carry_dy[k], {strain_[f].xx, strain_[f].yy, strain_[f].xy, strain_[f].yx});
     }
 }
 
-// The threaded map_to_lattice of chunk id, points k0 .. k1-1, once every chunk's cells are
-// known: runs of points sharing a cell; an unshared run's sums are kept in registers and
-// written once, each still taken in point order; a run in a cell that a lower chunk also
-// reaches is listed (deferred_[k0 ..]), to be added after those chunks. Wide: four points
-// of one group at a time in the lanes of an AVX2 register (detail::add_four).
-template <bool Wide>
-LPFDM_INLINE inline void Simulation::map_chunk(long k0, long k1, int id, long& listed, double& mass) {
-    const std::int32_t* pcell = p_.cell.data();
-    const std::uint16_t* pgroup = p_.group.data();
-    const double *pvol = p_.vol.data(), *psxx = p_.sxx.data(), *psyy = p_.syy.data(), *psxy = p_.sxy.data();
-    const bool carry = !pdx_.empty();
-    for (long k = k0; k < k1;) {
-        const int c = pcell[k];
-        long kend = k + 1;
-        while (kend < k1 && pcell[kend] == c) ++kend;
-        bool shared = false;
-        for (int u = 0; u < id; ++u) shared |= c >= map_tally_[std::size_t(u)].cmin && c <= map_tally_[std::size_t(u)].cmax;
-        if (shared || carry) {
-            for (long q = k; q < kend; ++q) {
-                mass += groups_[pgroup[q]].mass;
-                if (shared) deferred_[std::size_t(k0 + listed++)] = std::int32_t(q);
-                else map_point(std::size_t(q));
-            }
-        } else {
-            const std::size_t cc = std::size_t(c);
-            CellSums sums = cell_sums(cc);
-            long q = k;
-#if LPFDM_WIDE
-            if constexpr (Wide) {
-                for (; q + 4 <= kend; q += 4) {
-                    std::uint64_t gw;
-                    std::memcpy(&gw, pgroup + q, sizeof gw);
-                    if (gw != std::uint64_t(pgroup[q]) * 0x0001000100010001ULL) break;  // two groups: one at a time
-                    const Group& g = groups_[pgroup[q]];
-                    detail::v4d vol, sxx, syy, sxy;
-                    detail::load(pvol + q, vol); detail::load(psxx + q, sxx); detail::load(psyy + q, syy); detail::load(psxy + q, sxy);
-                    sums.add_four(g.mass, g.vol0, vol, sxx, syy, sxy, mass);  // eq. 7, 8
-                }
-            }
-#endif
-            for (; q < kend; ++q) {
-                const Group& g = groups_[pgroup[q]];
-                sums.add(g.mass, std::min(pvol[q], g.vol0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
-                mass += g.mass;
-            }
-            store_sums(cc, sums);
-        }
-        k = kend;
-    }
-}
-#if LPFDM_WIDE
-__attribute__((target("avx2"))) inline void Simulation::map_chunk_wide(long k0, long k1, int id, long& listed, double& mass) { map_chunk<true>(k0, k1, id, listed, mass); }
-#endif
-
-// Every cell sum takes its terms in point order, whatever the number of threads. With
-// threads, thread t takes a contiguous chunk of points and adds directly to every cell
-// that no lower chunk can touch (outside the lowest..highest cell of each lower chunk);
-// the other points it lists, and the lists are added afterwards, in chunk order. The
-// points are stored nearly cell by cell, so the lists hold the few points about the
-// chunk edges. (Masses are quantised, so the mass total is exact in any order.) Each
-// chunk's lowest..highest cell comes from update_points when step() calls both in a row,
-// on the same chunks, and no point left (else a pass over the chunk finds it).
-inline void Simulation::map_points([[maybe_unused]] bool after_update) {
+// map_to_lattice: eq. 7 and 8 for every point, in point order, into the cell it lies in
+// (after set-up, after a program moved points, or when advance_parted's chunks clashed).
+inline void Simulation::map_points() {
     clear_cells();
-    const long n = long(p_.size());
-    auto tally = [&](std::size_t k, Tally& a) {  // the cells (the mass is summed with the sums)
-        const int c = p_.cell[k];
-        a.cmin = std::min(a.cmin, c); a.cmax = std::max(a.cmax, c);
-        const int i = p_.x[k] >= 0 ? std::min(mx_ - 1, int(p_.x[k] * invL_)) : c % mx_;
-        a.imin = std::min(a.imin, i); a.imax = std::max(a.imax, i);
-    };
     Tally t;
-    int team = 1;
-#if defined(_OPENMP)
-    const int want = omp_get_max_threads();
-    if (n > 4096 && want > 1 && want <= int(map_tally_.size())) {
-        LPFDM_OMP(omp parallel num_threads(want))
-        {
-            const int nt = omp_get_num_threads(), id = omp_get_thread_num();
-            const long k0 = n * id / nt, k1 = n * (id + 1) / nt;
-            Tally& a = map_tally_[std::size_t(id)];
-            if (!after_update || tallied_team_ != nt) {  // the chunks' cells are not known from update_points
-                a = Tally{};
-                for (long k = k0; k < k1; ++k) tally(std::size_t(k), a);
-            }
-            LPFDM_OMP(omp barrier)
-            long listed = 0;  // the list of chunk id is kept in deferred_[k0 ..]
-            double mass = 0;
-#if LPFDM_WIDE
-            if (wide_) map_chunk_wide(k0, k1, id, listed, mass);
-            else
-#endif
-                map_chunk<false>(k0, k1, id, listed, mass);
-            a.mass = mass;
-            a.listed = listed;
-            a.list_at = k0;
-            if (id == 0) team = nt;
-        }
-        add_listed(team);
-        for (int u = 0; u < team; ++u) t.merge(map_tally_[std::size_t(u)]);
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        map_point(k);
+        const int c = p_.cell[k];
+        t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
+        const int i = p_.x[k] >= 0 ? std::min(mx_ - 1, int(p_.x[k] * invL_)) : c % mx_;
+        t.imin = std::min(t.imin, i); t.imax = std::max(t.imax, i);
+        t.mass += groups_[p_.group[k]].mass;
     }
-#endif
-    if (team == 1)
-        for (long k = 0; k < n; ++k) {
-            map_point(std::size_t(k));
-            tally(std::size_t(k), t);
-            t.mass += groups_[p_.group[std::size_t(k)]].mass;
-        }
-    tallied_team_ = 0;  // used once
     parts_known_ = false;  // not advance_parted's chunks
     mass_in_ = t.mass;
     occupied_ = landed(t);

@@ -593,9 +593,9 @@ TEST_CASE("HOURGLASS leaves an affine field alone: the damped column's answer do
 }
 
 TEST_CASE("phases one by one with two threads: a point moved between update_points and map_to_lattice is mapped where it now is") {
-    // step() lets map_to_lattice take each thread's cell range from update_points; a
-    // program stepping the phases itself may move points in between (setting x, y and
-    // cell), and the mapping must then see them where they are, as with one thread.
+    // A program stepping the phases itself may move points after the point phase
+    // (setting x, y and cell); map_to_lattice must then see them where they are, with
+    // any number of threads.
     auto run = [](int threads) {
 #if defined(_OPENMP)
         const int before = omp_get_max_threads();
