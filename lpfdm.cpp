@@ -30,8 +30,7 @@ const char* kUsage =
     "  --steps N     run N steps instead of the deck's\n"
     "  --seed N      seed of the strength scatter instead of the deck's SEED\n"
     "  --set K=V     override one deck parameter, e.g. --set MATERIAL1.C=12000, --set CLUSTER1.PPC=4,\n"
-    "                --set DAMPING.ALPHA=0 (CARD.PARAM; MATERIAL and WALL by id, CLUSTER and FIX by\n"
-    "                their order in the deck from 1); may be given several times\n"
+    "                --set DAMPING.ALPHA=0 (the keys are listed below); may be given several times\n"
     "  --threads N   use N threads (default 1, or OMP_NUM_THREADS; the output is the same for any N)\n"
     "  --kernel K    the code that runs the cycle (the same output with each):\n"
     "                fast       the default: threads, four values per AVX2 register where the processor has it\n"
@@ -102,7 +101,7 @@ int main(int argc, char** argv) {
         const std::string s = argv[a];
         auto value = [&]() -> const char* { return a + 1 < argc ? argv[++a] : nullptr; };
         long long v = 0;
-        if (s == "--help" || s == "-h") { std::fputs(kUsage, stdout); return 0; }
+        if (s == "--help" || s == "-h") { std::fputs(kUsage, stdout); std::fputs(("\n" + lpfdm::deck_help()).c_str(), stdout); return 0; }
         if (s == "--version") { std::printf("lpfdm %s\n", lpfdm::kVersion); return 0; }
         if (s == "-q") { opt.quiet = true; continue; }
         if (s == "--profile") { opt.profile = true; continue; }

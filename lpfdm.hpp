@@ -329,6 +329,192 @@ struct Scene {
     }
 };
 
+// --------------------------------------------------------- the deck's keys ---
+
+// The numbers of the deck language in one table: every card's positional fields (in card
+// order) and NAME=value parameters, with what they mean, their range and where they go in
+// a Scene. The deck reader reads fields by it, validate() checks ranges by it, --set
+// finds and checks a key by it, and --help lists it (a test checks that decks/README.md
+// names every card and key). Words (FIX X|Y|XY, OUTPUT POINTS file, ...) are the reader's.
+struct DeckKey {
+    const char* card;     // GRID, MATERIAL, ...
+    const char* name;     // --set CARD.NAME, and NAME= for a parameter
+    const char* what;     // the field as messages name it, with units
+    const char* subject;  // range messages say "<subject> must ..."
+    bool param;           // a NAME=value parameter (else a positional field)
+    bool required;        // a parameter that must be given (fields always are)
+    bool settable;        // --set may change it (not ids)
+    double lo, hi;        // accepted range ...
+    bool lo_open, hi_open, whole;  // ... its ends open or closed; whole numbers only
+    const char* unit;     // after the range in messages
+    double fallback;      // a parameter not given; a value equal to it is always accepted
+    int models;           // MATERIAL: the models that take it (bit 1 ELASTIC, bit 2 MOHR)
+    double (*get)(const Scene&, std::size_t);
+    void (*set)(Scene&, std::size_t, double);  // the index: among the cards of its kind, in deck order
+};
+
+#define LPFDM_AT(list, member) \
+    [](const Scene& s, std::size_t i) { return double(s.list[i].member); }, \
+    [](Scene& s, std::size_t i, double v) { s.list[i].member = static_cast<decltype(s.list[i].member)>(v); }
+#define LPFDM_OF(member) \
+    [](const Scene& s, std::size_t) { return double(s.member); }, \
+    [](Scene& s, std::size_t, double v) { s.member = static_cast<decltype(s.member)>(v); }
+inline constexpr double kHuge = std::numeric_limits<double>::infinity();
+inline constexpr int kElastic = 1, kMohr = 2, kBoth = 3;
+inline const DeckKey kDeckKeys[] = {
+    // card        name       what                   subject              param  req    set    lo      hi          lo_o   hi_o   whole  unit        fallback models
+    {"GRID",      "MX",      "mx (cells in x)",     "mx (cells in x)",   false, true,  true,  1,      1e6,        false, false, true,  "",         0,   0, LPFDM_OF(mx)},
+    {"GRID",      "MY",      "my (cells in y)",     "my (cells in y)",   false, true,  true,  1,      1e6,        false, false, true,  "",         0,   0, LPFDM_OF(my)},
+    {"GRID",      "L",       "L (cell size, m)",    "the cell size L",   false, true,  true,  0,      kHuge,      true,  true,  false, "",         0,   0, LPFDM_OF(cell_m)},
+    {"MATERIAL",  "ID",      "material id",         "material id",       false, true,  false, 1,      65535,      false, false, true,  "",         0,   0, LPFDM_AT(materials, id)},
+    {"MATERIAL",  "E",       "Young's modulus, Pa", "E",                 true,  true,  true,  0,      kHuge,      true,  true,  false, "",         0,   kBoth, LPFDM_AT(materials, E)},
+    {"MATERIAL",  "NU",      "Poisson's ratio",     "NU",                true,  true,  true,  -1,     0.5,        true,  true,  false, "",         0,   kBoth, LPFDM_AT(materials, nu)},
+    {"MATERIAL",  "RHO",     "density, kg/m^3",     "RHO",               true,  true,  true,  0,      kHuge,      true,  true,  false, "",         0,   kBoth, LPFDM_AT(materials, rho)},
+    {"MATERIAL",  "PHI",     "friction angle, deg", "PHI",               true,  true,  true,  0,      90,         false, true,  false, " degrees", 0,   kMohr, LPFDM_AT(materials, phi_deg)},
+    {"MATERIAL",  "C",       "cohesion, Pa",        "C",                 true,  true,  true,  0,      kHuge,      false, true,  false, "",         0,   kMohr, LPFDM_AT(materials, c)},
+    {"MATERIAL",  "PSI",     "dilation angle, deg (at most PHI)", "PSI", true,  false, true,  0,      90,         false, true,  false, "",         0,   kMohr, LPFDM_AT(materials, psi_deg)},
+    {"MATERIAL",  "TENSION", "tension limit, Pa (default: the apex c / tan phi)", "TENSION", true, false, true, 0, kHuge, false, true, false, "", -1, kMohr, LPFDM_AT(materials, tension)},
+    {"MATERIAL",  "SOFTEN",  "fraction of c lost at first yield", "SOFTEN", true, false, true, 0,    1,          false, false, false, "",         0,   kMohr, LPFDM_AT(materials, soften)},
+    {"MATERIAL",  "SCATTER", "coefficient of variation of c and phi", "SCATTER", true, false, true, 0, 0.5,      false, false, false, "",         0,   kMohr, LPFDM_AT(materials, scatter)},
+    {"CLUSTER",   "MAT",     "material id",         "material id",       false, true,  true,  1,      65535,      false, false, true,  "",         0,   0, LPFDM_AT(clusters, mat)},
+    {"CLUSTER",   "X0",      "x0",                  "x0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(clusters, box.x0)},
+    {"CLUSTER",   "Y0",      "y0",                  "y0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(clusters, box.y0)},
+    {"CLUSTER",   "X1",      "x1",                  "x1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(clusters, box.x1)},
+    {"CLUSTER",   "Y1",      "y1",                  "y1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(clusters, box.y1)},
+    {"CLUSTER",   "PPC",     "points per cell along each axis", "PPC",   true,  false, true,  1,      32,         false, false, true,  "",         2,   0, LPFDM_AT(clusters, ppc)},
+    {"FIX",       "X0",      "x0",                  "x0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(fixes, box.x0)},
+    {"FIX",       "Y0",      "y0",                  "y0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(fixes, box.y0)},
+    {"FIX",       "X1",      "x1",                  "x1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(fixes, box.x1)},
+    {"FIX",       "Y1",      "y1",                  "y1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(fixes, box.y1)},
+    {"WALL",      "ID",      "wall id",             "wall id",           false, true,  false, 1,      65535,      false, false, true,  "",         0,   0, LPFDM_AT(walls, id)},
+    {"WALL",      "X0",      "x0",                  "x0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(walls, box.x0)},
+    {"WALL",      "Y0",      "y0",                  "y0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(walls, box.y0)},
+    {"WALL",      "X1",      "x1",                  "x1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(walls, box.x1)},
+    {"WALL",      "Y1",      "y1",                  "y1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(walls, box.y1)},
+    {"WALL",      "VX",      "VX (m/s)",            "VX",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(walls, vx)},
+    {"WALL",      "VY",      "VY (m/s)",            "VY",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(walls, vy)},
+    {"GRAVITY",   "GX",      "gx (m/s^2)",          "gx",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_OF(gravity_x)},
+    {"GRAVITY",   "GY",      "gy (m/s^2)",          "gy",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_OF(gravity_y)},
+    {"DAMPING",   "ALPHA",   "alpha",               "DAMPING alpha",     false, true,  true,  0,      1,          false, true,  false, "",         0,   0, LPFDM_OF(damping)},
+    {"HOURGLASS", "KAPPA",   "kappa",               "HOURGLASS kappa",   false, true,  true,  0,      1,          false, false, false, "",         0,   0, LPFDM_OF(hourglass)},
+    {"SEED",      "N",       "seed",                "seed",              false, true,  true,  0,      9007199254740992.0, false, false, true, "", 0,   0, LPFDM_OF(seed)},
+    {"STEP",      "DT",      "dt (s)",              "the time step dt",  false, true,  true,  0,      kHuge,      true,  true,  false, "",         0,   0, LPFDM_OF(dt_s)},
+    {"STEP",      "N",       "number of steps",     "number of steps",   false, true,  true,  1,      1e9,        false, false, true,  "",         0,   0, LPFDM_OF(steps)},
+    {"OUTPUT",    "EVERY",   "EVERY n",             "EVERY n",           true,  false, true,  1,      1e9,        false, false, true,  "",         0,   0, LPFDM_AT(outputs, every)},
+};
+#undef LPFDM_AT
+#undef LPFDM_OF
+
+// The cards, in the order the deck reference lists them: the words around the numbers
+// of kDeckKeys, and what the card does.
+struct DeckCard {
+    const char* name;
+    const char* before;  // words before the positional fields
+    const char* after;   // words after them (before the parameters)
+    const char* meaning;
+};
+inline const DeckCard kDeckCards[] = {
+    {"TITLE", "text", "", "a title for the output headers"},
+    {"GRID", "", "", "the lattice: mx x my square cells of side L, origin at the lower-left corner"},
+    {"MATERIAL", "", "ELASTIC|MOHR", "an elastic or Mohr-Coulomb material (SI units, angles in degrees)"},
+    {"CLUSTER", "", "", "PPC x PPC points in every cell whose centre lies in the box [m]"},
+    {"FIX", "X|Y|XY", "", "nodes in the box held in that direction"},
+    {"WALL", "", "", "nodes in the box driven at (VX, VY) m/s; the wall passes to the next line of nodes after each cell"},
+    {"GRAVITY", "", "", "gravity [m/s^2]"},
+    {"DAMPING", "", "", "local non-viscous damping, eq. 13-14"},
+    {"HOURGLASS", "", "", "viscous control of the checkerboard mode eq. 5 cannot see (0: off)"},
+    {"MOTION", "PAPER|CENTRE|BILINEAR", "", "how points move with their cell: eq. 7a/7b about node [1], about the centre, or bilinear"},
+    {"ADVECT", "EQ12|POINTS", "", "how increments follow the material: eq. 12, or carried by the points"},
+    {"SEED", "", "", "seed of the strength scatter"},
+    {"STEP", "", "", "n steps of dt seconds"},
+    {"OUTPUT", "POINTS|HISTORY file", "", "a point table or a history, a frame or row every n steps"},
+    {"END", "", "", "the end of the deck (optional)"},
+};
+
+// Whether v lies in key k's range (a whole number where it must be one). unset: the
+// fallback of an optional parameter is accepted too (TENSION -1: the apex), as in a scene
+// built in code; a deck that writes it out of range is refused.
+inline bool in_range(const DeckKey& k, double v, bool unset = false) {
+    if (unset && v == k.fallback && k.param && !k.required) return true;
+    if (!(k.lo_open ? v > k.lo : v >= k.lo) || !(k.hi_open ? v < k.hi : v <= k.hi)) return false;
+    return !k.whole || v == std::floor(v);
+}
+// Whether key k may hold v in scene object `index` of s: in_range, and PSI at most PHI.
+inline bool key_ok(const DeckKey& k, double v, const Scene& s, std::size_t index, bool unset = false) {
+    if (std::strcmp(k.name, "PSI") == 0 && std::strcmp(k.card, "MATERIAL") == 0 && !(v <= s.materials[index].phi_deg)) return false;
+    return in_range(k, v, unset);
+}
+// The message for a value v outside key k's range: "<subject> must lie in [lo, hi)".
+inline std::string range_message(const DeckKey& k, double v) {
+    auto num = [](double x) {
+        char b[32];
+        if (x == std::floor(x) && std::fabs(x) < 1e15) std::snprintf(b, sizeof b, "%.0f", x);
+        else std::snprintf(b, sizeof b, "%g", x);
+        return std::string(b);
+    };
+    const std::string subj = k.subject;
+    if (std::strcmp(k.card, "MATERIAL") == 0 && std::strcmp(k.name, "PSI") == 0) return "PSI must lie in [0, PHI]";
+    if (std::strcmp(k.card, "MATERIAL") == 0 && std::strcmp(k.name, "SCATTER") == 0 && v > k.hi)
+        return "SCATTER above 0.5 makes the truncation at c >= 0 and phi > 0 dominate the distribution";
+    if (std::strcmp(k.card, "MATERIAL") == 0 && std::strcmp(k.name, "SCATTER") == 0) return "SCATTER must be >= 0";
+    if (k.whole) return subj + " must be a whole number in [" + num(k.lo) + ", " + num(k.hi) + "]";
+    if (k.hi == kHuge) return subj + " must be " + (k.lo_open ? "> " : ">= ") + num(k.lo) + k.unit;
+    return subj + " must lie in " + (k.lo_open ? "(" : "[") + num(k.lo) + ", " + num(k.hi) + (k.hi_open ? ")" : "]") + k.unit;
+}
+// The key of a card by name (upper case), or nullptr.
+inline const DeckKey* deck_key(const std::string& card, const std::string& name) {
+    for (const DeckKey& k : kDeckKeys)
+        if (card == k.card && name == k.name) return &k;
+    return nullptr;
+}
+// The parameters of a card (for MATERIAL, of a model: kElastic or kMohr), as "E, NU, RHO".
+inline std::string param_list(const char* card, int model = 0) {
+    std::string list;
+    for (const DeckKey& k : kDeckKeys)
+        if (k.param && std::strcmp(k.card, card) == 0 && (!model || (k.models & model)))
+            list += std::string(list.empty() ? "" : ", ") + k.name;
+    return list;
+}
+// A card's synopsis from the table: "CLUSTER mat x0 y0 x1 y1 [PPC=2]".
+inline std::string card_synopsis(const DeckCard& c) {
+    std::string out = c.name;
+    auto word = [&](const std::string& w) { if (!w.empty()) out += " " + w; };
+    word(c.before);
+    for (const DeckKey& k : kDeckKeys)
+        if (!k.param && std::strcmp(k.card, c.name) == 0) {
+            std::string n = k.name;
+            if (n != "L") for (char& ch : n) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+            word(n);
+        }
+    word(c.after);
+    for (const DeckKey& k : kDeckKeys) {
+        if (!k.param || std::strcmp(k.card, c.name) != 0) continue;
+        char fb[32];
+        std::snprintf(fb, sizeof fb, "%g", k.fallback);
+        const bool unset = !in_range(k, k.fallback);  // the fallback means "not given" (TENSION: the apex)
+        word(k.required ? std::string(k.name) + "=.." : "[" + std::string(k.name) + "=" + (unset ? std::string(k.whole ? "n" : "..") : fb) + "]");
+    }
+    return out;
+}
+
+// --help's list of the cards and the --set keys, from the tables above.
+inline std::string deck_help() {
+    std::string out = "deck cards (decks/README.md explains each):\n";
+    for (const DeckCard& c : kDeckCards) {
+        std::string line = "  " + card_synopsis(c);
+        line.resize(std::max<std::size_t>(line.size() + 1, 58), ' ');
+        out += line + c.meaning + "\n";
+    }
+    out += "--set keys (CARD.KEY; MATERIAL and WALL by id, CLUSTER, FIX and OUTPUT by order from 1):\n";
+    for (const DeckCard& c : kDeckCards) {
+        std::string list;
+        for (const DeckKey& k : kDeckKeys)
+            if (k.settable && std::strcmp(k.card, c.name) == 0) list += std::string(list.empty() ? "" : " ") + k.name;
+        if (!list.empty()) out += std::string("  ") + c.name + ": " + list + "\n";
+    }
+    return out;
+}
+
 // ------------------------------------------------------------ numerics ---
 
 namespace detail {
@@ -1118,56 +1304,38 @@ inline std::string apply_setting(Scene& s, const std::string& key_in, double v) 
     while (d > 0 && std::isdigit(static_cast<unsigned char>(card[d - 1]))) --d;
     const int num = d < card.size() ? std::atoi(card.c_str() + d) : 0;
     card.resize(d);
-    auto whole = [&](long lo, long hi, long& out) {
-        if (v != std::floor(v) || v < double(lo) || v > double(hi)) return false;
-        out = long(v);
-        return true;
-    };
-    auto box = [&](Box& b) {
-        if (par == "X0") b.x0 = v; else if (par == "Y0") b.y0 = v; else if (par == "X1") b.x1 = v; else if (par == "Y1") b.y1 = v;
-        else return false;
-        return true;
-    };
-    long w = 0;
-    if (card == "MATERIAL") {
-        for (auto& m : s.materials) {
-            if (m.id != num) continue;
-            double* f = par == "E" ? &m.E : par == "NU" ? &m.nu : par == "RHO" ? &m.rho : par == "PHI" ? &m.phi_deg : par == "C" ? &m.c
-                      : par == "PSI" ? &m.psi_deg : par == "TENSION" ? &m.tension : par == "SOFTEN" ? &m.soften : par == "SCATTER" ? &m.scatter : nullptr;
-            if (!f) return "MATERIAL has no parameter " + par;
-            *f = v;
-            return "";
-        }
-        return "no MATERIAL with id " + std::to_string(num);
+    bool known = false;
+    for (const DeckKey& k : kDeckKeys) known |= card == k.card;
+    if (!known) return "unknown setting " + key_in + " (e.g. MATERIAL1.C, CLUSTER1.PPC, WALL1.VY, DAMPING.ALPHA, STEP.DT, STEP.N, GRAVITY.GY, SEED.N, GRID.L)";
+    // Which card of its kind: MATERIAL and WALL by id, the others by their order from 1.
+    std::size_t index = 0, count = 0;
+    int model = 0;
+    if (card == "MATERIAL" || card == "WALL") {
+        bool found = false;
+        const std::size_t n = card == "MATERIAL" ? s.materials.size() : s.walls.size();
+        for (std::size_t i = 0; i < n && !found; ++i)
+            if ((card == "MATERIAL" ? s.materials[i].id : s.walls[i].id) == num) { index = i; found = true; }
+        if (!found) return "no " + card + " with id " + std::to_string(num);
+        if (card == "MATERIAL") model = s.materials[index].model == Model::MohrCoulomb ? kMohr : kElastic;
+    } else if (card == "CLUSTER" || card == "FIX" || card == "OUTPUT") {
+        count = card == "CLUSTER" ? s.clusters.size() : card == "FIX" ? s.fixes.size() : s.outputs.size();
+        if (num < 1 || std::size_t(num) > count) return "there is no " + card + " number " + std::to_string(num) + " (cards of a kind count from 1)";
+        index = std::size_t(num - 1);
     }
-    if (card == "CLUSTER" || card == "FIX") {
-        const std::size_t n = card == "CLUSTER" ? s.clusters.size() : s.fixes.size();
-        if (num < 1 || std::size_t(num) > n) return "there is no " + card + " number " + std::to_string(num) + " (cards of a kind count from 1)";
-        if (card == "FIX") return box(s.fixes[std::size_t(num - 1)].box) ? "" : "FIX has no parameter " + par;
-        Cluster& c = s.clusters[std::size_t(num - 1)];
-        if (par == "PPC") return whole(1, 32, w) ? (c.ppc = int(w), "") : "PPC must be a whole number in [1, 32]";
-        if (par == "MAT") return whole(1, 65535, w) ? (c.mat = int(w), "") : "MAT must be a material id";
-        return box(c.box) ? "" : "CLUSTER has no parameter " + par;
+    const DeckKey* k = deck_key(card, par);
+    if (!k || !k->settable) {
+        std::string list;
+        for (const DeckKey& q : kDeckKeys)
+            if (q.settable && card == q.card && (!model || (q.models & model))) list += std::string(list.empty() ? "" : ", ") + q.name;
+        return card + " has no parameter " + par + " (it takes " + list + ")";
     }
-    if (card == "WALL") {
-        for (auto& wl : s.walls) {
-            if (wl.id != num) continue;
-            if (par == "VX") { wl.vx = v; return ""; }
-            if (par == "VY") { wl.vy = v; return ""; }
-            return box(wl.box) ? "" : "WALL has no parameter " + par;
-        }
-        return "no WALL with id " + std::to_string(num);
-    }
-    if (card == "GRID" && par == "L") { s.cell_m = v; return ""; }
-    if (card == "GRID" && (par == "MX" || par == "MY")) return whole(1, 1000000, w) ? ((par == "MX" ? s.mx : s.my) = int(w), "") : "cells must be a whole number in [1, 1e6]";
-    if (card == "STEP" && par == "DT") { s.dt_s = v; return ""; }
-    if (card == "STEP" && par == "N") return whole(1, 1000000000, w) ? (s.steps = w, "") : "STEP.N must be a whole number in [1, 1e9]";
-    if (card == "GRAVITY" && par == "GX") { s.gravity_x = v; return ""; }
-    if (card == "GRAVITY" && par == "GY") { s.gravity_y = v; return ""; }
-    if (card == "DAMPING" && par == "ALPHA") { s.damping = v; return ""; }
-    if (card == "HOURGLASS" && par == "KAPPA") { s.hourglass = v; return ""; }
-    if (card == "SEED" && par == "N") return whole(0, 9007199254740992L, w) ? (s.seed = std::uint64_t(w), "") : "SEED.N must be a whole number >= 0";
-    return "unknown setting " + key_in + " (e.g. MATERIAL1.C, CLUSTER1.PPC, WALL1.VY, DAMPING.ALPHA, STEP.DT, STEP.N, GRAVITY.GY, SEED.N, GRID.L)";
+    if (model && !(k->models & model))
+        return card + " " + std::to_string(num) + " is " + (model == kMohr ? "MOHR" : "ELASTIC") + ": " + par + " is not one of its parameters (" + param_list("MATERIAL", model) + ")";
+    if (!in_range(*k, v, true)) return range_message(*k, v);  // before storing: it may not fit the member
+    const double was = k->get(s, index);
+    k->set(s, index, v);
+    if (!key_ok(*k, v, s, index, true)) { k->set(s, index, was); return range_message(*k, v); }
+    return "";
 }
 
 // -------------------------------------------------------------- checks ---
@@ -1181,32 +1349,37 @@ inline Diagnostics validate(const Scene& s) {
         return d;
     }
     const double X = s.mx * s.cell_m, Y = s.my * s.cell_m, tol = 1e-3 * s.cell_m;
+    // Every number of kDeckKeys in its range (for a material, the keys of its model).
+    // SCATTER at most 0.5: beyond it more than 2.3 % of draws fall below zero and the
+    // truncated sample's mean drifts by more than 3 %: truncation, not the Gaussian, decides.
+    auto keys = [&](const char* card, std::size_t index, const Pos& pos, int model) {
+        for (const DeckKey& k : kDeckKeys) {
+            if (std::strcmp(k.card, card) != 0 || (model && k.models && !(k.models & model))) continue;
+            const double v = k.get(s, index);
+            if (!key_ok(k, v, s, index, true)) err(pos, range_message(k, v));
+        }
+    };
+    keys("GRAVITY", 0, s.grid_pos, 0);
+    keys("DAMPING", 0, s.damping_pos, 0);
+    keys("HOURGLASS", 0, s.grid_pos, 0);
+    keys("STEP", 0, s.step_pos, 0);
+    for (std::size_t a = 0; a < s.outputs.size(); ++a) keys("OUTPUT", a, s.outputs[a].pos, 0);
     for (std::size_t a = 0; a < s.materials.size(); ++a) {
         const Material& m = s.materials[a];
         for (std::size_t b = 0; b < a; ++b)
             if (s.materials[b].id == m.id) err(m.pos, "material " + std::to_string(m.id) + " is defined twice");
-        if (!(m.E > 0)) err(m.pos, "E must be > 0");
-        if (!(m.nu > -1 && m.nu < 0.5)) err(m.pos, "NU must lie in (-1, 0.5)");
-        if (!(m.rho > 0)) err(m.pos, "RHO must be > 0");
+        keys("MATERIAL", a, m.pos, m.model == Model::MohrCoulomb ? kMohr : kElastic);
         if (m.model != Model::MohrCoulomb) continue;
-        if (!(m.phi_deg >= 0 && m.phi_deg < 90)) err(m.pos, "PHI must lie in [0, 90) degrees");
-        if (!(m.c >= 0)) err(m.pos, "C must be >= 0");
-        if (!(m.psi_deg >= 0 && m.psi_deg <= m.phi_deg)) err(m.pos, "PSI must lie in [0, PHI]");
-        if (!(m.soften >= 0 && m.soften <= 1)) err(m.pos, "SOFTEN must lie in [0, 1]");
-        if (m.tension < 0 && m.tension != -1) err(m.pos, "TENSION must be >= 0");
         if (m.phi_deg == 0 && m.c == 0) err(m.pos, "PHI = 0 and C = 0: the material has no strength");
-        if (!(m.scatter >= 0)) err(m.pos, "SCATTER must be >= 0");
-        // Beyond 0.5 more than 2.3 % of draws fall below zero and the truncated sample's
-        // mean drifts by more than 3 %: truncation, not the Gaussian, would decide.
-        if (m.scatter > 0.5) err(m.pos, "SCATTER above 0.5 makes the truncation at c >= 0 and phi > 0 dominate the distribution");
         if (m.scatter > 0 && m.phi_deg > 0 && (90 - m.phi_deg) < 2 * m.scatter * m.phi_deg)
             err(m.pos, "SCATTER too large for this PHI: more than 2.3 % of draws would pass 90 degrees");
     }
     if (s.clusters.empty()) err(s.grid_pos, "the scene has no CLUSTER: nothing to compute");
-    for (const auto& c : s.clusters) {
+    for (std::size_t a = 0; a < s.clusters.size(); ++a) {
+        const Cluster& c = s.clusters[a];
         const Material* m = s.material(c.mat);
         if (!m) err(c.pos, "material " + std::to_string(c.mat) + " is not defined");
-        if (c.ppc < 1 || c.ppc > 32) err(c.pos, "PPC must lie in [1, 32]");
+        keys("CLUSTER", a, c.pos, 0);
         if (c.box.x0 > c.box.x1 || c.box.y0 > c.box.y1) { err(c.pos, "the box needs x0 <= x1 and y0 <= y1"); continue; }
         if (c.box.x0 < -tol || c.box.y0 < -tol || c.box.x1 > X + tol || c.box.y1 > Y + tol) {
             err(c.pos, "the cluster box reaches outside the lattice [0, " + std::to_string(X) + "] x [0, " + std::to_string(Y) + "] m");
@@ -1224,23 +1397,23 @@ inline Diagnostics validate(const Scene& s) {
         detail::node_span(b.y0, b.y1, s.cell_m, s.my, j0, j1);
         return (i1 < i0 || j1 < j0) ? 0L : (i1 - i0 + 1L) * (j1 - j0 + 1L);
     };
-    for (const auto& f : s.fixes) {
+    for (std::size_t a = 0; a < s.fixes.size(); ++a) {
+        const Fix& f = s.fixes[a];
+        keys("FIX", a, f.pos, 0);
         const long n = node_count(f.box);
         if (n < 0) err(f.pos, "the box needs x0 <= x1 and y0 <= y1");
         else if (n == 0) err(f.pos, "the FIX box holds no node");
         if (f.dirs < 1 || f.dirs > 3) err(f.pos, "unknown direction");
     }
-    if (!(s.dt_s > 0)) err(s.step_pos, "the time step must be > 0");
-    if (s.steps < 1) err(s.step_pos, "the number of steps must be >= 1");
     for (std::size_t a = 0; a < s.walls.size(); ++a) {
         const Wall& w = s.walls[a];
+        keys("WALL", a, w.pos, 0);
         for (std::size_t b = 0; b < a; ++b)
             if (s.walls[b].id == w.id) err(w.pos, "wall " + std::to_string(w.id) + " is defined twice");
         const long n = node_count(w.box);
         if (n < 0) err(w.pos, "the box needs x0 <= x1 and y0 <= y1");
         else if (n == 0) err(w.pos, "the WALL box holds no node");
-        if (!std::isfinite(w.vx) || !std::isfinite(w.vy)) err(w.pos, "the wall velocity must be finite");
-        else if (s.dt_s > 0 && std::hypot(w.vx, w.vy) * s.dt_s > 0.1 * s.cell_m)
+        if (std::isfinite(w.vx) && std::isfinite(w.vy) && s.dt_s > 0 && std::hypot(w.vx, w.vy) * s.dt_s > 0.1 * s.cell_m)
             err(w.pos, "the wall moves " + std::to_string(std::hypot(w.vx, w.vy) * s.dt_s / s.cell_m) +
                            " cells per step; at most 0.1 is allowed (lower the speed or the time step)");
         for (const auto& f : s.fixes) {
@@ -1248,12 +1421,9 @@ inline Diagnostics validate(const Scene& s) {
             if (node_count(i) > 0) { err(w.pos, "the wall's nodes include fixed nodes (FIX at line " + std::to_string(f.pos.line) + ")"); break; }
         }
     }
-    if (s.damping < 0 || s.damping >= 1) err(s.damping_pos, "DAMPING must lie in [0, 1)");
-    if (!(s.hourglass >= 0 && s.hourglass <= 1)) err(s.grid_pos, "HOURGLASS kappa must lie in [0, 1]");
     if (s.advect == Advect::Points && s.motion == Motion::Paper)
         err(s.advect_pos, "ADVECT POINTS needs MOTION CENTRE or BILINEAR: carried from eq. 7a/7b about node [1], the increments grow without bound");
     for (const auto& o : s.outputs) {
-        if (o.every < 0) err(o.pos, "EVERY must be >= 1");
         if (o.kind == Output::History && s.steps >= 1 && o.every > s.steps)
             err(o.pos, "EVERY " + std::to_string(o.every) + " is more than the " + std::to_string(s.steps) + " steps: the history would have no rows");
     }
@@ -3534,7 +3704,38 @@ public:
         double value = 0;
         Pos pos;
     };
-    std::vector<Param> params(std::initializer_list<const char*> allowed, std::initializer_list<const char*> required) {
+    // The positional fields of card (kDeckKeys, in order) into scene object `index` of sc,
+    // each checked against its range.
+    void fields(const char* card, Scene& sc, std::size_t index) {
+        for (const DeckKey& k : kDeckKeys) {
+            if (k.param || std::strcmp(k.card, card) != 0 || !ok_) continue;
+            const Token* t = peek();
+            const double v = k.whole ? double(integer(k.what, long(k.lo), long(k.hi))) : real(k.what);
+            if (!ok_) return;
+            if (!in_range(k, v)) { fail(t->pos, range_message(k, v)); return; }
+            k.set(sc, index, v);
+        }
+    }
+    // The NAME=value parameters of card (of a material model: kElastic, kMohr) into scene
+    // object `index` of sc, then each checked against its range, in the order given.
+    void parameters(const char* card, int model, Scene& sc, std::size_t index) {
+        std::vector<const char*> allowed, required;
+        for (const DeckKey& k : kDeckKeys) {
+            if (!k.param || std::strcmp(k.card, card) != 0 || (model && !(k.models & model))) continue;
+            allowed.push_back(k.name);
+            if (k.required) required.push_back(k.name);
+        }
+        const std::vector<Param> ps = params(allowed, required);
+        for (const Param& p : ps) {  // a value out of range is not stored (it may not fit the member)
+            const DeckKey& k = *deck_key(card, p.name);
+            if (in_range(k, p.value)) k.set(sc, index, p.value);
+        }
+        for (const Param& p : ps) {
+            const DeckKey& k = *deck_key(card, p.name);
+            if (ok_ && !key_ok(k, p.value, sc, index)) fail(p.pos, range_message(k, p.value));
+        }
+    }
+    std::vector<Param> params(const std::vector<const char*>& allowed, const std::vector<const char*>& required) {
         std::vector<Param> out;
         while (ok_ && next_ < t_.size()) {
             const Token& name = t_[next_];
@@ -3578,10 +3779,6 @@ private:
     bool ok_ = true;
 };
 
-inline double param_or(const std::vector<CardReader::Param>& ps, const char* name, double def) {
-    for (const auto& p : ps) if (p.name == name) return p.value;
-    return def;
-}
 
 }  // namespace detail
 
@@ -3620,62 +3817,32 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
         } else if (kw == "GRID") {
             once(have_grid);
             sc.grid_pos = kp;
-            sc.mx = int(r.integer("mx (cells in x)", 1, 1'000'000));
-            sc.my = int(r.integer("my (cells in y)", 1, 1'000'000));
-            const Token* t = r.peek();
-            sc.cell_m = r.real("L (cell size, m)");
-            if (r.ok() && !(sc.cell_m > 0)) r.fail(t->pos, "the cell size L must be > 0");
+            r.fields("GRID", sc, 0);
         } else if (kw == "MATERIAL") {
-            Material m;
-            m.pos = kp;
-            m.id = int(r.integer("material id", 1, 65535));
+            sc.materials.emplace_back();
+            const std::size_t at = sc.materials.size() - 1;
+            sc.materials[at].pos = kp;
+            r.fields("MATERIAL", sc, at);
             const Token* model = r.field("model (ELASTIC or MOHR)");
             if (model) {
                 const std::string mm = upper(model->text);
-                std::vector<CardReader::Param> ps;
                 if (mm == "ELASTIC") {
-                    ps = r.params({"E", "NU", "RHO"}, {"E", "NU", "RHO"});
+                    r.parameters("MATERIAL", kElastic, sc, at);
                 } else if (mm == "MOHR") {
-                    m.model = Model::MohrCoulomb;
-                    ps = r.params({"E", "NU", "RHO", "PHI", "C", "PSI", "TENSION", "SOFTEN", "SCATTER"}, {"E", "NU", "RHO", "PHI", "C"});
+                    sc.materials[at].model = Model::MohrCoulomb;
+                    r.parameters("MATERIAL", kMohr, sc, at);
                 } else {
                     r.fail(model->pos, "unknown material model '" + model->text + "' (ELASTIC or MOHR)");
                 }
-                m.E = param_or(ps, "E", 0); m.nu = param_or(ps, "NU", 0); m.rho = param_or(ps, "RHO", 0);
-                m.phi_deg = param_or(ps, "PHI", 0); m.c = param_or(ps, "C", 0); m.psi_deg = param_or(ps, "PSI", 0);
-                m.tension = param_or(ps, "TENSION", -1); m.soften = param_or(ps, "SOFTEN", 0); m.scatter = param_or(ps, "SCATTER", 0);
-                for (const auto& p : ps) {  // range errors point at the value
-                    const double v = p.value;
-                    const char* bad = nullptr;
-                    if (p.name == "E" && !(v > 0)) bad = "E must be > 0";
-                    if (p.name == "NU" && !(v > -1 && v < 0.5)) bad = "NU must lie in (-1, 0.5)";
-                    if (p.name == "RHO" && !(v > 0)) bad = "RHO must be > 0";
-                    if (p.name == "PHI" && !(v >= 0 && v < 90)) bad = "PHI must lie in [0, 90) degrees";
-                    if (p.name == "C" && !(v >= 0)) bad = "C must be >= 0";
-                    if (p.name == "PSI" && !(v >= 0 && v <= m.phi_deg)) bad = "PSI must lie in [0, PHI]";
-                    if (p.name == "TENSION" && !(v >= 0)) bad = "TENSION must be >= 0";
-                    if (p.name == "SOFTEN" && !(v >= 0 && v <= 1)) bad = "SOFTEN must lie in [0, 1]";
-                    if (p.name == "SCATTER" && !(v >= 0)) bad = "SCATTER must be >= 0";
-                    if (p.name == "SCATTER" && v > 0.5) bad = "SCATTER above 0.5 makes the truncation at c >= 0 and phi > 0 dominate the distribution";
-                    if (bad) { r.fail(p.pos, bad); break; }
-                }
             }
-            if (r.ok()) sc.materials.push_back(m);
+            if (!r.ok()) sc.materials.pop_back();
         } else if (kw == "CLUSTER") {
             ++cluster_cards;
-            Cluster c;
-            c.pos = kp;
-            c.mat = int(r.integer("material id", 1, 65535));
-            c.box.x0 = r.real("x0"); c.box.y0 = r.real("y0"); c.box.x1 = r.real("x1"); c.box.y1 = r.real("y1");
-            const auto ps = r.params({"PPC"}, {});
-            const double ppc = param_or(ps, "PPC", 2);
-            if (r.ok() && (ppc != std::floor(ppc) || ppc < 1 || ppc > 32)) {
-                for (const auto& p : ps) if (p.name == "PPC") r.fail(p.pos, "PPC must be a whole number in [1, 32]");
-            }
-            if (r.ok()) {
-                c.ppc = int(ppc);
-                sc.clusters.push_back(c);
-            }
+            sc.clusters.emplace_back();
+            sc.clusters.back().pos = kp;
+            r.fields("CLUSTER", sc, sc.clusters.size() - 1);
+            r.parameters("CLUSTER", 0, sc, sc.clusters.size() - 1);
+            if (!r.ok()) sc.clusters.pop_back();
         } else if (kw == "FIX") {
             Fix f;
             f.pos = kp;
@@ -3687,35 +3854,28 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
                 else if (u == "XY" || u == "YX") f.dirs = kFixX | kFixY;
                 else r.fail(dir->pos, "unknown direction '" + dir->text + "' (X, Y or XY)");
             }
-            f.box.x0 = r.real("x0"); f.box.y0 = r.real("y0"); f.box.x1 = r.real("x1"); f.box.y1 = r.real("y1");
-            if (r.ok()) sc.fixes.push_back(f);
+            sc.fixes.push_back(f);
+            r.fields("FIX", sc, sc.fixes.size() - 1);
+            if (!r.ok()) sc.fixes.pop_back();
         } else if (kw == "WALL") {
-            Wall w;
-            w.pos = kp;
-            w.id = int(r.integer("wall id", 1, 65535));
-            w.box.x0 = r.real("x0"); w.box.y0 = r.real("y0"); w.box.x1 = r.real("x1"); w.box.y1 = r.real("y1");
-            w.vx = r.real("VX (m/s)"); w.vy = r.real("VY (m/s)");
-            if (r.ok()) sc.walls.push_back(w);
+            sc.walls.emplace_back();
+            sc.walls.back().pos = kp;
+            r.fields("WALL", sc, sc.walls.size() - 1);
+            if (!r.ok()) sc.walls.pop_back();
         } else if (kw == "GRAVITY") {
             once(have_gravity);
-            sc.gravity_x = r.real("gx (m/s^2)");
-            sc.gravity_y = r.real("gy (m/s^2)");
+            r.fields("GRAVITY", sc, 0);
         } else if (kw == "DAMPING") {
             once(have_damping);
             sc.damping_pos = kp;
-            const Token* t = r.peek();
-            sc.damping = r.real("alpha");
-            if (r.ok() && !(sc.damping >= 0 && sc.damping < 1)) r.fail(t->pos, "DAMPING alpha must lie in [0, 1)");
+            r.fields("DAMPING", sc, 0);
         } else if (kw == "SEED") {
             once(have_seed);
-            sc.seed = std::uint64_t(r.integer("seed", 0, 9'007'199'254'740'992L));
+            r.fields("SEED", sc, 0);
         } else if (kw == "STEP") {
             once(have_step);
             sc.step_pos = kp;
-            const Token* t = r.peek();
-            sc.dt_s = r.real("dt (s)");
-            if (r.ok() && !(sc.dt_s > 0)) r.fail(t->pos, "the time step dt must be > 0");
-            sc.steps = r.integer("number of steps", 1, 1'000'000'000L);
+            r.fields("STEP", sc, 0);
         } else if (kw == "OUTPUT") {
             Output o;
             o.pos = kp;
@@ -3730,28 +3890,26 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             if (f) o.file = f->text;
             if (f && (o.file.find('/') != std::string::npos || o.file == "." || o.file == ".."))
                 r.fail(f->pos, "the file name must not contain a directory (use -o DIR)");
+            for (const auto& prev : sc.outputs)
+                if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
+            sc.outputs.push_back(o);
+            const std::size_t at = sc.outputs.size() - 1;
             if (r.ok() && !r.at_end()) {
                 const Token* e = r.peek();
                 if (upper(e->text) == "EVERY" && !r.more_positional()) {  // EVERY=n, like other parameters
-                    const auto ps = r.params({"EVERY"}, {"EVERY"});
-                    for (const auto& q : ps) {
-                        if (q.value != std::floor(q.value) || q.value < 1 || q.value > 1e9) r.fail(q.pos, "EVERY n must be a whole number in [1, 1e9]");
-                        else o.every = long(q.value);
-                    }
-                } else {
+                    r.parameters("OUTPUT", 0, sc, at);
+                } else {  // EVERY n
                     e = r.field("EVERY");
                     if (e && upper(e->text) != "EVERY") r.fail(e->pos, "extra field '" + e->text + "'");
-                    o.every = r.integer("EVERY n", 1, 1'000'000'000L);
+                    const DeckKey& k = *deck_key("OUTPUT", "EVERY");
+                    const long n = r.integer(k.what, long(k.lo), long(k.hi));
+                    if (r.ok()) k.set(sc, at, double(n));
                 }
             }
-            for (const auto& prev : sc.outputs)
-                if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
-            if (r.ok()) sc.outputs.push_back(o);
+            if (!r.ok()) sc.outputs.pop_back();
         } else if (kw == "HOURGLASS") {
             once(have_hourglass);
-            const Token* t = r.peek();
-            sc.hourglass = r.real("kappa");
-            if (r.ok() && !(sc.hourglass >= 0 && sc.hourglass <= 1)) r.fail(t->pos, "HOURGLASS kappa must lie in [0, 1]");
+            r.fields("HOURGLASS", sc, 0);
         } else if (kw == "MOTION") {
             once(have_motion);
             const Token* t = r.field("PAPER, CENTRE or BILINEAR");

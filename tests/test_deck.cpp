@@ -6,6 +6,8 @@
 #include "../lpfdm.hpp"
 
 #include <cstdio>
+#include <cstring>
+#include <sstream>
 #include <fstream>
 #include <string>
 
@@ -1017,10 +1019,50 @@ TEST_CASE("apply_setting: CARD.PARAM overrides what the deck said, and names wha
     CHECK(lpfdm::apply_setting(s, "MATERIAL9.C", 1) == "no MATERIAL with id 9");
     CHECK(lpfdm::apply_setting(s, "CLUSTER2.PPC", 1).find("no CLUSTER number 2") != std::string::npos);
     CHECK(lpfdm::apply_setting(s, "CLUSTER1.PPC", 2.5) == "PPC must be a whole number in [1, 32]");
-    CHECK(lpfdm::apply_setting(s, "MATERIAL1.FOO", 1) == "MATERIAL has no parameter FOO");
+    CHECK(lpfdm::apply_setting(s, "MATERIAL1.FOO", 1).find("MATERIAL has no parameter FOO (it takes E, NU, RHO") == 0);
     CHECK(lpfdm::apply_setting(s, "NOPE", 1).find("CARD.PARAM") != std::string::npos);
     CHECK(lpfdm::apply_setting(s, "STEP.N", 0).find("whole number") != std::string::npos);
     CHECK(lpfdm::validate(s).empty());
-    CHECK(lpfdm::apply_setting(s, "DAMPING.ALPHA", 1.5).empty());  // accepted here, refused by validate()
-    CHECK(!lpfdm::validate(s).empty());
+    // The range of each key is the deck reader's (kDeckKeys): refused at once, the scene unchanged.
+    CHECK(lpfdm::apply_setting(s, "DAMPING.ALPHA", 1.5) == "DAMPING alpha must lie in [0, 1)");
+    CHECK(s.damping == 0.0);
+    CHECK(lpfdm::apply_setting(s, "MATERIAL1.NU", 0.5) == "NU must lie in (-1, 0.5)");
+    CHECK(lpfdm::apply_setting(s, "CLUSTER1.PPC", 1e300) == "PPC must be a whole number in [1, 32]");
+    CHECK(lpfdm::apply_setting(s, "MATERIAL1.ID", 3).find("MATERIAL has no parameter ID") == 0);
+    CHECK(lpfdm::validate(s).empty());
+}
+
+TEST_CASE("apply_setting: a key the material's model does not use is an error, not a silent no-op") {
+    lpfdm::Scene s = read_ok(kGrid + "MATERIAL 1 ELASTIC E=2E7 NU=0.25 RHO=2000\nMATERIAL 2 MOHR E=5E7 NU=0.3 RHO=1700 PHI=30 C=1E4\n" + kCluster + kStep + "OUTPUT HISTORY h.txt EVERY 2\n");
+    const std::string e = lpfdm::apply_setting(s, "MATERIAL1.PHI", 30);
+    CHECK(e == "MATERIAL 1 is ELASTIC: PHI is not one of its parameters (E, NU, RHO)");
+    CHECK(lpfdm::apply_setting(s, "MATERIAL2.PHI", 25).empty());
+    CHECK(s.materials[1].phi_deg == 25);
+    CHECK(lpfdm::apply_setting(s, "MATERIAL2.PSI", 26) == "PSI must lie in [0, PHI]");  // PHI is 25 now
+    CHECK(s.materials[1].psi_deg == 0);
+    CHECK(lpfdm::apply_setting(s, "OUTPUT1.EVERY", 3).empty());
+}
+
+TEST_CASE("one table of cards and keys: --help lists it, decks/README.md documents every card and key") {
+    const std::string help = lpfdm::deck_help();
+    std::ifstream in("decks/README.md");
+    REQUIRE(in);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    const std::string doc = ss.str();
+    for (const lpfdm::DeckCard& c : lpfdm::kDeckCards) {
+        INFO("card " << std::string(c.name));
+        CHECK(help.find(std::string("  ") + c.name) != std::string::npos);
+        CHECK(doc.find(std::string("| `") + c.name) != std::string::npos);  // a row of the card table
+    }
+    for (const lpfdm::DeckKey& k : lpfdm::kDeckKeys) {
+        INFO("key " << std::string(k.card) << "." << std::string(k.name));
+        if (k.param) CHECK(doc.find(std::string(k.name) + "=") != std::string::npos);  // in its card's synopsis
+        if (!k.settable) continue;
+        // the --set table: a row "| `CARD<..>` | `KEY`, ... |"
+        const std::size_t row = doc.find(std::string("| `") + k.card + (std::strcmp(k.card, "MATERIAL") == 0 || std::strcmp(k.card, "WALL") == 0 ? "<id>` |" : std::strcmp(k.card, "CLUSTER") == 0 || std::strcmp(k.card, "FIX") == 0 || std::strcmp(k.card, "OUTPUT") == 0 ? "<n>` |" : "` |"));
+        REQUIRE(row != std::string::npos);
+        const std::string line = doc.substr(row, doc.find('\n', row) - row);
+        CHECK(line.find(std::string("`") + k.name + "`") != std::string::npos);
+    }
 }
