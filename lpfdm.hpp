@@ -1481,7 +1481,11 @@ class Simulation {
 public:
     explicit Simulation(const Scene& scene, Kernel kernel = Kernel::Fast) : kernel_(kernel), sc_(scene) {
         wide_ = kernel == Kernel::Fast && have_wide();
+#if defined(_OPENMP)
+        if (kernel != Kernel::Reference) team_ = std::max(1, std::min(omp_get_max_threads(), omp_get_thread_limit()));
+#endif
         setup();
+        choose_point_loop();
     }
 
     // One LPFDM cycle (paper section 2), one function per phase.
@@ -1524,7 +1528,13 @@ public:
         return false;
 #endif
     }
-    void set_wide(bool on) { wide_ = on && have_wide() && kernel_ != Kernel::Reference; }
+    void set_wide(bool on) {
+        wide_ = on && have_wide() && kernel_ != Kernel::Reference;
+        choose_point_loop();
+    }
+    // Threads the fast kernel uses: omp_get_max_threads() when the Simulation was made
+    // (1 for the reference kernel, or without OpenMP).
+    int threads() const { return team_; }
     bool wide() const { return wide_; }
     const double* phase_seconds() const { return phase_s_; }          // kPhases entries, in step order
     // Bytes the point arrays hold per point (capacity, all arrays).
@@ -1645,35 +1655,38 @@ private:
     void clear_row(int j, int lo, int hi);
     void advance_points();
     bool advance_parted();
-    // What a range of points gives map_to_lattice's bookkeeping: the cells and columns
-    // they landed in, their mass, how many left the lattice.
-    struct Tally {
+    // Where a range of points landed in the point pass: the cells and columns, their mass,
+    // how many left the lattice (occupied_, mass_in_ and the outflow come from it).
+    struct Landing {
         int cmin = std::numeric_limits<int>::max(), cmax = -1, imin = std::numeric_limits<int>::max(), imax = -1;
         double mass = 0;
         long departed = 0;
-        long listed = 0;  // with threads: points whose sums wait for other chunks' (p_.listed[list_at ..])
-        // The fused threaded pass (advance_parted): the cells own_lo .. own_hi-1 take this
-        // chunk's sums directly; a point landing in any other cell is listed in
-        // p_.listed[list_at ..]. The defaults: every cell (the serial pass).
-        int own_lo = 0, own_hi = std::numeric_limits<int>::max();
-        long list_at = 0;
-        double seconds = 0;  // the time the chunk took (advance_parted balances the chunks)
-        // Another chunk's cells, mass and departures, added to these.
-        void merge(const Tally& a) {
+        // Another range's cells, mass and departures, added to these.
+        void merge(const Landing& a) {
             mass += a.mass; departed += a.departed;
             cmin = std::min(cmin, a.cmin); cmax = std::max(cmax, a.cmax);
             imin = std::min(imin, a.imin); imax = std::max(imax, a.imax);
         }
     };
-    // The cells a tally's points landed in, as a box of whole rows (map_to_lattice's occupied_).
-    Range landed(const Tally& t) const { return t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1}; }
+    // A thread's share of the threaded point pass (advance_parted): the cells own_lo ..
+    // own_hi-1 take its chunk's sums directly; a point landing in any other cell is listed
+    // in p_.listed[list_at ..] (listed of them). The defaults: every cell (one thread).
+    struct Part {
+        int own_lo = 0, own_hi = std::numeric_limits<int>::max();
+        long list_at = 0, listed = 0;
+        double seconds = 0;  // the time the chunk took (advance_parted balances the chunks)
+    };
+    // The cells a range's points landed in, as a box of whole rows (occupied_).
+    Range landed(const Landing& t) const { return t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1}; }
     // Points per block of the AVX2 point loop with a Mohr-Coulomb material (run_points).
     static constexpr long kConsultBlock = 256;
-    void advance_range(long k0, long k1, Tally& t);
-    template <Motion M, bool Carry> void advance_run(long k0, long k1, Tally& t);
-    template <Motion M, bool Carry, bool Wide> LPFDM_INLINE void run_points(long k0, long k1, Tally& t);
+    void advance_range(long k0, long k1, Part& part, Landing& t);
+    void choose_point_loop();
+    void (Simulation::*run_)(long, long, Part&, Landing&) = nullptr;  // the point loop (choose_point_loop)
+    template <Motion M, bool Carry> void advance_run(long k0, long k1, Part& part, Landing& t);
+    template <Motion M, bool Carry, bool Wide> LPFDM_INLINE void run_points(long k0, long k1, Part& part, Landing& t);
 #if LPFDM_WIDE
-    __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Tally& t);
+    __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Part& part, Landing& t);
 #endif
     // Row j of a lattice phase: f(j, std::false_type), or f(j, std::true_type) built for
     // AVX2 (f inlined into row_wide) when the AVX2 version is on, so that f may work
@@ -1701,11 +1714,11 @@ private:
     long row_moves_ = 0;
     template <class F> void by_rows(RowLoop loop, int j0, int j1, long work, const F& f);
     void map_point(std::size_t k);
-    // The points the team's chunks listed (p_.listed[list_at ..] of each Tally), in chunk
+    // The points the team's chunks listed (p_.listed[list_at ..] of each Part), in chunk
     // order: eq. 7, 8.
     void add_listed(int team) {
         for (int u = 0; u < team; ++u) {
-            const Tally& a = map_tally_[std::size_t(u)];
+            const Part& a = parts_[std::size_t(u)];
             for (long d = 0; d < a.listed; ++d) map_point(std::size_t(p_.listed[std::size_t(a.list_at + d)]));
         }
     }
@@ -1776,7 +1789,7 @@ private:
     }
     bool serial() const {
 #if defined(_OPENMP)
-        return omp_get_max_threads() == 1 || p_.size() <= 4096 || !user_models_.empty();
+        return team_ == 1 || p_.size() <= 4096 || !user_models_.empty();
 #else
         return true;
 #endif
@@ -1833,6 +1846,7 @@ private:
     Range impose_supports();
     void carried_row(int j, int i0, int i1);
     Kernel kernel_ = Kernel::Fast;
+    int team_ = 1;  // threads, fixed when the Simulation is made
     bool profiling_ = false;
     double phase_s_[kPhases] = {0, 0, 0, 0, 0};
     bool wide_ = false;  // the AVX2 version of the point loop and lattice phases (LPFDM_WIDE)
@@ -1879,10 +1893,11 @@ private:
     std::vector<Carried> carried_;
     // The threaded point pass only: per thread its chunk's cells, mass and list length
     // (the lists themselves are Points::listed).
-    std::vector<Tally> map_tally_;
+    std::vector<Part> parts_;
+    std::vector<Landing> landings_;
     // advance_parted: thread u's chunk of the points, chunk_at_[u] .. chunk_at_[u + 1] - 1,
-    // for chunk_team_ threads; parts_known_: map_tally_ holds the last pass's chunks (from
-    // list_at) and the cells their points lie in now.
+    // for chunk_team_ threads; parts_known_: parts_ and landings_ hold the last pass's
+    // chunks (from list_at) and the cells their points lie in now.
     std::vector<long> chunk_at_;
     int chunk_team_ = 0;
     bool parts_known_ = false;
@@ -1969,13 +1984,14 @@ inline void Simulation::setup() {
     for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
     find_mohr_groups();
 #if defined(_OPENMP)
-    if (omp_get_max_threads() > 1 && p_.size() > 4096) {  // the threaded point pass's room
-        map_tally_.resize(std::size_t(omp_get_max_threads()));
-        chunk_at_.assign(map_tally_.size() + 1, 0);
+    if (team_ > 1 && p_.size() > 4096) {  // the threaded point pass's room
+        parts_.resize(std::size_t(team_));
+        landings_.resize(std::size_t(team_));
+        chunk_at_.assign(parts_.size() + 1, 0);
         p_.each_array([&](const char*, auto& v, Points::Use u, bool state) { if (!state && uses(sc_, u, true)) v.assign(p_.size(), {}); });
     }
     for (RowBlocks& b : row_blocks_) {  // the lattice phases' blocks of rows (by_rows)
-        const std::size_t team = std::size_t(omp_get_max_threads());
+        const std::size_t team = std::size_t(team_);
         b.at.assign(team + 1, 0.0); b.seconds.assign(team, 0.0); b.rows.assign(team + 1, 0);
     }
 #endif
@@ -2307,7 +2323,7 @@ template <class F>
 inline void Simulation::by_rows([[maybe_unused]] RowLoop loop, int j0, int j1, [[maybe_unused]] long work, const F& f) {
 #if defined(_OPENMP)
     RowBlocks& b = row_blocks_[loop];
-    const int cap = std::min(omp_get_max_threads(), int(b.seconds.size()));
+    const int cap = std::min(team_, int(b.seconds.size()));
     if (work > 8192 && cap > 1 && !omp_in_parallel()) {
         const int n = j1 - j0;
         int team = 1;
@@ -2399,8 +2415,9 @@ inline void Simulation::cell_strains() {
 // does the same, one point at a time; this pass takes runs of points sharing a cell).
 inline void Simulation::advance_points() {
     clear_cells();
-    Tally t;
-    advance_range(0, long(p_.size()), t);
+    Part all;
+    Landing t;
+    advance_range(0, long(p_.size()), all, t);
     departed_ = std::size_t(t.departed);
     if (departed_) remove_departed();
     mass_in_ = t.mass;
@@ -2409,7 +2426,7 @@ inline void Simulation::advance_points() {
 
 // advance_points by threads. Thread u
 // moves the points of its chunk (a contiguous range) and adds those landing in its part
-// of the cells (own_lo .. own_hi-1 of its Tally; the parts follow one another in cell
+// of the cells (own_lo .. own_hi-1 of its Part; the parts follow one another in cell
 // order) directly; a point landing in another part is listed, and the lists are added
 // after the pass in chunk order. Each cell sum then takes its terms in point order, the
 // same as the serial pass, unless a chunk landed in a higher chunk's part: that higher
@@ -2425,10 +2442,10 @@ inline void Simulation::advance_points() {
 inline bool Simulation::advance_parted() {
 #if defined(_OPENMP)
     const long n = long(p_.size());
-    const int want = std::min(omp_get_max_threads(), omp_get_thread_limit());
+    const int want = team_;
     // A team smaller than asked for (dynamic teams, or inside another parallel region) would
     // make parts for threads that do not come: one thread then (advance_points).
-    if (want < 2 || want > int(map_tally_.size()) || omp_get_dynamic() || omp_in_parallel()) return false;
+    if (want < 2 || want > int(parts_.size()) || omp_get_dynamic() || omp_in_parallel()) return false;
     if (chunk_team_ != want) {  // a new thread count: even chunks
         for (int u = 0; u <= want; ++u) chunk_at_[std::size_t(u)] = n * u / want;
         chunk_team_ = want;
@@ -2447,8 +2464,8 @@ inline bool Simulation::advance_parted() {
             int top = -1;  // the highest cell the chunk's points lie in, or above it
             auto look = [&](long a, long b) { for (long k = a; k < b; ++k) top = std::max(top, p_.cell[std::size_t(k)]); };
             if (parts_known_) {  // the last step's chunk u, o0 .. o1-1, and the points it did not hold
-                const long o0 = map_tally_[std::size_t(u)].list_at, o1 = map_tally_[std::size_t(u + 1)].list_at;
-                if (std::max(k0, o0) < std::min(k1, o1)) top = map_tally_[std::size_t(u)].cmax;
+                const long o0 = parts_[std::size_t(u)].list_at, o1 = parts_[std::size_t(u + 1)].list_at;
+                if (std::max(k0, o0) < std::min(k1, o1)) top = landings_[std::size_t(u)].cmax;
                 look(k0, std::min(k1, o0));
                 look(std::max(k0, o1), k1);
             } else {
@@ -2456,8 +2473,8 @@ inline bool Simulation::advance_parted() {
             }
             hi = std::max(lo, top + mx_ + 2);
         }
-        map_tally_[std::size_t(u)].own_lo = lo;
-        map_tally_[std::size_t(u)].own_hi = hi;
+        parts_[std::size_t(u)].own_lo = lo;
+        parts_[std::size_t(u)].own_hi = hi;
         lo = hi;
     }
     int team = 1;
@@ -2466,26 +2483,27 @@ inline bool Simulation::advance_parted() {
         const int nt = omp_get_num_threads(), id = omp_get_thread_num();
         const long k0 = nt == want ? chunk_at_[std::size_t(id)] : n * id / nt, k1 = nt == want ? chunk_at_[std::size_t(id + 1)] : n * (id + 1) / nt;
         const double t0 = omp_get_wtime();
-        Tally mine;
-        mine.own_lo = map_tally_[std::size_t(id)].own_lo;
-        if (id + 1 < nt) mine.own_hi = map_tally_[std::size_t(id)].own_hi;  // the last chunk: every cell above
+        Part mine;
+        mine.own_lo = parts_[std::size_t(id)].own_lo;
+        if (id + 1 < nt) mine.own_hi = parts_[std::size_t(id)].own_hi;  // the last chunk: every cell above
         mine.list_at = k0;
         // The part's cells are this thread's alone: it clears them (clear_cells) itself.
         if (!occupied_.empty())
             for (int j = std::max(occupied_.j0, mine.own_lo / mx_), j1 = int(std::min<long>(occupied_.j1, mine.own_hi / mx_ + 1L)); j < j1; ++j)
                 clear_row(j, mine.own_lo, mine.own_hi);
-        advance_range(k0, k1, mine);
+        Landing got;
+        advance_range(k0, k1, mine, got);
         mine.seconds = omp_get_wtime() - t0;
-        map_tally_[std::size_t(id)] = mine;
+        parts_[std::size_t(id)] = mine;
+        landings_[std::size_t(id)] = got;
         if (id == 0) team = nt;
     }
-    Tally t;
+    Landing t;
     bool clash = false;
     for (int u = 0; u < team; ++u) {
-        const Tally& a = map_tally_[std::size_t(u)];
-        clash |= a.cmax >= a.own_hi;  // landed in a higher chunk's part
-        parted_.listed += a.listed;
-        t.merge(a);
+        clash |= landings_[std::size_t(u)].cmax >= parts_[std::size_t(u)].own_hi;  // landed in a higher chunk's part
+        parted_.listed += parts_[std::size_t(u)].listed;
+        t.merge(landings_[std::size_t(u)]);
     }
     if (!clash) add_listed(team);
     departed_ = std::size_t(t.departed);
@@ -2497,8 +2515,8 @@ inline bool Simulation::advance_parted() {
     // The chunks took unequal times (points that cross cells or yield cost more, and they
     // gather in parts of a scene): the next step's chunks follow the times.
     if (parts_known_)
-        detail::balance(team, [&](int u) { return u < team ? map_tally_[std::size_t(u)].list_at : n; },
-                        [&](int u) { return map_tally_[std::size_t(u)].seconds; }, chunk_at_.data());
+        detail::balance(team, [&](int u) { return u < team ? parts_[std::size_t(u)].list_at : n; },
+                        [&](int u) { return parts_[std::size_t(u)].seconds; }, chunk_at_.data());
     ++parted_.steps;
     if (clash) {
         ++parted_.clashes;
@@ -2518,18 +2536,22 @@ inline bool Simulation::advance_parted() {
 // in point order, so the result is the same bit for bit as a plain loop over points.
 // Requires p_.cell[k] to be the cell holding (x[k], y[k]) (as after every step).
 // One instantiation per motion rule and transfer, so the loop holds only what it uses.
-inline void Simulation::advance_range(long k0, long k1, Tally& t) {
+inline void Simulation::advance_range(long k0, long k1, Part& part, Landing& t) { (this->*run_)(k0, k1, part, t); }
+
+// The version of the point loop this scene runs, chosen once (at set-up, and when set_wide
+// changes the choice): the motion rule, ADVECT POINTS, and AVX2.
+inline void Simulation::choose_point_loop() {
     const bool carry = sc_.advect == Advect::Points;
+    switch (sc_.motion) {
+    case Motion::Paper: run_ = &Simulation::advance_run<Motion::Paper, false>; break;  // ADVECT POINTS refuses PAPER
+    case Motion::Centre: run_ = carry ? &Simulation::advance_run<Motion::Centre, true> : &Simulation::advance_run<Motion::Centre, false>; break;
+    case Motion::Bilinear: run_ = carry ? &Simulation::advance_run<Motion::Bilinear, true> : &Simulation::advance_run<Motion::Bilinear, false>; break;
+    }
 #if LPFDM_WIDE
     // The AVX2 version for the paper's motion rule only (the default, and every shipped
     // deck's): each version of this loop adds a fifth to the build time of the tests.
-    if (wide_ && sc_.motion == Motion::Paper) { advance_run_wide(k0, k1, t); return; }
+    if (wide_ && sc_.motion == Motion::Paper) run_ = &Simulation::advance_run_wide;
 #endif
-    switch (sc_.motion) {
-    case Motion::Paper: advance_run<Motion::Paper, false>(k0, k1, t); break;  // ADVECT POINTS refuses PAPER
-    case Motion::Centre: carry ? advance_run<Motion::Centre, true>(k0, k1, t) : advance_run<Motion::Centre, false>(k0, k1, t); break;
-    case Motion::Bilinear: carry ? advance_run<Motion::Bilinear, true>(k0, k1, t) : advance_run<Motion::Bilinear, false>(k0, k1, t); break;
-    }
 }
 
 // Mohr-Coulomb after the elastic trial of eq. 6 left point q outside the surface (t
@@ -2552,18 +2574,19 @@ inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q,
 }
 
 template <Motion M, bool Carry>
-inline void Simulation::advance_run(long k0, long k1, Tally& tally) { run_points<M, Carry, false>(k0, k1, tally); }
+inline void Simulation::advance_run(long k0, long k1, Part& part, Landing& landing) { run_points<M, Carry, false>(k0, k1, part, landing); }
 #if LPFDM_WIDE
-__attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Tally& tally) { run_points<Motion::Paper, false, true>(k0, k1, tally); }
+__attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Part& part, Landing& landing) { run_points<Motion::Paper, false, true>(k0, k1, part, landing); }
 #endif
 
 template <Motion M, bool Carry, bool Wide>
-LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) {
-    Tally t = tally;  // a local: kept in registers (stores through the cell arrays could alias a reference)
+LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, Landing& landing) {
+    Landing t = landing;  // locals: kept in registers (stores through the cell arrays could alias a reference)
+    Part pt = part;
     // The cells this chunk adds to directly (all of them in the serial pass); a point
     // landing in any other is listed (advance_parted).
-    const int own_lo = t.own_lo;
-    const unsigned own_n = unsigned(t.own_hi) - unsigned(t.own_lo);
+    const int own_lo = pt.own_lo;
+    const unsigned own_n = unsigned(pt.own_hi) - unsigned(pt.own_lo);
     auto owned = [&](int c) LPFDM_INLINE { return unsigned(c) - unsigned(own_lo) < own_n; };
     // Local pointers: stores through a double* may alias any double member, which would
     // make the compiler reload every member after every store.
@@ -2853,7 +2876,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                         stayed = true;
                     } else {
                         if (owned(cn)) add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
-                        else p_.listed[std::size_t(t.list_at + t.listed++)] = std::int32_t(q);  // another chunk's cell
+                        else p_.listed[std::size_t(pt.list_at + pt.listed++)] = std::int32_t(q);  // another chunk's cell
                         t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
                         t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
                     }
@@ -2985,13 +3008,15 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Tally& tally) 
                 runs(b0, b1, std::integral_constant<int, kMotion>{});
                 b0 = b1;
             }
-            tally = t;
+            landing = t;
+            part = pt;
             return;
         }
     }
 #endif
     runs(k0, k1, std::integral_constant<int, kWhole>{});
-    tally = t;
+    landing = t;
+    part = pt;
 }
 
 // Points that left the lattice leave the cycle; their mass becomes outflow. The order
@@ -3046,7 +3071,7 @@ inline void Simulation::map_point(std::size_t k) {
 // (after set-up, after a program moved points, or when advance_parted's chunks clashed).
 inline void Simulation::map_points() {
     clear_cells();
-    Tally t;
+    Landing t;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         map_point(k);
         const int c = p_.cell[k];
