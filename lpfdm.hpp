@@ -857,11 +857,14 @@ inline bool mohr_inside(MohrTrial& t, double tension, const Stress& s) {
 inline MohrResult mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, const MohrTrial& t, Stress& s);
 }  // namespace detail
 
+// 2 c sqrt(N_phi), the shear planes' constant.
+inline double two_c_sqrt_n(const MohrStrength& st) { return 2 * st.c * (st.sqrt_n_phi > 0 ? st.sqrt_n_phi : std::sqrt(st.n_phi)); }
+
 // The elastic test, then the correction of a point that yields.
-inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStrength& st, Stress& s) {
+LPFDM_INLINE inline MohrResult mohr_coulomb_return(const MaterialConstants& k, const MohrStrength& st, Stress& s) {
     detail::MohrTrial t;
     t.np = st.n_phi;
-    t.two_c_sq = 2 * st.c * (st.sqrt_n_phi > 0 ? st.sqrt_n_phi : std::sqrt(t.np));
+    t.two_c_sq = two_c_sqrt_n(st);
     if (detail::mohr_inside(t, st.tension, s)) return {};
     return detail::mohr_coulomb_correct(k, st, t, s);
 }
@@ -1758,7 +1761,12 @@ private:
         store_sums(c, a);
     }
     void map_points();
-    void plastic_correction(const MaterialConstants& mc, std::size_t q, const detail::MohrTrial& t, Stress& s);
+    // eq. 6's Mohr-Coulomb part: the return of point k's elastic trial s with its strength
+    // (Own: its own c and N_phi), and its plastic shear if it yielded.
+    template <bool Own> LPFDM_INLINE void mohr_consult(const MaterialConstants& mc, std::size_t k, Stress& s) {
+        const MohrResult r = mohr_coulomb_return(mc, strength_of<Own>(mc, k), s);
+        if (r.mode != MohrResult::Elastic) record_yield(k, r.d_gamma_p);
+    }
     // Point q was returned to the yield surface with plastic shear increment d_gamma_p.
     void record_yield(std::size_t q, double d_gamma_p) {
         p_.plastic_shear[q] += d_gamma_p;
@@ -1825,10 +1833,13 @@ private:
     void reference_integrate();
     // eq. 6 for point k in a cell of strain increment e and rotation (rc, rs).
     void consult_model(std::size_t k, const MaterialConstants& mc, const StrainIncrement& e, double rc, double rs, Stress& s);
-    // The strength of Mohr-Coulomb point k now: its own c and N_phi (scatter) or its
+    // The strength of Mohr-Coulomb point k now: its own c and N_phi (Own: scatter) or its
     // material's, cohesion softened once it has yielded.
     MohrStrength strength_of(const MaterialConstants& mc, std::size_t k) const {
-        const bool own = !p_.c0.empty();
+        return p_.c0.empty() ? strength_of<false>(mc, k) : strength_of<true>(mc, k);
+    }
+    template <bool Own> LPFDM_INLINE MohrStrength strength_of(const MaterialConstants& mc, std::size_t k) const {
+        const bool own = Own;
         const double c0 = own ? p_.c0[k] : mc.c;
         MohrStrength st;
         st.n_phi = own ? p_.n_phi[k] : mc.n_phi;
@@ -1840,9 +1851,10 @@ private:
     }
     // eq. 12's look-up: the strain increments of the cell holding the lattice point (fx, fy)
     // (in cells), the mean of two or four cells where it lies on their common edge or
-    // corner; cells outside the lattice (in the fast kernel: outside the strained box) do
-    // not count. False when no cell counts.
-    bool strain_at(double fx, double fy, double& exx, double& eyy, double& exy, double& eyx) const;
+    // corner; cells outside `box` (the reference: the lattice; the fast kernel: the cells
+    // whose strains it made, which hold every cell a moving node can reach) do not count.
+    // False when no cell counts.
+    LPFDM_INLINE bool strain_at(double fx, double fy, const Range& box, double& exx, double& eyy, double& exy, double& eyx) const;
     Range impose_supports();
     void carried_row(int j, int i0, int i1);
     Kernel kernel_ = Kernel::Fast;
@@ -2120,8 +2132,7 @@ inline void Simulation::consult_model(std::size_t k, const MaterialConstants& mc
     if (mc.model == Model::User) { user_consult(mc, k, e, s); return; }
     elastic_increment(mc, e, s);  // the elastic trial
     if (mc.model != Model::MohrCoulomb) return;
-    const MohrResult r = mohr_coulomb_return(mc, strength_of(mc, k), s);
-    if (r.mode != MohrResult::Elastic) record_yield(k, r.d_gamma_p);
+    p_.c0.empty() ? mohr_consult<false>(mc, k, s) : mohr_consult<true>(mc, k, s);
 }
 
 // 2. The points, in storage order: eq. 6 and the volume change with the strain of the cell
@@ -2218,24 +2229,38 @@ inline void Simulation::reference_nodal_forces() {
         }
 }
 
-inline bool Simulation::strain_at(double fxs, double fys, double& exx, double& eyy, double& exy, double& eyx) const {
+LPFDM_INLINE inline bool Simulation::strain_at(double fxs, double fys, const Range& box, double& exx, double& eyy, double& exy, double& eyx) const {
     int ci = int(fxs), cj = int(fys);  // floor without a library call (|du| < L/2)
     ci -= fxs < ci; cj -= fys < cj;
     // On a cell edge (a zero component of du) the cells on both sides share the look-up,
     // so that a mirror-symmetric motion stays symmetric.
     const int ci0 = fxs == ci ? ci - 1 : ci, cj0 = fys == cj ? cj - 1 : cj;
-    auto inside = [&](int a, int b) { return a >= 0 && b >= 0 && a < mx_ && b < my_; };
+    auto inside = [&](int a, int b) { return a >= box.i0 && b >= box.j0 && a < box.i1 && b < box.j1; };
+    const CellStrain* cs = strain_.data();
     if (ci0 == ci && cj0 == cj) {  // one cell
         if (!inside(ci, cj)) return false;
-        const CellStrain& e = strain_[std::size_t(cell(ci, cj))];
+        const CellStrain& e = cs[cell(ci, cj)];
         exx = e.xx; eyy = e.yy; exy = e.xy; eyx = e.yx;
         return true;
     }
-    exx = eyy = exy = eyx = 0;
+    if (inside(ci0, cj0) && inside(ci, cj)) {  // two or four cells, all counting (the usual case: one test)
+        const CellStrain* a = cs + cell(ci0, cj0);
+        exx = 0 + a->xx; eyy = 0 + a->yy; exy = 0 + a->xy; eyx = 0 + a->yx;  // the same sums as below
+        if (ci0 != ci) { exx += a[1].xx; eyy += a[1].yy; exy += a[1].xy; eyx += a[1].yx; }
+        if (cj0 != cj) {
+            const CellStrain* b = a + mx_;
+            exx += b->xx; eyy += b->yy; exy += b->xy; eyx += b->yx;
+            if (ci0 != ci) { exx += b[1].xx; eyy += b[1].yy; exy += b[1].xy; eyx += b[1].yx; }
+        }
+        const double iw = ci0 != ci && cj0 != cj ? 0.25 : 0.5;
+        exx *= iw; eyy *= iw; exy *= iw; eyx *= iw;
+        return true;
+    }
+    exx = eyy = exy = eyx = 0;  // two or four cells, in row order, some outside the box
     double w = 0;
     auto add = [&](int a, int b) {
         if (!inside(a, b)) return;
-        const CellStrain& e = strain_[std::size_t(cell(a, b))];
+        const CellStrain& e = cs[cell(a, b)];
         exx += e.xx; eyy += e.yy; exy += e.xy; eyx += e.yx; w += 1;
     };
     add(ci0, cj0);
@@ -2278,7 +2303,7 @@ inline void Simulation::reference_compensate() {
             const std::size_t n = std::size_t(node(i, j));
             double ux = dux_[n], uy = duy_[n], exx, eyy, exy, eyx;
             if ((ux == 0 && uy == 0) || nmass_prev_[n] == 0) continue;
-            if (!strain_at(i - ux * invL_, j - uy * invL_, exx, eyy, exy, eyx)) continue;
+            if (!strain_at(i - ux * invL_, j - uy * invL_, {0, mx_, 0, my_}, exx, eyy, exy, eyx)) continue;
             compensate_increment(ux, uy, exx, eyy, exy, eyx);  // eq. 12a, 12b
             dux_[n] = ux; duy_[n] = uy;
         }
@@ -2554,17 +2579,6 @@ inline void Simulation::choose_point_loop() {
 #endif
 }
 
-// Mohr-Coulomb after the elastic trial of eq. 6 left point q outside the surface (t
-// from detail::mohr_inside): the return, with the point's own strength.
-inline void Simulation::plastic_correction(const MaterialConstants& mc, std::size_t q, const detail::MohrTrial& t, Stress& s) {
-    MohrStrength st;
-    st.n_phi = t.np;
-    st.n_psi = std::min(mc.n_psi, t.np);
-    st.tension = mc.tension;
-    const MohrResult r = detail::mohr_coulomb_correct(mc, st, t, s);
-    if (r.mode != MohrResult::Elastic) record_yield(q, r.d_gamma_p);
-}
-
 // eq. 6 by a model the embedding program gave (set_user_model).
 inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s) {
     const bool plastic = !p_.plastic_shear.empty();
@@ -2606,24 +2620,12 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
     const int mx = mx_, my = my_;
     const double L = L_, invL = invL_, X = mx * L, Y = my * L;
     const bool single = groups_.size() == 1;
-    const double* pc0 = p_.c0.data();
-    const double* pnp = p_.n_phi.data();
-    const double* psq = p_.sqrt_n_phi.data();
-    const std::uint8_t* pyield = p_.yielded.data();
     const Span* cols = cols_.data();
     const Span* rows = rows_.data();
-    // Mohr-Coulomb point r of material mc: its strength, its own (own: scatter) or the
-    // material's, softened once it has yielded; and with its elastic trial s, the test,
-    // the return when outside, and the stress written to the point.
-    auto strength = [&](const MaterialConstants& mc, long r, detail::MohrTrial& tr, auto own) LPFDM_INLINE {
-        const double c0 = own ? pc0[r] : mc.c;
-        tr.np = own ? pnp[r] : mc.n_phi;
-        tr.two_c_sq = 2 * (pyield[r] ? c0 * (1 - mc.soften) : c0) * (own ? psq[r] : mc.sqrt_n_phi);
-    };
+    // Mohr-Coulomb point r of material mc with its elastic trial s: the consult of eq. 6
+    // (mohr_consult, as the reference's), and the stress written to the point.
     auto consult_point = [&](const MaterialConstants& mc, long r, Stress s, auto own) LPFDM_INLINE {
-        detail::MohrTrial tr;
-        strength(mc, r, tr, own);
-        if (!detail::mohr_inside(tr, mc.tension, s)) plastic_correction(mc, std::size_t(r), tr, s);
+        mohr_consult<decltype(own)::value>(mc, std::size_t(r), s);
         psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
     };
     // eq. 6 with the Jaumann rotation of eq. 5f (the elastic trial), for one point or four in
@@ -2958,9 +2960,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     detail::v4d xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;
                     detail::load(psxx + q, xx); detail::load(psyy + q, yy); detail::load(psxy + q, xy); detail::load(pszz + q, zz);
                     for (int l = 0; l < 4; ++l) {
-                        detail::MohrTrial tr;
-                        strength(mc, q + l, tr, own);
-                        np[l] = tr.np; two_c_sq[l] = tr.two_c_sq;
+                        const MohrStrength st = strength_of<decltype(own)::value>(mc, std::size_t(q + l));
+                        np[l] = st.n_phi; two_c_sq[l] = 2 * st.c * st.sqrt_n_phi;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
                     }
                     int settled = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
                     if (settled == 15) continue;  // all four inside: the trial stands
@@ -3209,7 +3210,7 @@ inline void Simulation::compensate() {
     double *ux_n = dux_.data(), *uy_n = duy_.data();
     const double* nm = nmass_.data();
     const double* nm_prev = nmass_prev_.data();
-    const CellStrain* cs = strain_.data();
+    [[maybe_unused]] const CellStrain* cs = strain_.data();  // the AVX2 lanes read it
     if (gaining) by_rows(kFillRows, nr.j0, nr.j1, gaining * (nr.i1 - nr.i0), [&](int j) {
         if (!row_gained_[std::size_t(j)]) return;
         for (int i = nr.i0; i < nr.i1; ++i) {
@@ -3225,62 +3226,19 @@ inline void Simulation::compensate() {
             if (msum > 0) { ux_n[n] = sx / msum; uy_n[n] = sy / msum; }
         }
     });
-    // Node (i, j): eq. 12 one node at a time.
+    // Node (i, j): eq. 12 one node at a time, as the reference does it.
     auto shift = [&](int i, int j) LPFDM_INLINE {
         const int n = j * (mx + 1) + i;
-        const double ux = ux_n[n], uy = uy_n[n];
+        double ux = ux_n[n], uy = uy_n[n], exx, eyy, exy, eyx;
         if ((ux == 0 && uy == 0) || nm_prev[n] == 0) return;
-        // The cell holding x_node - du_node; where that point lies exactly on a cell
-        // edge (a zero component of du), the cells on both sides share the lookup,
-        // so that a mirror-symmetric motion stays symmetric.
-        const double fxs = i - ux * invL, fys = j - uy * invL;
-        int ci = int(fxs), cj = int(fys);  // floor without a library call (|du| < L/2)
-        ci -= fxs < ci; cj -= fys < cj;
-        const int ci0 = fxs == ci ? ci - 1 : ci, cj0 = fys == cj ? cj - 1 : cj;
-        double exx, eyy, exy, eyx;
-        if (ci0 == ci && cj0 == cj) {  // the usual case: one cell
-            if (ci < st.i0 || cj < st.j0 || ci >= st.i1 || cj >= st.j1) return;
-            const int c = cj * mx + ci;
-            exx = cs[c].xx; eyy = cs[c].yy; exy = cs[c].xy; eyx = cs[c].yx;
-        } else if (ci0 >= st.i0 && cj0 >= st.j0 && ci < st.i1 && cj < st.j1) {  // two or four cells, all strained
-            // Kept apart from the border path below: one path with per-cell tests costs
-            // this phase a third more instructions where a block settles (ux = 0).
-            const CellStrain* a = cs + (cj0 * mx + ci0);
-            exx = 0 + a->xx; eyy = 0 + a->yy; exy = 0 + a->xy; eyx = 0 + a->yx;  // the same sums as below
-            if (ci0 != ci) { exx += a[1].xx; eyy += a[1].yy; exy += a[1].xy; eyx += a[1].yx; }
-            if (cj0 != cj) {
-                const CellStrain* b = a + mx;
-                exx += b->xx; eyy += b->yy; exy += b->xy; eyx += b->yx;
-                if (ci0 != ci) { exx += b[1].xx; eyy += b[1].yy; exy += b[1].xy; eyx += b[1].yx; }
-            }
-            const double iw = ci0 != ci && cj0 != cj ? 0.25 : 0.5;
-            exx *= iw; eyy *= iw; exy *= iw; eyx *= iw;
-        } else {  // two or four cells, in row order, some outside the strained box
-            exx = eyy = exy = eyx = 0;
-            double w = 0;
-            auto add = [&](int a, int b) {
-                if (a < st.i0 || b < st.j0 || a >= st.i1 || b >= st.j1) return;
-                const CellStrain& e = cs[b * mx + a];
-                exx += e.xx; eyy += e.yy; exy += e.xy; eyx += e.yx; w += 1;
-            };
-            add(ci0, cj0);
-            if (ci0 != ci) add(ci, cj0);
-            if (cj0 != cj) { add(ci0, cj); if (ci0 != ci) add(ci, cj); }
-            if (w == 0) return;
-            if (w == 2 || w == 4) {  // x / 2 and x * 0.5 are the same number: no division
-                const double iw = w == 2 ? 0.5 : 0.25;
-                exx *= iw; eyy *= iw; exy *= iw; eyx *= iw;
-            } else if (w > 1) {
-                exx /= w; eyy /= w; exy /= w; eyx /= w;
-            }
-        }
-        double cx = ux, cy = uy;
-        compensate_increment(cx, cy, exx, eyy, exy, eyx);  // eq. 12a, 12b
-        ux_n[n] = cx; uy_n[n] = cy;
+        if (!strain_at(i - ux * invL, j - uy * invL, st, exx, eyy, exy, eyx)) return;
+        compensate_increment(ux, uy, exx, eyy, exy, eyx);  // eq. 12a, 12b
+        ux_n[n] = ux; uy_n[n] = uy;
     };
     // Nodes i .. i + 3 of row j in the lanes of a vector, when each lane is one that shift
     // leaves alone or one whose x_node - du_node lies in a strained cell, or on the edge of
-    // two or four strained cells: the same operations on the same numbers. Otherwise (the
+    // two or four strained cells: strain_at's two first cases and compensate_increment,
+    // restated in lanes, the same operations on the same numbers. Otherwise (the
     // border of the strained box, a number not finite) the four nodes go one at a time.
     auto shift_row = [&](int j, auto wide) LPFDM_INLINE {
         detail::sweep(nr.i0, nr.i1, wide, [&](int i, auto tag) LPFDM_INLINE {
