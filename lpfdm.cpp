@@ -2,6 +2,7 @@
 // tables and histories for gnuplot. Usage: lpfdm [options] DECK (see --help).
 #include "lpfdm.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -24,7 +25,7 @@ const char* kUsage =
     "usage: lpfdm [options] DECK\n"
     "Runs the Lagrangian Particle Finite Difference Method on the scene of DECK.\n"
     "\n"
-    "options:\n"
+    "options (an option with a value may also be written --opt=value):\n"
     "  -o DIR        write output files into DIR (created; default: the current directory)\n"
     "  --refine K    K times finer lattice: same geometry in metres, dt / K, K times the steps\n"
     "  --steps N     run N steps instead of the deck's\n"
@@ -97,9 +98,24 @@ double physical_memory_bytes() {
 
 int main(int argc, char** argv) {
     Options opt;
+    // The options that take a value; each may also be written --opt=value.
+    const std::vector<std::string> with_value = {"-o", "--refine", "--steps", "--seed", "--threads", "--kernel", "--set"};
+    const std::vector<std::string> options = {"-o", "--refine", "--steps", "--seed", "--threads", "--kernel", "--set", "--profile", "--no-avx2", "-q", "--help", "--version"};
     for (int a = 1; a < argc; ++a) {
-        const std::string s = argv[a];
-        auto value = [&]() -> const char* { return a + 1 < argc ? argv[++a] : nullptr; };
+        std::string s = argv[a];
+        std::string inline_value;  // --opt=value
+        bool has_inline = false;
+        const std::size_t eq = s.find('=');
+        if (s.rfind("--", 0) == 0 && eq != std::string::npos &&
+            std::find(with_value.begin(), with_value.end(), s.substr(0, eq)) != with_value.end()) {
+            inline_value = s.substr(eq + 1);
+            s = s.substr(0, eq);
+            has_inline = true;
+        }
+        auto value = [&]() -> const char* {
+            if (has_inline) return inline_value.c_str();
+            return a + 1 < argc ? argv[++a] : nullptr;
+        };
         long long v = 0;
         if (s == "--help" || s == "-h") { std::fputs(kUsage, stdout); std::fputs(("\n" + lpfdm::deck_help()).c_str(), stdout); return 0; }
         if (s == "--version") { std::printf("lpfdm %s\n", lpfdm::kVersion); return 0; }
@@ -127,7 +143,8 @@ int main(int argc, char** argv) {
             if (!d || !parse_long(d, 1, 1024, v)) return usage_error("--threads needs a whole number from 1 to 1024");
             opt.threads = long(v);
         } else if (s == "--kernel") {
-            const std::string d = a + 1 < argc ? argv[++a] : "";
+            const char* dv = value();
+            const std::string d = dv ? dv : "";
             if (d == "fast") opt.kernel = lpfdm::Kernel::Fast;
             else if (d == "scalar") opt.kernel = lpfdm::Kernel::Scalar;
             else if (d == "reference") opt.kernel = lpfdm::Kernel::Reference;
@@ -141,7 +158,7 @@ int main(int argc, char** argv) {
                 return usage_error("--set needs CARD.PARAM=VALUE with a finite number, e.g. --set MATERIAL1.C=12000");
             opt.settings.push_back({kv.substr(0, eq), x});
         } else if (!s.empty() && s[0] == '-' && s != "-") {
-            return usage_error("unknown option '" + s + "'");
+            return usage_error("unknown option '" + s + "'" + lpfdm::did_you_mean(s.substr(0, s.find('=')), options));
         } else {
             if (!opt.deck.empty()) return usage_error("only one deck, please");
             opt.deck = s;

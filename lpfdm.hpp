@@ -475,6 +475,40 @@ inline std::string param_list(const char* card, int model = 0) {
             list += std::string(list.empty() ? "" : ", ") + k.name;
     return list;
 }
+// " (did you mean X?)" when one of candidates is close to what was written (case aside):
+// one edit away (two for words of more than four letters; a swap of neighbours is one
+// edit), or what was written begins it; else "".
+inline std::string did_you_mean(const std::string& written, const std::vector<std::string>& candidates) {
+    std::string w;
+    for (char ch : written) w += char(std::toupper(static_cast<unsigned char>(ch)));
+    auto distance = [](const std::string& a, const std::string& b) {  // optimal string alignment
+        std::vector<std::vector<int>> d(a.size() + 1, std::vector<int>(b.size() + 1));
+        for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = int(i);
+        for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = int(j);
+        for (std::size_t i = 1; i <= a.size(); ++i)
+            for (std::size_t j = 1; j <= b.size(); ++j) {
+                d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] != b[j - 1])});
+                if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+            }
+        return d[a.size()][b.size()];
+    };
+    std::string best;
+    int best_d = w.size() > 4 ? 3 : 2;
+    for (const std::string& c : candidates) {
+        std::string u;
+        for (char ch : c) u += char(std::toupper(static_cast<unsigned char>(ch)));
+        const int dd = w.size() >= 3 && u.compare(0, w.size(), w) == 0 ? 1 : distance(w, u);
+        if (dd < best_d) { best_d = dd; best = c; }
+    }
+    return best.empty() ? "" : " (did you mean " + best + "?)";
+}
+// The names of every card.
+inline std::vector<std::string> card_names() {
+    std::vector<std::string> v;
+    for (const DeckCard& c : kDeckCards) v.push_back(c.name);
+    return v;
+}
+
 // A card's synopsis from the table: "CLUSTER mat x0 y0 x1 y1 [PPC=2]".
 inline std::string card_synopsis(const DeckCard& c) {
     std::string out = c.name;
@@ -1309,7 +1343,7 @@ inline std::string apply_setting(Scene& s, const std::string& key_in, double v) 
     card.resize(d);
     bool known = false;
     for (const DeckKey& k : kDeckKeys) known |= card == k.card;
-    if (!known) return "unknown setting " + key_in + " (e.g. MATERIAL1.C, CLUSTER1.PPC, WALL1.VY, DAMPING.ALPHA, STEP.DT, STEP.N, GRAVITY.GY, SEED.N, GRID.L)";
+    if (!known) return "unknown setting " + key_in + " (e.g. MATERIAL1.C, CLUSTER1.PPC, WALL1.VY, DAMPING.ALPHA, STEP.DT, STEP.N, GRAVITY.GY, SEED.N, GRID.L)" + did_you_mean(card, card_names());
     // Which card of its kind: MATERIAL and WALL by id, the others by their order from 1.
     std::size_t index = 0, count = 0;
     int model = 0;
@@ -1328,9 +1362,13 @@ inline std::string apply_setting(Scene& s, const std::string& key_in, double v) 
     const DeckKey* k = deck_key(card, par);
     if (!k || !k->settable) {
         std::string list;
+        std::vector<std::string> names;
         for (const DeckKey& q : kDeckKeys)
-            if (q.settable && card == q.card && (!model || (q.models & model))) list += std::string(list.empty() ? "" : ", ") + q.name;
-        return card + " has no parameter " + par + " (it takes " + list + ")";
+            if (q.settable && card == q.card && (!model || (q.models & model))) {
+                list += std::string(list.empty() ? "" : ", ") + q.name;
+                names.push_back(q.name);
+            }
+        return card + " has no parameter " + par + " (it takes " + list + ")" + did_you_mean(par, names);
     }
     if (model && !(k->models & model))
         return card + " " + std::to_string(num) + " is " + (model == kMohr ? "MOHR" : "ELASTIC") + ": " + par + " is not one of its parameters (" + param_list("MATERIAL", model) + ")";
@@ -3730,7 +3768,8 @@ public:
             if (!known) {
                 std::string list;
                 for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
-                fail(name.pos, "unknown parameter '" + name.text + "' (this card takes " + list + ")");
+                fail(name.pos, "unknown parameter '" + name.text + "' (this card takes " + list + ")" +
+                                   did_you_mean(name.text, std::vector<std::string>(allowed.begin(), allowed.end())));
                 break;
             }
             for (const auto& p : out)
@@ -3917,7 +3956,7 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             have_end = true;
             sc.end_pos = kp;
         } else {
-            r.fail(kp, "unknown card '" + toks[0].text + "'");
+            r.fail(kp, "unknown card '" + toks[0].text + "'" + did_you_mean(toks[0].text, card_names()));
             continue;
         }
         r.finish();

@@ -149,5 +149,36 @@ head -c $((65 * 1024 * 1024)) /dev/zero | tr '\0' ' ' >"$tmp/huge.deck"
 check_not_a_deck "deck over 64 MiB" "$tmp/huge.deck" "larger than 64 MiB"
 rm -f "$tmp/huge.deck"
 
+# The command line: --opt=value reads as --opt value; --kernel reference writes what the
+# fast kernel writes (two threads); a mistaken option or key is named with a suggestion.
+# cli NAME EXPECTED_STATUS PHRASE ARGS...: runs EXE -q ARGS into a new directory $out.
+cli() {
+    local name=$1 want=$2 phrase=$3
+    shift 3
+    out="$tmp/out.$name"
+    rm -rf "$out" && mkdir -p "$out"
+    { timeout -k 5 "$limit" "$exe" -q -o "$out" "$@" >"$tmp/stdout" 2>"$tmp/stderr" </dev/null; rc=$?; } 2>/dev/null
+    if [ $rc -ne "$want" ]; then
+        fail "$name" "exit status $rc, expected $want ($(head -n 1 "$tmp/stderr"))"
+    elif [ -n "$phrase" ] && ! grep -q -F -- "$phrase" "$tmp/stderr"; then
+        fail "$name" "stderr does not say '$phrase': $(head -n 1 "$tmp/stderr")"
+    else
+        passed=$((passed + 1))
+    fi
+}
+cli "kernel reference" 0 "" --kernel reference --steps 40 tests/decks/threads_outflow.deck
+cp -r "$out" "$tmp/ref"
+cli "kernel=fast, steps=40, threads=2" 0 "" --kernel=fast --steps=40 --threads=2 tests/decks/threads_outflow.deck
+if [ -s "$tmp/ref/threads_outflow_points.txt" ] && diff -r -q "$tmp/ref" "$out" >/dev/null; then
+    passed=$((passed + 1))
+else
+    fail "reference = fast" "the outputs of --kernel reference and --kernel=fast --threads=2 differ"
+fi
+cli "unknown kernel" 2 "--kernel needs fast, scalar or reference" --kernel nope decks/column.deck
+cli "misspelt option" 2 "(did you mean --threads?)" --threds 2 decks/column.deck
+cli "misspelt --set key" 2 "(did you mean SOFTEN?)" --set MATERIAL1.SOFTN=0.5 decks/psc.deck
+cli "--set key of another model" 2 "MATERIAL 1 is ELASTIC: PHI is not one of its parameters" --set MATERIAL1.PHI=30 decks/column.deck
+cli "--set out of range" 2 "NU must lie in (-1, 0.5)" --set=MATERIAL1.NU=0.5 decks/column.deck
+
 echo "decks: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -1066,3 +1066,17 @@ TEST_CASE("one table of cards and keys: --help lists it, decks/README.md documen
         CHECK(line.find(std::string("`") + k.name + "`") != std::string::npos);
     }
 }
+
+TEST_CASE("a misspelt card, parameter or --set key is named with the closest one of the table") {
+    CHECK_ONE_ERROR(plus("CLUSTR 1 2 2 4 4"), 5, 1, "unknown card 'CLUSTR' (did you mean CLUSTER?)");
+    CHECK_ONE_ERROR(plus("GRAV 0 -9.81"), 5, 1, "(did you mean GRAVITY?)");  // a beginning
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 4 PCC=3"), 5, 19, "(did you mean PPC?)");  // two letters swapped
+    CHECK_ONE_ERROR(plus("MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=30 C=0 SOFTNE=0.5"), 5, 50, "(did you mean SOFTEN?)");
+    lpfdm::Scene s;
+    CHECK(read_text(plus("FOO 1 2"), s)[0].message.find("did you mean") == std::string::npos);  // nothing close
+    CHECK(lpfdm::did_you_mean("dampng", lpfdm::card_names()) == " (did you mean DAMPING?)");
+    CHECK(lpfdm::did_you_mean("XYZZY", lpfdm::card_names()).empty());
+    lpfdm::Scene t = read_ok(plus("DAMPING 0.5"));
+    CHECK(lpfdm::apply_setting(t, "DAMPING.ALPAH", 0.1).find("(did you mean ALPHA?)") != std::string::npos);
+    CHECK(lpfdm::apply_setting(t, "DAMPNIG.ALPHA", 0.1).find("(did you mean DAMPING?)") != std::string::npos);
+}

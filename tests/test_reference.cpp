@@ -127,11 +127,16 @@ std::vector<std::filesystem::path> runnable_decks() {
     return v;
 }
 
-// Steps for a scene of n points: about 3e5 particle-steps a run (the sanitizer build
-// runs this too), at least 12 and at most the deck's.
+// Steps for a scene of n points: about 3e5 particle-steps a run (1e5 in the sanitizer
+// build, several times slower), at least 12 and at most the deck's.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr double kBudget = 1e5;
+#else
+constexpr double kBudget = 3e5;
+#endif
 long steps_for(const Scene& s) {
     const double n = std::max(1.0, count_points(s));
-    return std::min(s.steps, std::max(12L, long(3e5 / n)));
+    return std::min(s.steps, std::max(12L, long(kBudget / n)));
 }
 
 }  // namespace
