@@ -596,7 +596,7 @@ TEST_CASE("phases one by one with two threads: a point moved between update_poin
     // A program stepping the phases itself may move points after the point phase
     // (setting x, y and cell); map_to_lattice must then see them where they are, with
     // any number of threads.
-    auto run = [](int threads) {
+    auto run = []([[maybe_unused]] int threads) {
 #if defined(_OPENMP)
         const int before = omp_get_max_threads();
         omp_set_num_threads(threads);
@@ -769,7 +769,7 @@ END
 // A tower on a wide base: 22 200 points, a box of 130 x 75 cells, so that the lattice
 // phases go by threads too; rows of the tower cost eq. 12 and eq. 13 less than the base's
 // (most of their nodes hold no mass), so their blocks of rows move.
-Scene tower_on_base() {
+[[maybe_unused]] Scene tower_on_base() {
     const std::string deck = R"(
 GRID     140 80 0.25
 MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000
@@ -874,7 +874,7 @@ namespace {
 // each thread's points lie all over the scene instead of in a band of rows. jump: after
 // the first step, the first point is put where the last one is (in the highest cells).
 // wide: the AVX2 version of the loops (where the processor has it), else one at a time.
-Simulation::PartedPass compare_threads(const Scene& s, int threads, bool shuffle, bool jump = false, bool wide = true) {
+[[maybe_unused]] Simulation::PartedPass compare_threads(const Scene& s, int threads, bool shuffle, bool jump = false, bool wide = true) {
     Simulation::PartedPass pass;
 #if defined(_OPENMP)
     const int before = omp_get_max_threads();
