@@ -1923,7 +1923,8 @@ private:
         for (const MaterialConstants* mc : group_consts_) mohr_groups_ = mohr_groups_ || mc->model == Model::MohrCoulomb;
     }
     std::vector<double> row_ke_, row_du_;               // per node row: kinetic energy (a fixed-order sum), largest increment
-    std::vector<std::uint8_t> row_gained_;              // per node row: a node gained mass this step (nodal_forces)
+    std::vector<std::uint8_t> row_gained_;              // per node row: a node gained mass this step; made with the
+                                                        // node masses (nodal_forces), read by eq. 12's fill (compensate)
     std::vector<UserModel> user_models_;
     Points p_;
     // nodes
@@ -1962,8 +1963,11 @@ private:
     [[maybe_unused]] int chunk_team_ = 0;  // (used with OpenMP only)
     bool parts_known_ = false;
     PartedPass parted_;
+    // The fast kernel's record of where the lattice is active, kept beside the fields it
+    // describes (the reference cycle visits everything and needs none of it): outside
+    // these boxes the cell sums, strains, nodal masses, forces and increments are zero.
     Range occupied_;   // cells holding points after the last mapping
-    Range strained_;   // cells whose strains are current
+    Range strained_;   // cells whose strains strain_ holds for this step (eq. 12 reads no other)
     Range live_nodes_; // nodes that may hold a non-zero du
     std::vector<WallState> walls_;
     long step_ = 0;
