@@ -39,7 +39,8 @@
 //                                                               jaumann_rotation, rotate_stress
 //   eq. 6      a point's stress: the model, once a step          Simulation::consult_model
 //              elastic (Hooke, plane strain)                    elastic_change, elastic_increment
-//              Mohr-Coulomb return (FLAC's, closed form)         mohr_coulomb_return
+//              Mohr-Coulomb return (FLAC's, closed form)         mohr_coulomb_return,
+//                                                               Simulation::mohr_consult
 //              each point's strength (scatter, softening)       Simulation::strength_of
 //   eq. 7a-7b  point motion with its cell                        move_point_paper (MOTION CENTRE:
 //                                                               move_point_centre, BILINEAR: _bilinear)
@@ -478,11 +479,17 @@ inline const DeckKey* deck_key(const std::string& card, const std::string& name)
     return nullptr;
 }
 // The parameters of a card (for MATERIAL, of a model: kElastic or kMohr), as "E, NU, RHO".
-inline std::string param_list(const char* card, int model = 0) {
-    std::string list;
+// The keys of a card (for MATERIAL, of a model): its parameters, or (settable) those --set
+// may change.
+inline std::vector<std::string> key_names(const std::string& card, int model, bool settable) {
+    std::vector<std::string> v;
     for (const DeckKey& k : kDeckKeys)
-        if (k.param && std::strcmp(k.card, card) == 0 && (!model || (k.models & model)))
-            list += std::string(list.empty() ? "" : ", ") + k.name;
+        if (card == k.card && (settable ? k.settable : k.param) && (!model || (k.models & model))) v.push_back(k.name);
+    return v;
+}
+inline std::string joined(const std::vector<std::string>& names) {
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
     return list;
 }
 // " (did you mean X?)" when one of candidates is close to what was written (case aside):
@@ -551,10 +558,8 @@ inline std::string deck_help() {
     }
     out += "--set keys (CARD.KEY; MATERIAL and WALL by id, CLUSTER, FIX and OUTPUT by order from 1):\n";
     for (const DeckCard& c : kDeckCards) {
-        std::string list;
-        for (const DeckKey& k : kDeckKeys)
-            if (k.settable && std::strcmp(k.card, c.name) == 0) list += std::string(list.empty() ? "" : " ") + k.name;
-        if (!list.empty()) out += std::string("  ") + c.name + ": " + list + "\n";
+        const std::vector<std::string> keys = key_names(c.name, 0, true);
+        if (!keys.empty()) out += std::string("  ") + c.name + ": " + joined(keys) + "\n";
     }
     return out;
 }
@@ -1371,17 +1376,11 @@ inline std::string apply_setting(Scene& s, const std::string& key_in, double v) 
     }
     const DeckKey* k = deck_key(card, par);
     if (!k || !k->settable) {
-        std::string list;
-        std::vector<std::string> names;
-        for (const DeckKey& q : kDeckKeys)
-            if (q.settable && card == q.card && (!model || (q.models & model))) {
-                list += std::string(list.empty() ? "" : ", ") + q.name;
-                names.push_back(q.name);
-            }
-        return card + " has no parameter " + par + " (it takes " + list + ")" + did_you_mean(par, names);
+        const std::vector<std::string> names = key_names(card, model, true);
+        return card + " has no parameter " + par + " (it takes " + joined(names) + ")" + did_you_mean(par, names);
     }
     if (model && !(k->models & model))
-        return card + " " + std::to_string(num) + " is " + (model == kMohr ? "MOHR" : "ELASTIC") + ": " + par + " is not one of its parameters (" + param_list("MATERIAL", model) + ")";
+        return card + " " + std::to_string(num) + " is " + (model == kMohr ? "MOHR" : "ELASTIC") + ": " + par + " is not one of its parameters (" + joined(key_names("MATERIAL", model, false)) + ")";
     if (!in_range(*k, v, true)) return range_message(*k, v);  // before storing: it may not fit the member
     const double was = k->get(s, index);
     k->set(s, index, v);
@@ -1883,15 +1882,11 @@ private:
     void consult_model(std::size_t k, const MaterialConstants& mc, const StrainIncrement& e, double rc, double rs, Stress& s);
     // The strength of Mohr-Coulomb point k now: its own c and N_phi (Own: scatter) or its
     // material's, cohesion softened once it has yielded.
-    MohrStrength strength_of(const MaterialConstants& mc, std::size_t k) const {
-        return p_.c0.empty() ? strength_of<false>(mc, k) : strength_of<true>(mc, k);
-    }
     template <bool Own> LPFDM_INLINE MohrStrength strength_of(const MaterialConstants& mc, std::size_t k) const {
-        const bool own = Own;
-        const double c0 = own ? p_.c0[k] : mc.c;
+        const double c0 = Own ? p_.c0[k] : mc.c;
         MohrStrength st;
-        st.n_phi = own ? p_.n_phi[k] : mc.n_phi;
-        st.sqrt_n_phi = own ? p_.sqrt_n_phi[k] : mc.sqrt_n_phi;
+        st.n_phi = Own ? p_.n_phi[k] : mc.n_phi;
+        st.sqrt_n_phi = Own ? p_.sqrt_n_phi[k] : mc.sqrt_n_phi;
         st.c = p_.yielded[k] ? c0 * (1 - mc.soften) : c0;
         st.n_psi = std::min(mc.n_psi, st.n_phi);
         st.tension = mc.tension;
@@ -3075,19 +3070,28 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
 // Points that left the lattice leave the cycle; their mass becomes outflow. The order
 // of the remaining points is kept.
 inline void Simulation::remove_departed() {
-    std::size_t w = 0;
     const std::size_t n = p_.size();
+    std::int32_t* cell = p_.cell.data();
     for (std::size_t k = 0; k < n; ++k) {
-        if (p_.cell[k] < 0) {
-            // A non-finite point also lands here; keep it so the guard can name it.
-            if (std::isfinite(p_.x[k]) && std::isfinite(p_.y[k])) { mass_out_ += groups_[p_.group[k]].mass; continue; }
-            p_.cell[k] = 0;
-        }
-        if (w != k) p_.each_array([&](const char*, auto& v, Points::Use, bool) { if (!v.empty()) v[w] = v[k]; });
-        ++w;
+        if (cell[k] >= 0) continue;
+        // A non-finite point also lands here; keep it so the guard can name it.
+        if (std::isfinite(p_.x[k]) && std::isfinite(p_.y[k])) mass_out_ += groups_[p_.group[k]].mass;
+        else cell[k] = 0;
     }
-    // Shrinking keeps capacity: no allocation.
-    p_.each_array([&](const char*, auto& v, Points::Use, bool) { if (!v.empty()) v.resize(w); });
+    // Each array in turn, cell (which says who stays) last. Shrinking keeps capacity: no allocation.
+    std::size_t w = 0;
+    auto compact = [&](const char* name, auto& v, Points::Use, bool) {
+        if (v.empty() || std::strcmp(name, "cell") == 0) return;
+        w = 0;
+        for (std::size_t k = 0; k < n; ++k)
+            if (cell[k] >= 0) v[w++] = v[k];
+        v.resize(w);
+    };
+    p_.each_array(compact);
+    w = 0;
+    for (std::size_t k = 0; k < n; ++k)
+        if (cell[k] >= 0) cell[w++] = cell[k];
+    p_.cell.resize(w);
     departed_ = 0;
 }
 

@@ -27,8 +27,8 @@ using namespace lpfdm;
 namespace {
 
 // Allocations made by `steps` calls of step() (and, with profile, of the profiled step).
-long news_in_steps(const Scene& s, long steps, bool profile = false) {
-    Simulation sim(s);
+long news_in_steps(const Scene& s, long steps, bool profile = false, Kernel kernel = Kernel::Fast) {
+    Simulation sim(s, kernel);
     sim.set_profiling(profile);
     g_news = 0;
     g_counting = true;
@@ -71,6 +71,7 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
         INFO(c.deck);
         CHECK(n == 0);
         CHECK(news_in_steps(s, 20, true) == 0);  // profiled steps too
+        CHECK(news_in_steps(s, 50, false, Kernel::Reference) == 0);  // the reference cycle too
     }
     Scene s = deck("decks/cliff.deck", 200);
     s.motion = Motion::Centre;
