@@ -682,6 +682,19 @@ inline void elastic_increment(const MaterialConstants& k, const StrainIncrement&
     s.xx += ds.xx; s.yy += ds.yy; s.xy += ds.xy; s.zz += ds.zz;
 }
 
+// The energy account's one material formula: a : C^-1 : b for two stresses of the plane
+// strain state (sigma_zz included), C the isotropic elasticity of the material
+// (K = (a1 + 2 a2) / 3, G): p_a p_b / K + s_a : s_b / (2G), p the mean stress, s the
+// deviator. Half of it with a = b is the elastic energy per unit volume; with a the
+// corrected stress and b the correction a Mohr-Coulomb return removed it is the plastic
+// work per unit volume of that step (a : d_eps^p, d_eps^p = C^-1 b).
+inline double compliance_product(const MaterialConstants& k, const Stress& a, const Stress& b) {
+    const double K = (k.a1 + 2 * k.a2) / 3, G = k.G;
+    const double pa = (a.xx + a.yy + a.zz) / 3, pb = (b.xx + b.yy + b.zz) / 3;
+    const double dev = (a.xx - pa) * (b.xx - pb) + (a.yy - pa) * (b.yy - pb) + (a.zz - pa) * (b.zz - pb) + 2 * a.xy * b.xy;
+    return pa * pb / K + dev / (2 * G);
+}
+
 // The rotation of eq. 5f as an exact orthogonal matrix (Cayley form, no trigonometry):
 // the material turns by phi with tan(phi/2) = theta/2 (phi = theta to third order), so
 // the stress components turn by 2 phi. Returns (cos 2phi, sin 2phi).
@@ -1109,6 +1122,7 @@ struct Points {
     // Only when some material is Mohr-Coulomb:
     std::vector<double> plastic_shear;
     std::vector<std::uint8_t> yielded;
+    std::vector<double> plastic_work;       // work dissipated by the point's plastic returns [J/m]
     // Only when some material scatters: intact cohesion, N_phi and sqrt(N_phi) of each
     // point (the root taken once, not per step; a program that changes n_phi sets both).
     std::vector<double> c0, n_phi, sqrt_n_phi;
@@ -1134,6 +1148,7 @@ private:
         f("sxx", p.sxx, kAlways, true); f("syy", p.syy, kAlways, true); f("sxy", p.sxy, kAlways, true); f("szz", p.szz, kAlways, true);
         f("vol", p.vol, kAlways, true); f("cell", p.cell, kAlways, true); f("id", p.id, kAlways, true); f("group", p.group, kAlways, true);
         f("plastic_shear", p.plastic_shear, kPlastic, true); f("yielded", p.yielded, kPlastic, true);
+        f("plastic_work", p.plastic_work, kPlastic, true);
         f("c0", p.c0, kScatter, true); f("n_phi", p.n_phi, kScatter, true); f("sqrt_n_phi", p.sqrt_n_phi, kScatter, true);
         f("listed", p.listed, kThreads, false);
         f("carry_dx", p.carry_dx, kCarry, false); f("carry_dy", p.carry_dy, kCarry, false); f("carry_from", p.carry_from, kCarry, false);
@@ -1540,6 +1555,7 @@ public:
 
     // One LPFDM cycle (paper section 2), one function per phase.
     void step() {
+        if (step_ == 0) start_energy();
         if (profiling_) { step_profiled(); return; }
         if (kernel_ == Kernel::Reference) { step_reference(); return; }
         cell_strains();    // eq. 5a-5f
@@ -1551,6 +1567,7 @@ public:
     }
     // The same step by the reference cycle, whatever the kernel (see Kernel).
     void step_reference() {
+        if (step_ == 0) start_energy();
         reference_cell_strains();  // eq. 5a-5f
         reference_points();        // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b; eq. 7, 8
         reference_nodal_forces();  // eq. 8, virtual work transpose of eq. 5, gravity eq. 10
@@ -1616,6 +1633,32 @@ public:
     double mass_outflow() const { return mass_out_; }                 // of the points that left [kg/m]
     double mass_initial() const { return mass0_; }                    // inside + outflow, exactly
     double unbalanced_ratio() const;                                  // max unbalanced / mean gross nodal force (after step() or integrate())
+    // The energy account since the first step [J/m], every term summed in a fixed order
+    // (the same numbers with every kernel and thread count):
+    //   kinetic   of the nodes, (1/2) m du(t - dt/2) . du(t + dt/2) / dt^2: the leapfrog's
+    //             own kinetic energy, which with the strain energy at t is conserved
+    //             exactly by an undamped linear step (ke, the history's column, is
+    //             (1/2) m (du(t + dt/2) / dt)^2, half a step later);
+    //   strain    elastic energy of the points, V (1/2) sigma : C^-1 : sigma, V = min(V, m / rho)
+    //             as in eq. 8 (compliance_product), less its value before the first step;
+    //   gravity   potential energy of the points, -m g . x, less its value at the start;
+    //   w_walls, w_fixes   work the walls and the fixed nodes did on the material;
+    //   w_gravity work gravity did on the nodes (the points' potential energy moved by
+    //             eq. 7a/7b instead: gravity + w_gravity is what the mapping gains or loses);
+    //   d_damping dissipated by local damping (eq. 13, 14);
+    //   d_plastic dissipated by the plastic returns (Points::plastic_work);
+    //   error     (w_walls + w_fixes - kinetic - strain - gravity - d_damping - d_plastic)
+    //             / max(|w_walls + w_fixes|, kinetic + |strain| + |gravity|, the largest
+    //             kinetic energy so far, d_damping + d_plastic): energy the discrete cycle
+    //             created (< 0) or lost (> 0), as a fraction of the energy in play.
+    // Nodal works are trapezoidal in time (the force at t and t + dt on the increment between).
+    // Points that left the lattice keep the strain and potential energy they left with;
+    // the kinetic energy of their nodes is lost and shows in the error. A user model's
+    // dissipation is not known: its points count as elastic.
+    struct Energy {
+        double kinetic = 0, strain = 0, gravity = 0, w_walls = 0, w_fixes = 0, w_gravity = 0, d_damping = 0, d_plastic = 0, error = 0;
+    };
+    Energy energy() const;
     double reaction_x() const { return rx_; }                         // sum of fixed-node reactions [N/m]
     double reaction_y() const { return ry_; }
     int mx() const { return mx_; }                                    // cells in x
@@ -1654,6 +1697,7 @@ public:
         if (p_.plastic_shear.empty()) {
             p_.plastic_shear.assign(p_.size(), 0.0);
             p_.yielded.assign(p_.size(), 0);
+            p_.plastic_work.assign(p_.size(), 0.0);
         }
     }
 
@@ -1811,13 +1855,19 @@ private:
     // eq. 6's Mohr-Coulomb part: the return of point k's elastic trial s with its strength
     // (Own: its own c and N_phi), and its plastic shear if it yielded.
     template <bool Own> LPFDM_INLINE void mohr_consult(const MaterialConstants& mc, std::size_t k, Stress& s) {
+        const Stress trial = s;
         const MohrResult r = mohr_coulomb_return(mc, strength_of<Own>(mc, k), s);
-        if (r.mode != MohrResult::Elastic) record_yield(k, r.d_gamma_p);
+        if (r.mode != MohrResult::Elastic) record_yield(mc, k, r.d_gamma_p, trial, s);
     }
-    // Point q was returned to the yield surface with plastic shear increment d_gamma_p.
-    void record_yield(std::size_t q, double d_gamma_p) {
+    // Point q was returned from the trial stress to s with plastic shear increment
+    // d_gamma_p: its plastic shear, its yielded flag and the work its return dissipated,
+    // V s : C^-1 (trial - s), V = min(V, V0) as in eq. 8 (this step's volume: every kernel
+    // changes V before the consult).
+    void record_yield(const MaterialConstants& mc, std::size_t q, double d_gamma_p, const Stress& trial, const Stress& s) {
         p_.plastic_shear[q] += d_gamma_p;
         p_.yielded[q] = 1;  // softening takes effect from the next consult
+        const Stress b{trial.xx - s.xx, trial.yy - s.yy, trial.xy - s.xy, trial.zz - s.zz};
+        p_.plastic_work[q] += std::min(p_.vol[q], groups_[p_.group[q]].vol0) * compliance_product(mc, s, b);
     }
     void user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s);
     void carried_increments(const Range& nodes);
@@ -1965,6 +2015,28 @@ private:
     Range strained_;   // cells whose strains strain_ holds for this step (eq. 12 reads no other)
     Range live_nodes_; // nodes that may hold a non-zero du
     std::vector<WallState> walls_;
+    // The energy account (energy()): the increments eq. 13 started from (after eq. 12),
+    // the wall nodes driven this step (their damping is not applied), the running sums.
+    std::vector<double> dux_old_, duy_old_;
+    std::vector<std::uint8_t> driven_;
+    std::vector<std::int32_t> driven_nodes_;
+    struct EnergySums {
+        double w_walls = 0, w_fixes = 0, w_gravity = 0, d_damping = 0;        // force x the step's mean increment
+        double h_walls = 0, h_fixes = 0, h_gravity = 0, h_damping = 0;        // the last step's force x half its increment
+        double kinetic = 0, peak_kinetic = 0;                                 // now, and the most it was
+        double left_strain = 0, left_potential = 0, left_plastic = 0;         // of the points that left
+        double strain0 = 0, potential0 = 0;                                   // before the first step
+    } es_;
+    void start_energy();
+    void keep_increments(const Range& nodes);
+    void tally_energy(const Range& nodes);
+    // Elastic and potential energy of point k.
+    double strain_energy(std::size_t k) const {
+        const Group& g = groups_[p_.group[k]];
+        const Stress s{p_.sxx[k], p_.syy[k], p_.sxy[k], p_.szz[k]};
+        return 0.5 * std::min(p_.vol[k], g.vol0) * compliance_product(*group_consts_[p_.group[k]], s, s);
+    }
+    double potential_energy(std::size_t k) const { return -groups_[p_.group[k]].mass * (sc_.gravity_x * p_.x[k] + sc_.gravity_y * p_.y[k]); }
     long step_ = 0;
     std::size_t departed_ = 0;
     double ke_ = 0, mass_in_ = 0, mass_out_ = 0, mass0_ = 0, rx_ = 0, ry_ = 0, max_du_ = 0;
@@ -1996,8 +2068,9 @@ inline double count_points(const Scene& s) {
 inline void Simulation::setup() {
     mx_ = sc_.mx; my_ = sc_.my; L_ = sc_.cell_m; invL_ = 1 / L_;
     const std::size_t nodes = std::size_t(mx_ + 1) * (my_ + 1), cells = std::size_t(mx_) * my_;
-    for (auto* v : {&dux_, &duy_, &fx_, &fy_, &nmass_, &nmass_prev_}) v->assign(nodes, 0.0);
+    for (auto* v : {&dux_, &duy_, &fx_, &fy_, &nmass_, &nmass_prev_, &dux_old_, &duy_old_}) v->assign(nodes, 0.0);
     fixed_.assign(nodes, 0);
+    driven_.assign(nodes, 0);
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) v->assign(cells, 0.0);
     strain_.assign(cells, CellStrain{});
     auto spans = [&](int m, std::vector<Span>& v) {
@@ -2037,6 +2110,7 @@ inline void Simulation::setup() {
         node_range(w.box, i0, i1, j0, j1);
         for (int j = j0; j <= j1; ++j)
             for (int i = i0; i <= i1; ++i) { ws.base_i.push_back(i); ws.base_j.push_back(j); }
+        driven_nodes_.reserve(driven_nodes_.capacity() + ws.base_i.size());
         walls_.push_back(std::move(ws));
     }
     create_points();
@@ -2125,7 +2199,7 @@ inline void Simulation::create_points() {
                     p_.cell.push_back(cell(i, j));
                     p_.id.push_back(std::int32_t(p_.id.size()));
                     p_.group.push_back(g);
-                    if (plastic) { p_.plastic_shear.push_back(0.0); p_.yielded.push_back(0); }
+                    if (plastic) { p_.plastic_shear.push_back(0.0); p_.yielded.push_back(0); p_.plastic_work.push_back(0.0); }
                     if (!scatter) continue;
                     if (mat.scatter > 0) {
                         const double cc = rng.truncated_normal(mat.c, mat.scatter * mat.c, 0, std::numeric_limits<double>::infinity(), false);
@@ -2196,10 +2270,10 @@ inline void Simulation::reference_points() {
         const CellStrain& ce = strain_[std::size_t(c)];
         const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
         const Group& g = groups_[p_.group[k]];
+        p_.vol[k] *= 1 + e.xx + e.yy;  // V (1 + d_eps_xx + d_eps_yy)
         Stress s{p_.sxx[k], p_.syy[k], p_.sxy[k], p_.szz[k]};
         consult_model(k, *group_consts_[p_.group[k]], e, ce.rc, ce.rs, s);  // eq. 6
         p_.sxx[k] = s.xx; p_.syy[k] = s.yy; p_.sxy[k] = s.xy; p_.szz[k] = s.zz;
-        p_.vol[k] *= 1 + e.xx + e.yy;  // V (1 + d_eps_xx + d_eps_yy)
 
         // eq. 7a/7b (or MOTION CENTRE, BILINEAR); (dx, dy): the point's own increment.
         const double xi = ci * L_, yj = cj * L_, x0 = p_.x[k], y0 = p_.y[k];
@@ -2360,6 +2434,7 @@ inline void Simulation::reference_compensate() {
 // directions and moving walls; the kinetic energy summed by rows, in node order.
 inline void Simulation::reference_integrate() {
     const double dt2 = sc_.dt_s * sc_.dt_s;
+    keep_increments({0, mx_ + 1, 0, my_ + 1});  // for the energy account
     for (std::size_t n = 0; n < nmass_.size(); ++n) {
         if (nmass_[n] == 0) { dux_[n] = duy_[n] = 0; continue; }
         damped_increment(dux_[n], fx_[n], nmass_[n], dt2, sc_.damping, dux_[n]);  // eq. 13, 14
@@ -2367,6 +2442,7 @@ inline void Simulation::reference_integrate() {
     }
     integrated_ = {0, mx_ + 1, 0, my_ + 1};
     impose_supports();
+    tally_energy(integrated_);
     double ke = 0, maxdu = 0;
     for (int j = 0; j <= my_; ++j) {
         double row_ke = 0;
@@ -2846,8 +2922,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                         for (; q < qend; ++q) {
                             Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
                             trial(s.xx, s.yy, s.xy, s.zz);  // eq. 6, the elastic trial
+                            pvol[q] *= dv;  // before the consult, as everywhere (its plastic work reads V)
                             consult_point(mc, q, s, own);
-                            pvol[q] *= dv;
                         }
                     };
                     if (!p_.c0.empty()) consult(std::true_type{});  // scatter: each point's own strength
@@ -3019,7 +3095,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     for (int l = 0; l < 4; ++l) {
                         const long r = q + l;
                         if (settled >> (4 + l) & 1) {
-                            record_yield(std::size_t(r), d_gamma[l]);
+                            record_yield(mc, std::size_t(r), d_gamma[l], Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]}, Stress{xx[l], yy[l], xy[l], zz[l]});
                         } else if (!(settled >> l & 1)) {
                             consult_point(mc, r, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]}, own);
                         }
@@ -3075,8 +3151,14 @@ inline void Simulation::remove_departed() {
     for (std::size_t k = 0; k < n; ++k) {
         if (cell[k] >= 0) continue;
         // A non-finite point also lands here; keep it so the guard can name it.
-        if (std::isfinite(p_.x[k]) && std::isfinite(p_.y[k])) mass_out_ += groups_[p_.group[k]].mass;
-        else cell[k] = 0;
+        if (std::isfinite(p_.x[k]) && std::isfinite(p_.y[k])) {
+            mass_out_ += groups_[p_.group[k]].mass;
+            es_.left_strain += strain_energy(k);  // the energy account keeps what it took along
+            es_.left_potential += potential_energy(k);
+            if (!p_.plastic_work.empty()) es_.left_plastic += p_.plastic_work[k];
+        } else {
+            cell[k] = 0;
+        }
     }
     // Each array in turn, cell (which says who stays) last. Shrinking keeps capacity: no allocation.
     std::size_t w = 0;
@@ -3404,6 +3486,7 @@ inline void Simulation::carried_row(int j, int i0, int i1) {
 inline void Simulation::integrate() {
     const Range nodes_now{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     const Range nr = nodes_now.unite(live_nodes_);
+    keep_increments(nr);
     const double dt2 = sc_.dt_s * sc_.dt_s, alpha = sc_.damping;
     double ke = 0, maxdu = 0;
     const int mx = mx_;
@@ -3440,6 +3523,7 @@ inline void Simulation::integrate() {
     by_rows(kAdvanceRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(advance_row, j); });
     integrated_ = nr;
     const Range wall_nodes = impose_supports();
+    tally_energy(nr);
     double *row_ke_of = row_ke_.data(), *row_du_of = row_du_.data();
     // The kinetic energy of row j, summed in node order, and its largest increment (nodes
     // with mass only); four nodes' terms at a time in the lanes of a vector.
@@ -3490,11 +3574,27 @@ inline void Simulation::integrate() {
 // force they cancel). Returns the nodes the walls drove.
 inline Range Simulation::impose_supports() {
     rx_ = ry_ = 0;
+    const double dt2 = sc_.dt_s * sc_.dt_s;
+    // The work a support does in one direction of node n, holding it at c where eq. 13 began
+    // from b: its force S = m (c - b) / dt^2 - F on the step's mean increment (b + c) / 2.
+    auto support_work = [&](std::size_t n, double b, double c, double f, double& w, double& h) {
+        const double m = nmass_[n];
+        if (m == 0) return;
+        const double S = m * (c - b) / dt2 - f;
+        w += 0.5 * S * (b + c);
+        h += 0.5 * S * c;
+    };
+    double hf = 0;
     for (const std::int32_t n : fixed_nodes_) {
-        if (fixed_[n] & kFixX) { dux_[n] = 0; rx_ -= fx_[n]; }
-        if (fixed_[n] & kFixY) { duy_[n] = 0; ry_ -= fy_[n]; }
+        const std::size_t u = std::size_t(n);
+        if (fixed_[u] & kFixX) { dux_[u] = 0; rx_ -= fx_[u]; support_work(u, dux_old_[u], 0.0, fx_[u], es_.w_fixes, hf); }
+        if (fixed_[u] & kFixY) { duy_[u] = 0; ry_ -= fy_[u]; support_work(u, duy_old_[u], 0.0, fy_[u], es_.w_fixes, hf); }
     }
+    es_.h_fixes = hf;
+    for (const std::int32_t n : driven_nodes_) driven_[std::size_t(n)] = 0;
+    driven_nodes_.clear();  // capacity reserved at set-up: no allocation
     Range wall_nodes{};
+    double hw = 0;
     for (std::size_t w = 0; w < walls_.size(); ++w) {
         WallState& ws = walls_[w];
         const Wall& spec = sc_.walls[w];
@@ -3503,8 +3603,18 @@ inline Range Simulation::impose_supports() {
             const int i = ws.base_i[q] + ws.shift_i, j = ws.base_j[q] + ws.shift_j;
             if (i < 0 || j < 0 || i > mx_ || j > my_) continue;
             const int n = node(i, j);
-            if (!(fixed_[n] & kFixX)) { dux_[n] = spec.vx * sc_.dt_s; ws.fx -= fx_[n]; }
-            if (!(fixed_[n] & kFixY)) { duy_[n] = spec.vy * sc_.dt_s; ws.fy -= fy_[n]; }
+            const std::size_t u = std::size_t(n);
+            if (!(fixed_[u] & kFixX)) {
+                dux_[u] = spec.vx * sc_.dt_s; ws.fx -= fx_[u];
+                support_work(u, dux_old_[u], dux_[u], fx_[u], es_.w_walls, hw);
+                driven_[u] |= kFixX;
+            }
+            if (!(fixed_[u] & kFixY)) {
+                duy_[u] = spec.vy * sc_.dt_s; ws.fy -= fy_[u];
+                support_work(u, duy_old_[u], duy_[u], fy_[u], es_.w_walls, hw);
+                driven_[u] |= kFixY;
+            }
+            driven_nodes_.push_back(n);
             wall_nodes = wall_nodes.unite({i, i + 1, j, j + 1});
         }
         // Travel after this increment; whole cells travelled move the wall to the next line.
@@ -3512,7 +3622,82 @@ inline Range Simulation::impose_supports() {
         ws.shift_i = int(std::trunc(ws.dx * invL_ * (1 + 1e-12)));
         ws.shift_j = int(std::trunc(ws.dy * invL_ * (1 + 1e-12)));
     }
+    es_.h_walls = hw;
     return wall_nodes;
+}
+
+// The increments eq. 13 starts from, at the nodes it will visit (the energy account).
+inline void Simulation::keep_increments(const Range& nodes) {
+    if (nodes.empty()) return;
+    for (int j = nodes.j0; j < nodes.j1; ++j) {
+        const std::size_t a = std::size_t(node(nodes.i0, j)), b = std::size_t(node(nodes.i1 - 1, j)) + 1;
+        std::copy(dux_.begin() + long(a), dux_.begin() + long(b), dux_old_.begin() + long(a));
+        std::copy(duy_.begin() + long(a), duy_.begin() + long(b), duy_old_.begin() + long(a));
+    }
+}
+
+// The energy account of one step at every node with mass, in node order, after the
+// supports were imposed: the kinetic energy (b . c), the work of gravity, and the
+// dissipation of the damping eq. 13 applied (free directions only), each as force x the
+// mean increment (b + c) / 2, and force x c / 2 (energy() takes it off: trapezoidal sums).
+inline void Simulation::tally_energy(const Range& nodes) {
+    const double dt2 = sc_.dt_s * sc_.dt_s, gx = sc_.gravity_x, gy = sc_.gravity_y, alpha = sc_.damping;
+    double kin = 0, wg = 0, hg = 0, wd = 0, hd = 0;
+    auto damping = [&](double b, double c, double f) {
+        const double D = alpha * std::fabs(f) * (b > 0 ? 1.0 : b < 0 ? -1.0 : 0.0);  // eq. 14
+        wd += 0.5 * D * (b + c);
+        hd += 0.5 * D * c;
+    };
+    for (int j = nodes.j0; j < nodes.j1; ++j)
+        for (int i = nodes.i0; i < nodes.i1; ++i) {
+            const std::size_t n = std::size_t(node(i, j));
+            const double m = nmass_[n];
+            if (m == 0) continue;
+            const double bx = dux_old_[n], by = duy_old_[n], cx = dux_[n], cy = duy_[n];
+            kin += m * (bx * cx + by * cy);
+            wg += 0.5 * m * (gx * (bx + cx) + gy * (by + cy));
+            hg += 0.5 * m * (gx * cx + gy * cy);
+            if (alpha > 0) {
+                const std::uint8_t held = fixed_[n] | driven_[n];
+                if (!(held & kFixX)) damping(bx, cx, fx_[n]);
+                if (!(held & kFixY)) damping(by, cy, fy_[n]);
+            }
+        }
+    es_.kinetic = 0.5 * kin / dt2;
+    es_.peak_kinetic = std::max(es_.peak_kinetic, es_.kinetic);
+    es_.w_gravity += wg; es_.h_gravity = hg;
+    es_.d_damping += wd; es_.h_damping = hd;
+}
+
+// The strain and potential energy of the points before the first step (they may have
+// been given an initial stress after the Simulation was made).
+inline void Simulation::start_energy() {
+    double e = 0, v = 0;
+    for (std::size_t k = 0; k < p_.size(); ++k) { e += strain_energy(k); v += potential_energy(k); }
+    es_.strain0 = e;
+    es_.potential0 = v;
+}
+
+inline Simulation::Energy Simulation::energy() const {
+    double strain = 0, potential = 0, plastic = 0;
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        strain += strain_energy(k);
+        potential += potential_energy(k);
+        if (!p_.plastic_work.empty()) plastic += p_.plastic_work[k];
+    }
+    Energy e;
+    e.kinetic = es_.kinetic;
+    e.strain = strain + es_.left_strain - es_.strain0;
+    e.gravity = potential + es_.left_potential - es_.potential0;
+    e.w_walls = es_.w_walls - es_.h_walls;
+    e.w_fixes = es_.w_fixes - es_.h_fixes;
+    e.w_gravity = es_.w_gravity - es_.h_gravity;
+    e.d_damping = es_.d_damping - es_.h_damping;
+    e.d_plastic = plastic + es_.left_plastic;
+    const double in = e.w_walls + e.w_fixes;
+    const double scale = std::max({std::fabs(in), e.kinetic + std::fabs(e.strain) + std::fabs(e.gravity), es_.peak_kinetic, e.d_damping + e.d_plastic});
+    e.error = scale > 0 ? (in - e.kinetic - e.strain - e.gravity - e.d_damping - e.d_plastic) / scale : 0.0;
+    return e;
 }
 
 // The largest unbalanced force (free directions) over the mean gross force of the nodes
@@ -4058,7 +4243,10 @@ inline void write_history_header(std::FILE* f, const Simulation& sim, const std:
     fmt::print(f, "# unbal = max unbalanced nodal force / mean gross nodal force; rx ry = reactions of the fixed nodes\n");
     std::string h = "# step time ke mass_in mass_out";
     for (const auto& w : sim.scene().walls) h += fmt::format(" w{0}_fx w{0}_fy w{0}_dx w{0}_dy", w.id);
-    fmt::print(f, "{} unbal rx ry\n", h);
+    fmt::print(f, "#   energy [J/m] since the start (Simulation::energy): e_kin kinetic (leapfrog), e_strain elastic, e_grav potential of the points;\n");
+    fmt::print(f, "#   w_walls w_fixes w_gravity work done on the material; d_damping d_plastic dissipated;\n");
+    fmt::print(f, "#   energy_error = (work in - stored - dissipated) / (energy in play), work in = w_walls + w_fixes\n");
+    fmt::print(f, "{} unbal rx ry e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error\n", h);
 }
 
 inline void write_history_row(std::FILE* f, const Simulation& sim) {
@@ -4066,7 +4254,10 @@ inline void write_history_row(std::FILE* f, const Simulation& sim) {
     fmt::format_to(std::back_inserter(b), "{} {:.9g} {:.9g} {:.17g} {:.17g}", sim.step_count(), sim.time(), sim.kinetic_energy(), sim.mass_inside(),
                    sim.mass_outflow());
     for (const auto& w : sim.walls()) fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g}", w.fx, w.fy, w.dx, w.dy);
-    fmt::format_to(std::back_inserter(b), " {:.6g} {:.9g} {:.9g}\n", sim.unbalanced_ratio(), sim.reaction_x(), sim.reaction_y());
+    fmt::format_to(std::back_inserter(b), " {:.6g} {:.9g} {:.9g}", sim.unbalanced_ratio(), sim.reaction_x(), sim.reaction_y());
+    const Simulation::Energy e = sim.energy();
+    fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.6g}\n", e.kinetic, e.strain, e.gravity, e.w_walls,
+                   e.w_fixes, e.w_gravity, e.d_damping, e.d_plastic, e.error);
     std::fwrite(b.data(), 1, b.size(), f);
 }
 #endif  // LPFDM_NO_IO
