@@ -1,0 +1,118 @@
+// The energy account (Simulation::energy, the history's energy columns) against known
+// answers: free fall (potential into kinetic, exactly), an undamped elastic column ringing
+// under its own weight (conserved to the discretisation), confined compression by a wall
+// (the wall's work into strain energy M eps^2 / 2 per unit volume), and plane-strain
+// compression of Mohr-Coulomb soil (the wall's work dissipated by the plastic returns).
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../lpfdm.hpp"
+
+using namespace lpfdm;
+
+namespace {
+
+// The largest |energy_error| over the samples taken every `every` steps of `steps` steps.
+double worst_error(Simulation& sim, long steps, long every) {
+    double worst = 0;
+    for (long n = 1; n <= steps; ++n) {
+        sim.step();
+        if (n % every == 0) worst = std::max(worst, std::fabs(sim.energy().error));
+    }
+    return worst;
+}
+
+}  // namespace
+
+TEST_CASE("energy: a free fall turns potential energy into kinetic energy, exactly") {
+    Scene s;
+    REQUIRE(read_deck("decks/freefall.deck", s).empty());
+    Simulation sim(s);
+    for (int n = 0; n < 2000; ++n) sim.step();  // 0.5 s: still in the air (contact at 0.608 s)
+    const Simulation::Energy e = sim.energy();
+    // The block of 2000 kg/m has fallen g t (t - dt) / 2 (see the deck): its potential
+    // energy went down by m g times that, and the leapfrog's kinetic energy rose by as much.
+    const double m = 2000, g = 9.81, t = 0.5, dt = 2.5e-4;
+    const double fall = g * t * (t - dt) / 2;
+    CHECK(e.gravity == doctest::Approx(-m * g * fall).epsilon(1e-12));
+    CHECK(e.kinetic == doctest::Approx(m * g * fall).epsilon(1e-12));
+    CHECK(e.w_gravity == doctest::Approx(m * g * fall).epsilon(1e-12));
+    CHECK(std::fabs(e.strain) < 1e-20 * e.kinetic);  // no stress while falling (round-off only)
+    CHECK(std::fabs(e.error) < 1e-12);
+}
+
+TEST_CASE("energy: an undamped elastic column ringing under its own weight keeps its energy") {
+    Scene s;
+    REQUIRE(read_deck("decks/verify_ringing.deck", s).empty());  // no damping, 1.4 s: four periods
+    Simulation sim(s);
+    const double worst = worst_error(sim, s.steps, 10);
+    const Simulation::Energy e = sim.energy();
+    MESSAGE("ringing column: largest |energy_error| " << worst << "; kinetic " << e.kinetic << ", strain " << e.strain << ", gravity " << e.gravity);
+    // The points' potential energy and the nodes' gravity work differ by the mapping (the
+    // points move by eq. 7a about node [1]); the error stays under a percent of the energy
+    // in play (about 8 kJ/m) through four periods.
+    CHECK(worst < 0.01);
+    CHECK(e.w_walls == 0.0);
+    CHECK(e.d_damping == 0.0);
+    CHECK(e.d_plastic == 0.0);
+    // Static answer at the mean of the oscillation: strain energy gamma^2 H^3 / (6 M) W.
+    // Peak strain energy is four times the static one (twice the strain), reached every period.
+}
+
+TEST_CASE("energy: a wall's work in confined compression is the strain energy M eps^2 / 2 per unit volume") {
+    Scene s;
+    s.mx = 10; s.my = 24; s.cell_m = 0.1;
+    s.materials.push_back(Material::elastic(1, 1e7, 0.3, 1000));
+    s.clusters.push_back({1, {0, 0, 1, 2}, 2, {}});
+    s.fixes.push_back({kFixX, {0, 0.05, 0, 1.95}, {}});  // smooth sides
+    s.fixes.push_back({kFixX, {1, 0.05, 1, 1.95}, {}});
+    s.fixes.push_back({kFixX | kFixY, {0, 0, 1, 0}, {}});  // rough base
+    s.walls.push_back({1, {0, 2, 1, 2}, 0, -0.005, {}});  // the top line of nodes, down at 5 mm/s
+    s.damping = 0.8; s.dt_s = 4e-4; s.steps = 1;
+    Simulation sim(s);
+    for (int n = 0; n < 1000; ++n) sim.step();  // 2 mm: a strain of 1e-3
+    sim.set_wall_velocity(1, 0, 0);
+    for (int n = 0; n < 3000; ++n) sim.step();  // at rest
+    const Simulation::Energy e = sim.energy();
+    const Material& m = s.materials[0];
+    const double M = m.E * (1 - m.nu) / ((1 + m.nu) * (1 - 2 * m.nu)), W = 1, H = 2;
+    const double eps = -sim.walls()[0].dy / H;
+    MESSAGE("strain energy " << e.strain << " J/m, M eps^2 W H / 2 = " << 0.5 * M * eps * eps * W * H << "; wall work " << e.w_walls
+                              << ", damping " << e.d_damping << ", error " << e.error);
+    // Oedometric: sigma_yy = M eps everywhere (sigma_xx = sigma_zz = lambda eps), so the
+    // elastic energy is M eps^2 / 2 per unit volume: 2 % covers the discretisation, as the
+    // wall-force test of tests/test_walls.cpp.
+    CHECK(e.strain == doctest::Approx(0.5 * M * eps * eps * W * H).epsilon(0.02));
+    // The wall did that work and what damping took: the account closes.
+    CHECK(e.w_walls == doctest::Approx(e.strain + e.kinetic + e.d_damping).epsilon(1e-3));
+    CHECK(std::fabs(e.error) < 1e-3);
+    // The base and sides do not move: only the increments eq. 12 gives fixed nodes that
+    // gained mass (and the supports take back) do work there.
+    CHECK(std::fabs(e.w_fixes) < 1e-6 * e.w_walls);
+}
+
+TEST_CASE("energy: in plane-strain compression the wall's work goes into plastic dissipation") {
+    Scene s;
+    REQUIRE(read_deck("decks/verify_psc.deck", s).empty());
+    Simulation sim(s);
+    const long steps = 10000;  // 0.24 s: 1.2 % axial strain, well past the peak at ~0.3 %
+    const double worst = worst_error(sim, steps, 100);
+    const Simulation::Energy e = sim.energy();
+    MESSAGE("PSC: wall work " << e.w_walls << ", plastic " << e.d_plastic << ", strain " << e.strain << ", damping " << e.d_damping
+                              << "; largest |energy_error| " << worst);
+    CHECK(worst < 0.01);
+    // Once the specimen flows at its limit load, nearly all the wall's work is dissipated by
+    // plasticity; the elastic energy stays near its value at the peak.
+    CHECK(e.d_plastic > 0.7 * e.w_walls);
+    CHECK(e.d_plastic < e.w_walls);
+    // At the peak q = 2c tan(45 + phi/2) over the width W = 0.1 m, the work rate is q W v:
+    // the dissipation of the last 100 steps matches the wall's force x its travel.
+    const double d0 = e.d_plastic, w0 = e.w_walls, f0 = sim.walls()[0].fy;
+    for (int n = 0; n < 500; ++n) sim.step();
+    const Simulation::Energy e1 = sim.energy();
+    const double travel = 500 * s.dt_s * 0.001;
+    CHECK(e1.w_walls - w0 == doctest::Approx(-0.5 * (f0 + sim.walls()[0].fy) * travel).epsilon(0.05));
+    CHECK(e1.d_plastic - d0 == doctest::Approx(e1.w_walls - w0).epsilon(0.05));
+}
