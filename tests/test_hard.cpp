@@ -878,11 +878,10 @@ Push push_wall(long rest) {
         }
         // The wall's own nodes are part of the driver: their kinetic energy is handed to them
         // by the prescription, not by the force; leave it out of the soil's energy.
+        // (Both lines of nodes while the wall's face lies between them: driven_nodes.)
         double wall_ke = 0;
-        for (std::size_t q = 0; q < w.base_i.size(); ++q) {
-            const int i = w.base_i[q] + w.shift_i, j = w.base_j[q] + w.shift_j;
-            if (i < 0 || j < 0 || i > s.mx || j > s.my) continue;
-            const std::size_t n = std::size_t(sim.node(i, j));
+        for (const std::int32_t m : sim.driven_nodes()) {
+            const std::size_t n = std::size_t(m);
             wall_ke += 0.5 * sim.node_mass()[n] * (e.px[n] * sim.du_x()[n] + e.py[n] * sim.du_y()[n]) / (s.dt_s * s.dt_s);
         }
         if (k == 0) base = e.last - wall_ke;

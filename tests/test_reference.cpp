@@ -183,6 +183,9 @@ TEST_CASE("the options no shipped deck uses, on a flowing column and a hopper: t
         Scene h = base;
         h.hourglass = 0.05;
         compare_kernels(std::string(deck) + " HOURGLASS", h, steps);
+        Scene m = base;  // (every kernel runs the reference cycle for it: this guards a fast version to come)
+        m.mapping = Mapping::Smooth;
+        compare_kernels(std::string(deck) + " MAPPING SMOOTH", m, steps);
     }
 }
 
