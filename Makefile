@@ -19,7 +19,7 @@ help:
 	@echo "make demo     build and run the collapsing cliff, draw $(OUT)/cliff.png and $(OUT)/cliff.gif"
 	@echo "make test     unit tests (-O2 and ASan+UBSan) and deck tests"
 	@echo "make figures  run the paper's three scenes and draw them into $(OUT)/"
-	@echo "make verify   verification ladder: out/verify.tsv, work-precision and convergence plots"
+	@echo "make verify   verification ladder (both mappings for column, PSC, footing): out/verify.tsv, work-precision and convergence plots"
 	@echo "make fuzz     fuzz the deck reader with libFuzzer (FUZZ_SECONDS, default 1800)"
 	@echo "make bench    particle-steps/s on the benchmark scenes, 1 and 2 threads, against the plain loop"
 	@echo "make clean    remove what the build made"
@@ -90,6 +90,7 @@ demo: lpfdm
 verify: lpfdm
 	@mkdir -p $(OUT)
 	bash tools/verify.sh ./lpfdm $(OUT)
+	VERIFY_MAPPING=SMOOTH VERIFY_APPEND=1 bash tools/verify.sh ./lpfdm $(OUT) column psc footing
 
 # Speed on the named benchmark scenes (decks/bench_*.deck), with the plain loop beside it.
 bench: lpfdm

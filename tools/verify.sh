@@ -22,6 +22,9 @@
 #                    another job holds makes a shared machine's times erratic)
 #   VERIFY_APPEND=1  add rows to an existing OUT/verify.tsv (e.g. after one case) instead
 #                    of starting it anew; orders and pictures are made from all its rows
+#   VERIFY_MAPPING=SMOOTH  run each deck with MAPPING SMOOTH (a copy of the deck with the
+#                    card added); the rows' cases end in _smooth (make verify runs the
+#                    column, PSC and footing both ways, for the work-precision diagram)
 # A run is timed from the program's own summary line (the time of the steps and of the
 # output written during them, without start-up); the cut's time is the sum of its
 # bisection runs, each timed once; the hopper's the sum of its four slot widths.
@@ -36,8 +39,11 @@ threads=${VERIFY_THREADS:-1}
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
 decks=$root/decks
-work=$out/verify
-mkdir -p "$work"
+mapping=${VERIFY_MAPPING:-PAPER}
+suffix=$([ "$mapping" = PAPER ] || echo "_$(tr 'A-Z' 'a-z' <<<"$mapping")")
+ladders=$out/verify
+work=$out/verify$suffix
+mkdir -p "$work" "$ladders"
 tsv=$out/verify.tsv
 command -v "$exe" >/dev/null 2>&1 || [ -x "$exe" ] || { echo "verify: no program $exe" >&2; exit 2; }
 if [ ! -s "$tsv" ] || [ "${VERIFY_APPEND:-0}" = 0 ]; then
@@ -56,6 +62,10 @@ run() {
     local dir=$1 deck=$2; shift 2
     local line walls=() cpus=() k n times=${RUN_TIMES:-$repeat} TIMEFORMAT='%U %S'
     mkdir -p "$dir"
+    if [ "$mapping" != PAPER ]; then  # the deck with a MAPPING card (before END, if any)
+        awk -v m="MAPPING $mapping" '/^[ \t]*[Ee][Nn][Dd]([ \t!]|$)/ && !done { print m; done = 1 } { print } END { if (!done) print m }' "$deck" >"$dir/$(basename "$deck")"
+        deck=$dir/$(basename "$deck")
+    fi
     for ((k = 0; k < times; k++)); do
         { time "$exe" --threads "$threads" -o "$dir" "$@" "$deck" >"$dir/stdout.txt" 2>"$dir/stderr.txt"; } 2>"$dir/time.txt"
         line=$(grep '^lpfdm: [0-9]* steps' "$dir/stdout.txt")
@@ -80,10 +90,10 @@ run() {
 # row CASE CELLS PPC STEPS WALL PSTEPS MEASURED REFERENCE [ERROR]
 # (error default: measured / reference - 1; CPU time from $CPU)
 row() {
-    awk -v c="$1" -v n="$2" -v p="$3" -v s="$4" -v w="$5" -v ps="$6" -v m="$7" -v r="$8" -v e="${9:-}" -v cpu="$CPU" 'BEGIN {
+    awk -v c="$1$suffix" -v n="$2" -v p="$3" -v s="$4" -v w="$5" -v ps="$6" -v m="$7" -v r="$8" -v e="${9:-}" -v cpu="$CPU" 'BEGIN {
         if (e == "") e = (m == "nan" || r == 0) ? "nan" : m / r - 1
         printf "%s\t%d\t%d\t%d\t%.4g\t%.4g\t%.7g\t%.7g\t%.4g\t%.4g\n", c, n, p, s, w, (w > 0 ? ps / w : 0), m, r, e, cpu }' >>"$tsv"
-    printf '%-22s cells %3d  ppc %d  %8.2f s  measured %-12s reference %-12s error %s\n' "$1" "$2" "$3" "$5" "$7" "$8" \
+    printf '%-22s cells %3d  ppc %d  %8.2f s  measured %-12s reference %-12s error %s\n' "$1$suffix" "$2" "$3" "$5" "$7" "$8" \
         "$(tail -1 "$tsv" | cut -f9)"
 }
 
@@ -279,13 +289,13 @@ awk -F'\t' 'NR > 1 {
 
 if command -v gnuplot >/dev/null 2>&1; then
     # One data block per case (two points per cell only: the refinement ladder).
-    awk -F'\t' 'NR > 1 && $3 == 2 { e = ($9 < 0 ? -$9 : $9); if (e > 0) print $1, $2, $5, e, $7 > (dir "/ladder_" $1 ".dat") }' dir="$work" "$tsv"
+    awk -F'\t' 'NR > 1 && $3 == 2 { e = ($9 < 0 ? -$9 : $9); if (e > 0) print $1, $2, $5, e, $7 > (dir "/ladder_" $1 ".dat") }' dir="$ladders" "$tsv"
     # Left out of the two diagrams: the collapse (no exact reference; it has its own picture)
     # and the stiff column's settlement (its error is below the point table's 9 digits).
     list=$(awk -F'\t' 'NR > 1 && $3 == 2 && $1 !~ /^collapse|^column_stiff_settlement/ && !s[$1]++ { printf "%s ", $1 }' "$tsv")
     orders=$(awk -F'\t' 'NR > 1 && $2 == 2 && $1 !~ /_self$/ { o[$1] = $5 } END { for (k in o) printf "%s=%s ", k, o[k] }' "$out/verify_orders.tsv")
-    gnuplot -e "dir='$work'; cases='$list'; orders='$orders'; out='$out/verify_work_precision.png'" "$here/verify_work_precision.gp"
-    gnuplot -e "dir='$work'; cases='$list'; orders='$orders'; out='$out/verify_convergence.png'" "$here/verify_convergence.gp"
+    gnuplot -e "dir='$ladders'; cases='$list'; orders='$orders'; out='$out/verify_work_precision.png'" "$here/verify_work_precision.gp"
+    gnuplot -e "dir='$ladders'; cases='$list'; orders='$orders'; out='$out/verify_convergence.png'" "$here/verify_convergence.gp"
     [ "$(wc -l <"$out/verify_collapse.tsv")" -gt 1 ] && gnuplot -e "in='$out/verify_collapse.tsv'; out='$out/verify_runout.png'" "$here/verify_runout.gp"
     [ "$(wc -l <"$out/verify_hopper.tsv")" -gt 1 ] && gnuplot -e "in='$out/verify_hopper.tsv'; out='$out/verify_hopper.png'" "$here/verify_hopper.gp"
 else
