@@ -2113,7 +2113,10 @@ private:
     } es_;
     void start_energy();
     void keep_increments(const Range& nodes);
-    void tally_energy(const Range& nodes);
+    struct RowEnergy { double kin = 0, sbx = 0, sby = 0, scx = 0, scy = 0, wd = 0, hd = 0; };
+    std::vector<RowEnergy> row_energy_;  // per node row: the energy account's sums (energy_row_terms)
+    template <class Wide> LPFDM_INLINE void energy_row_terms(int j, int i0, int i1, Wide);
+    void tally_energy(int j0, int j1);
     // Elastic and potential energy of point k.
     double strain_energy(std::size_t k) const {
         const Group& g = groups_[p_.group[k]];
@@ -2235,6 +2238,7 @@ inline void Simulation::setup() {
 #endif
     row_ke_.assign(std::size_t(my_ + 1), 0.0);
     row_du_.assign(std::size_t(my_ + 1), 0.0);
+    row_energy_.assign(std::size_t(my_ + 1), RowEnergy{});
     row_gained_.assign(std::size_t(my_ + 1), 0);
     map_to_lattice();
     strained_ = occupied_.grow(2, mx_, my_);
@@ -2631,7 +2635,8 @@ inline void Simulation::reference_integrate() {
     }
     integrated_ = {0, mx_ + 1, 0, my_ + 1};
     impose_supports();
-    tally_energy(integrated_);
+    for (int j = 0; j <= my_; ++j) energy_row_terms(j, 0, mx_ + 1, std::false_type{});
+    tally_energy(0, my_ + 1);
     double ke = 0, maxdu = 0;
     for (int j = 0; j <= my_; ++j) {
         double row_ke = 0;
@@ -3726,7 +3731,6 @@ inline void Simulation::integrate() {
     by_rows(kAdvanceRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(advance_row, j); });
     integrated_ = nr;
     const Range wall_nodes = impose_supports();
-    tally_energy(nr);
     double *row_ke_of = row_ke_.data(), *row_du_of = row_du_.data();
     // The kinetic energy of row j, summed in node order, and its largest increment (nodes
     // with mass only); four nodes' terms at a time in the lanes of a vector.
@@ -3761,6 +3765,7 @@ inline void Simulation::integrate() {
         }
         row_ke_of[j] = row_ke;
         row_du_of[j] = row_du;
+        energy_row_terms(j, nr.i0, nr.i1, wide);  // the energy account's terms of the row
     };
     by_rows(kEnergyRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(energy_row, j); });
     for (int j = nr.j0; j < nr.j1; ++j) {
@@ -3769,6 +3774,7 @@ inline void Simulation::integrate() {
     }
     ke_ = ke / dt2;
     max_du_ = maxdu;
+    if (!nr.empty()) tally_energy(nr.j0, nr.j1);
     live_nodes_ = nodes_now.unite(wall_nodes);
 }
 
@@ -3931,37 +3937,93 @@ inline void Simulation::keep_increments(const Range& nodes) {
     }
 }
 
-// The energy account of one step at every node with mass, in node order, after the
-// supports were imposed: the kinetic energy (b . c), the work of gravity, and the
+// The energy account of one step, after the supports were imposed: per row of nodes
+// (energy_row_terms) the leapfrog's kinetic energy (b . c), gravity's work and the
 // dissipation of the damping eq. 13 applied (free directions only), each as force x the
-// mean increment (b + c) / 2, and force x c / 2 (energy() takes it off: trapezoidal sums).
-inline void Simulation::tally_energy(const Range& nodes) {
-    const double dt2 = sc_.dt_s * sc_.dt_s, gx = sc_.gravity_x, gy = sc_.gravity_y, alpha = sc_.damping;
-    double kin = 0, wg = 0, hg = 0, wd = 0, hd = 0;
-    auto damping = [&](double b, double c, double f) {
-        const double D = alpha * std::fabs(f) * (b > 0 ? 1.0 : b < 0 ? -1.0 : 0.0);  // eq. 14
-        wd += 0.5 * D * (b + c);
-        hd += 0.5 * D * c;
+// mean increment (b + c) / 2 and force x c / 2 (energy() takes the latter off: trapezoidal
+// sums); then the rows in order.
+
+// Row j's terms, nodes i0 .. i1-1: each sum kept in four parts, node i's terms going to
+// part i % 4, the parts added at the end; four nodes at a time in the lanes of a vector
+// when Wide (the lanes are the parts), one at a time otherwise: the same bits either way.
+// A node without mass adds exact zeros, so every kernel gets the same sums whatever
+// columns it visits.
+template <class Wide> inline void Simulation::energy_row_terms(int j, int i0, int i1, Wide) {
+    const double *nm = nmass_.data(), *bxs = dux_old_.data(), *bys = duy_old_.data(), *cxs = dux_.data(), *cys = duy_.data();
+    const double *fxs = fx_.data(), *fys = fy_.data();
+    const bool damped = sc_.damping > 0;
+    const int row = node(0, j);
+    double part[7][4] = {};  // kin sbx sby scx scy wd hd, by i % 4
+    auto one_node = [&](int i) {
+        const int n = row + i, l = i & 3;
+        const double m = nm[n], bx = bxs[n], by = bys[n], cx = cxs[n], cy = cys[n];
+        part[0][l] += m * (bx * cx + by * cy);
+        part[1][l] += m * (bx + cx); part[2][l] += m * (by + cy);
+        part[3][l] += m * cx; part[4][l] += m * cy;
+        if (damped) {  // eq. 14's force |F| sgn(b), every direction (tally_energy takes the held ones off)
+            const double dx = std::fabs(fxs[n]) * double((bx > 0) - (bx < 0)), dy = std::fabs(fys[n]) * double((by > 0) - (by < 0));
+            part[5][l] += dx * (bx + cx) + dy * (by + cy);
+            part[6][l] += dx * cx + dy * cy;
+        }
     };
-    for (int j = nodes.j0; j < nodes.j1; ++j)
-        for (int i = nodes.i0; i < nodes.i1; ++i) {
-            const std::size_t n = std::size_t(node(i, j));
-            const double m = nmass_[n];
-            if (m == 0) continue;
-            const double bx = dux_old_[n], by = duy_old_[n], cx = dux_[n], cy = duy_[n];
-            kin += m * (bx * cx + by * cy);
-            wg += 0.5 * m * (gx * (bx + cx) + gy * (by + cy));
-            hg += 0.5 * m * (gx * cx + gy * cy);
-            if (alpha > 0) {
-                const std::uint8_t held = fixed_[n] | driven_[n];
-                if (!(held & kFixX)) damping(bx, cx, fx_[n]);
-                if (!(held & kFixY)) damping(by, cy, fy_[n]);
+    int i = i0;
+#if LPFDM_WIDE
+    if constexpr (Wide::value) {
+        using detail::v4d;
+        for (; i < i1 && (i & 3); ++i) one_node(i);
+        v4d acc[7];
+        for (int k = 0; k < 7; ++k) acc[k] = v4d{part[k][0], part[k][1], part[k][2], part[k][3]};
+        const v4d one = {1, 1, 1, 1}, zero{};
+        for (; i + 4 <= i1; i += 4) {
+            const int n = row + i;
+            v4d m, bx, by, cx, cy;
+            detail::load(nm + n, m); detail::load(bxs + n, bx); detail::load(bys + n, by); detail::load(cxs + n, cx); detail::load(cys + n, cy);
+            acc[0] += m * (bx * cx + by * cy);
+            acc[1] += m * (bx + cx); acc[2] += m * (by + cy);
+            acc[3] += m * cx; acc[4] += m * cy;
+            if (damped) {
+                v4d fx, fy, ax, ay;
+                detail::load(fxs + n, fx); detail::load(fys + n, fy);
+                detail::abs_of(fx, ax); detail::abs_of(fy, ay);
+                const v4d sx = (bx > zero ? one : zero) - (bx < zero ? one : zero), sy = (by > zero ? one : zero) - (by < zero ? one : zero);
+                const v4d dx = ax * sx, dy = ay * sy;
+                acc[5] += dx * (bx + cx) + dy * (by + cy);
+                acc[6] += dx * cx + dy * cy;
             }
         }
-    es_.kinetic = 0.5 * kin / dt2;
+        for (int k = 0; k < 7; ++k)
+            for (int l = 0; l < 4; ++l) part[k][l] = acc[k][l];
+    }
+#endif
+    for (; i < i1; ++i) one_node(i);
+    double sum[7];
+    for (int k = 0; k < 7; ++k) sum[k] = ((part[k][0] + part[k][1]) + part[k][2]) + part[k][3];
+    row_energy_[std::size_t(j)] = RowEnergy{sum[0], sum[1], sum[2], sum[3], sum[4], sum[5], sum[6]};
+}
+
+// The rows j0 .. j1-1 of energy_row_terms, in order, into the running sums.
+inline void Simulation::tally_energy(int j0, int j1) {
+    const double dt2 = sc_.dt_s * sc_.dt_s, gx = sc_.gravity_x, gy = sc_.gravity_y, alpha = sc_.damping;
+    RowEnergy t;
+    for (int j = j0; j < j1; ++j) {
+        const RowEnergy& r = row_energy_[std::size_t(j)];
+        t.kin += r.kin; t.sbx += r.sbx; t.sby += r.sby; t.scx += r.scx; t.scy += r.scy; t.wd += r.wd; t.hd += r.hd;
+    }
+    // The rows counted damping on every direction; the fixed and driven ones had none.
+    auto held_off = [&](std::size_t n, unsigned dirs) {
+        if (alpha == 0 || nmass_[n] == 0) return;
+        const double bx = dux_old_[n], by = duy_old_[n], cx = dux_[n], cy = duy_[n];
+        const double dx = (dirs & kFixX) ? std::fabs(fx_[n]) * double((bx > 0) - (bx < 0)) : 0.0;
+        const double dy = (dirs & kFixY) ? std::fabs(fy_[n]) * double((by > 0) - (by < 0)) : 0.0;
+        t.wd -= dx * (bx + cx) + dy * (by + cy);
+        t.hd -= dx * cx + dy * cy;
+    };
+    for (const std::int32_t n : fixed_nodes_) held_off(std::size_t(n), fixed_[std::size_t(n)]);
+    for (const std::int32_t n : driven_nodes_) held_off(std::size_t(n), driven_[std::size_t(n)] & ~fixed_[std::size_t(n)]);
+    es_.kinetic = 0.5 * t.kin / dt2;
     es_.peak_kinetic = std::max(es_.peak_kinetic, es_.kinetic);
-    es_.w_gravity += wg; es_.h_gravity = hg;
-    es_.d_damping += wd; es_.h_damping = hd;
+    es_.w_gravity += 0.5 * (gx * t.sbx + gy * t.sby); es_.h_gravity = 0.5 * (gx * t.scx + gy * t.scy);
+    es_.d_damping += 0.5 * alpha * t.wd; es_.h_damping = 0.5 * alpha * t.hd;
 }
 
 // The strain and potential energy of the points before the first step (they may have
