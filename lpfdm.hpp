@@ -16,6 +16,7 @@
 //   s.fixes.push_back({lpfdm::kFixX | lpfdm::kFixY, {0, 0, 20, 0}});
 //   s.gravity_y = -9.81; s.damping = 0.8; s.dt_s = 1e-3; s.steps = 6000;
 //   auto diags = lpfdm::validate(s);            // empty when the scene can run
+//   auto warns = lpfdm::warnings(s);            // legal but probably wrong (units, angles)
 //   lpfdm::Simulation sim(s);                   // points made here; nothing allocated later
 //   for (long n = 0; n < s.steps; ++n) sim.step();
 //   const lpfdm::Points& p = sim.points();      // p.x[k], p.syy[k], ... (structure of arrays)
