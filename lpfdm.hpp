@@ -217,12 +217,23 @@ struct Diagnostic {
 using Diagnostics = std::vector<Diagnostic>;
 // Diagnostics in the order of the deck: by file, line and column (stable: the messages
 // of one place keep the order they were found in).
+// (std::sort on the indices, the first index breaking ties: std::stable_sort takes its
+// buffer from the nothrow operator new, which a program counting allocations may not
+// replace along with the plain one.)
 inline void sort_diagnostics(std::vector<Diagnostic>& d) {
-    std::stable_sort(d.begin(), d.end(), [](const Diagnostic& a, const Diagnostic& b) {
-        if (a.pos.file != b.pos.file) return a.pos.file < b.pos.file;
-        if (a.pos.line != b.pos.line) return a.pos.line < b.pos.line;
-        return a.pos.col < b.pos.col;
+    std::vector<std::size_t> order(d.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) {
+        const Pos &a = d[i].pos, &b = d[j].pos;
+        if (a.file != b.file) return a.file < b.file;
+        if (a.line != b.line) return a.line < b.line;
+        if (a.col != b.col) return a.col < b.col;
+        return i < j;
     });
+    std::vector<Diagnostic> sorted;
+    sorted.reserve(d.size());
+    for (std::size_t k : order) sorted.push_back(std::move(d[k]));
+    d = std::move(sorted);
 }
 // One diagnostic at file:line:col, as a list (built member by member: g++ 12 at -O3 warns
 // that a braced {{file, line, col}, message} may be used uninitialized).
