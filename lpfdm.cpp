@@ -12,6 +12,7 @@
 
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <getopt.h>
 #include <unistd.h>
 
 namespace {
@@ -21,38 +22,74 @@ extern "C" void on_sigint(int) { g_interrupted = 1; }
 
 constexpr int kExitBadInput = 2, kExitNumerical = 3, kExitInterrupted = 130;
 
-const char* kUsage =
-    "usage: lpfdm [options] DECK\n"
-    "Runs the Lagrangian Particle Finite Difference Method on the scene of DECK.\n"
-    "\n"
-    "options (an option with a value may also be written --opt=value):\n"
-    "  -o DIR        write output files into DIR (created; default: the current directory)\n"
-    "  --refine K    K times finer lattice: same geometry in metres, dt / K, K times the steps\n"
-    "  --steps N     run N steps instead of the deck's\n"
-    "  --seed N      seed of the strength scatter instead of the deck's SEED\n"
-    "  --set K=V     override one deck parameter, e.g. --set MATERIAL1.C=12000, --set CLUSTER1.PPC=4,\n"
-    "                --set DAMPING.ALPHA=0 (the keys are listed below); may be given several times\n"
-    "  --threads N   use N threads (default 1, or OMP_NUM_THREADS; the output is the same for any N)\n"
-    "  --kernel K    the code that runs the cycle (the same output with each):\n"
-    "                fast       the default: threads, four values per AVX2 register where the processor has it\n"
-    "                scalar     fast, one value at a time (no AVX2)\n"
-    "                reference  the plain cycle, every cell, point and node, one thread: the definition\n"
-    "  --profile     print the time of each phase of the cycle, peak memory and bytes per point\n"
-    "  --no-avx2     the same as --kernel scalar\n"
-    "  -q            quiet: no progress line and no summary\n"
-    "  --help        this text\n"
-    "  --version     the version\n"
-    "\n"
-    "exit status: 0 done, 2 bad deck or options, 3 numerical trouble, 130 interrupted\n";
+// The options: getopt_long's table, --help and decks/README.md (a test compares them) from
+// this one list. Short forms: -n for --steps (-s would be any of --steps, --seed, --set,
+// --strict), -D for --set (as a compiler's -D NAME=VALUE).
+struct OptionSpec {
+    const char* name;
+    char brief;       // the short form, or 0
+    const char* arg;  // the value's name, or nullptr for a flag
+    const char* help; // lines after the first are indented under it
+};
+constexpr int kSeed = 256, kStrict = 257, kNoAvx2 = 258;  // getopt values of the options without a short form
+const OptionSpec kOptions[] = {
+    {"output", 'o', "DIR", "write the output files into DIR (created; default: the current directory)"},
+    {"steps", 'n', "N", "run N steps instead of the deck's"},
+    {"refine", 'r', "K", "K times finer lattice: same geometry in metres, dt / K, K times the steps"},
+    {"seed", 0, "N", "seed of the strength scatter instead of the deck's SEED"},
+    {"set", 'D', "K=V", "override one deck parameter, e.g. --set MATERIAL1.C=12000, --set CLUSTER1.PPC=4,\n"
+                        "--set DAMPING.ALPHA=0 (the keys are listed below); may be given several times"},
+    {"threads", 't', "N", "use N threads (default 1, or OMP_NUM_THREADS; the output is the same for any N)"},
+    {"kernel", 'k', "K", "the code that runs the cycle (the same output with each):\n"
+                         "fast       the default: threads, four values per AVX2 register where the processor has it\n"
+                         "scalar     fast, one value at a time (no AVX2)\n"
+                         "reference  the plain cycle, every cell, point and node, one thread: the definition"},
+    {"strict", 0, nullptr, "warnings are errors: a deck that draws one stops with exit status 2"},
+    {"profile", 'p', nullptr, "print the time of each phase of the cycle, peak memory and bytes per point"},
+    {"no-avx2", 0, nullptr, "the same as --kernel scalar"},
+    {"quiet", 'q', nullptr, "no progress line and no summary"},
+    {"help", 'h', nullptr, "this text"},
+    {"version", 'V', nullptr, "the version"},
+};
+int option_value(const OptionSpec& o) {
+    if (o.brief) return o.brief;
+    const std::string n = o.name;
+    return n == "seed" ? kSeed : n == "strict" ? kStrict : kNoAvx2;
+}
+
+// The usage text: the synopsis, each option from kOptions, the exit status.
+std::string usage_text() {
+    std::string out = "usage: lpfdm [options] DECK\n"
+                      "Runs the Lagrangian Particle Finite Difference Method on the scene of DECK.\n"
+                      "\n"
+                      "options (a value may follow as the next word or after '=': --steps 100, --steps=100, -n 100):\n";
+    for (const OptionSpec& o : kOptions) {
+        std::string head = "  ";
+        head += o.brief ? std::string("-") + o.brief + ", " : std::string("    ");
+        head += std::string("--") + o.name + (o.arg ? std::string(" ") + o.arg : "");
+        head.resize(std::max<std::size_t>(head.size() + 2, 22), ' ');
+        const std::string indent(head.size(), ' ');
+        std::string help = o.help;
+        for (std::size_t nl; (nl = help.find('\n')) != std::string::npos;) {
+            out += head + help.substr(0, nl) + "\n";
+            help = help.substr(nl + 1);
+            head = indent;
+        }
+        out += head + help + "\n";
+    }
+    out += "\nexit status: 0 done, 2 bad deck or options, 3 numerical trouble, 130 interrupted\n";
+    return out;
+}
 
 struct Options {
     std::string deck, outdir = ".";
     long refine = 1, steps = 0;
     long long seed = -1;
-    bool quiet = false, profile = false;
+    bool quiet = false, profile = false, strict = false;
     lpfdm::Kernel kernel = lpfdm::Kernel::Fast;
     long threads = 0;
     std::vector<std::pair<std::string, double>> settings;
+    std::vector<std::string> setting_text;  // each --set as written
 };
 
 bool parse_long(const char* s, long long lo, long long hi, long long& v) {
@@ -62,10 +99,6 @@ bool parse_long(const char* s, long long lo, long long hi, long long& v) {
     return errno == 0 && end != s && *end == '\0' && v >= lo && v <= hi;
 }
 
-int usage_error(const std::string& m) {
-    std::fprintf(stderr, "lpfdm: error: %s\n%s", m.c_str(), kUsage);
-    return kExitBadInput;
-}
 
 // An output file written as NAME.part and renamed when complete, so a stopped run
 // never leaves a table that looks complete.
@@ -98,106 +131,141 @@ double physical_memory_bytes() {
 
 int main(int argc, char** argv) {
     Options opt;
-    // The options that take a value; each may also be written --opt=value.
-    const std::vector<std::string> with_value = {"-o", "--refine", "--steps", "--seed", "--threads", "--kernel", "--set"};
-    const std::vector<std::string> options = {"-o", "--refine", "--steps", "--seed", "--threads", "--kernel", "--set", "--profile", "--no-avx2", "-q", "--help", "--version"};
-    for (int a = 1; a < argc; ++a) {
-        std::string s = argv[a];
-        std::string inline_value;  // --opt=value
-        bool has_inline = false;
-        const std::size_t eq = s.find('=');
-        if (s.rfind("--", 0) == 0 && eq != std::string::npos &&
-            std::find(with_value.begin(), with_value.end(), s.substr(0, eq)) != with_value.end()) {
-            inline_value = s.substr(eq + 1);
-            s = s.substr(0, eq);
-            has_inline = true;
-        }
-        auto value = [&]() -> const char* {
-            if (has_inline) return inline_value.c_str();
-            return a + 1 < argc ? argv[++a] : nullptr;
-        };
+    // --- the command line: every mistake collected, then reported with the deck's ---
+    std::vector<std::string> cli_errors, decks;
+    std::vector<option> longs;
+    std::string shorts = ":";  // ':' first: a missing value is told from an unknown option
+    std::vector<std::string> names;
+    for (const OptionSpec& o : kOptions) {
+        longs.push_back({o.name, o.arg ? required_argument : no_argument, nullptr, option_value(o)});
+        if (o.brief) shorts += std::string(1, o.brief) + (o.arg ? ":" : "");
+        names.push_back(std::string("--") + o.name);
+        if (o.brief) names.push_back(std::string("-") + o.brief);
+    }
+    longs.push_back({nullptr, 0, nullptr, 0});
+    auto spelled = [&](int c) {  // how option c is named in a message
+        for (const OptionSpec& o : kOptions)
+            if (option_value(o) == c) return std::string("--") + o.name;
+        return std::string("-") + char(c);
+    };
+    opterr = 0;
+    for (;;) {
+        const int c = getopt_long(argc, argv, shorts.c_str(), longs.data(), nullptr);
+        if (c == -1) break;
         long long v = 0;
-        if (s == "--help" || s == "-h") { std::fputs(kUsage, stdout); std::fputs(("\n" + lpfdm::deck_help()).c_str(), stdout); return 0; }
-        if (s == "--version") { std::printf("lpfdm %s\n", lpfdm::kVersion); return 0; }
-        if (s == "-q") { opt.quiet = true; continue; }
-        if (s == "--profile") { opt.profile = true; continue; }
-        if (s == "--no-avx2") { opt.kernel = lpfdm::Kernel::Scalar; continue; }
-        if (s == "-o") {
-            const char* d = value();
-            if (!d) return usage_error("-o needs a directory");
-            opt.outdir = d;
-        } else if (s == "--refine") {
-            const char* d = value();
-            if (!d || !parse_long(d, 1, 64, v)) return usage_error("--refine needs a whole number from 1 to 64");
-            opt.refine = long(v);
-        } else if (s == "--steps") {
-            const char* d = value();
-            if (!d || !parse_long(d, 1, 1'000'000'000LL, v)) return usage_error("--steps needs a whole number from 1 to 1e9");
-            opt.steps = long(v);
-        } else if (s == "--seed") {
-            const char* d = value();
-            if (!d || !parse_long(d, 0, 9'007'199'254'740'992LL, v)) return usage_error("--seed needs a whole number >= 0");
-            opt.seed = v;
-        } else if (s == "--threads") {
-            const char* d = value();
-            if (!d || !parse_long(d, 1, 1024, v)) return usage_error("--threads needs a whole number from 1 to 1024");
-            opt.threads = long(v);
-        } else if (s == "--kernel") {
-            const char* dv = value();
-            const std::string d = dv ? dv : "";
+        const char* arg = optarg;
+        switch (c) {
+        case 'h': std::fputs(usage_text().c_str(), stdout); std::fputs(("\n" + lpfdm::deck_help()).c_str(), stdout); return 0;
+        case 'V': std::printf("lpfdm %s\n", lpfdm::kVersion); return 0;
+        case 'q': opt.quiet = true; break;
+        case 'p': opt.profile = true; break;
+        case kStrict: opt.strict = true; break;
+        case kNoAvx2: opt.kernel = lpfdm::Kernel::Scalar; break;
+        case 'o':
+            if (!*arg) cli_errors.push_back("-o needs a directory");
+            else opt.outdir = arg;
+            break;
+        case 'r':
+            if (!parse_long(arg, 1, 64, v)) cli_errors.push_back(std::string("--refine needs a whole number from 1 to 64, not '") + arg + "'");
+            else opt.refine = long(v);
+            break;
+        case 'n':
+            if (!parse_long(arg, 1, 1'000'000'000LL, v)) cli_errors.push_back(std::string("--steps needs a whole number from 1 to 1e9, not '") + arg + "'");
+            else opt.steps = long(v);
+            break;
+        case kSeed:
+            if (!parse_long(arg, 0, 9'007'199'254'740'992LL, v)) cli_errors.push_back(std::string("--seed needs a whole number >= 0, not '") + arg + "'");
+            else opt.seed = v;
+            break;
+        case 't':
+            if (!parse_long(arg, 1, 1024, v)) cli_errors.push_back(std::string("--threads needs a whole number from 1 to 1024, not '") + arg + "'");
+            else opt.threads = long(v);
+            break;
+        case 'k': {
+            const std::string d = arg;
             if (d == "fast") opt.kernel = lpfdm::Kernel::Fast;
             else if (d == "scalar") opt.kernel = lpfdm::Kernel::Scalar;
             else if (d == "reference") opt.kernel = lpfdm::Kernel::Reference;
-            else return usage_error("--kernel needs fast, scalar or reference");
-        } else if (s == "--set") {
-            const char* d = value();
-            const std::string kv = d ? d : "";
+            else cli_errors.push_back("--kernel needs fast, scalar or reference, not '" + d + "'" + lpfdm::did_you_mean(d, {"fast", "scalar", "reference"}));
+            break;
+        }
+        case 'D': {
+            const std::string kv = arg;
             const std::size_t eq = kv.find('=');
             double x = 0;
-            if (eq == std::string::npos || !lpfdm::detail::parse_real(kv.substr(eq + 1), x))
-                return usage_error("--set needs CARD.PARAM=VALUE with a finite number, e.g. --set MATERIAL1.C=12000");
-            opt.settings.push_back({kv.substr(0, eq), x});
-        } else if (!s.empty() && s[0] == '-' && s != "-") {
-            return usage_error("unknown option '" + s + "'" + lpfdm::did_you_mean(s.substr(0, s.find('=')), options));
-        } else {
-            if (!opt.deck.empty()) return usage_error("only one deck, please");
-            opt.deck = s;
+            if (eq == std::string::npos || !lpfdm::detail::parse_real(kv.substr(eq + 1), x)) {
+                cli_errors.push_back("--set needs CARD.PARAM=VALUE with a finite number, e.g. --set MATERIAL1.C=12000, not '" + kv + "'");
+            } else {
+                opt.settings.push_back({kv.substr(0, eq), x});
+                opt.setting_text.push_back(kv);
+            }
+            break;
+        }
+        case ':':
+            cli_errors.push_back(spelled(optopt) + " needs a value");
+            break;
+        default: {  // '?': an unknown, ambiguous or misspelt option, or a flag given a value
+            const std::string word = optind > 0 && optind <= argc ? argv[optind - 1] : "";
+            if (word.rfind("--", 0) == 0) {
+                const std::string bare = word.substr(0, word.find('='));
+                if (word.find('=') != std::string::npos && optopt) cli_errors.push_back(bare + " takes no value");
+                else cli_errors.push_back("unknown option '" + bare + "'" + lpfdm::did_you_mean(bare, names));
+            } else {
+                cli_errors.push_back(std::string("unknown option '-") + char(optopt) + "'" + lpfdm::did_you_mean(std::string("-") + char(optopt), names));
+            }
+        }
         }
     }
-    if (opt.deck.empty()) return usage_error("no deck given");
+    for (int a = optind; a < argc; ++a) decks.push_back(argv[a]);
+    if (decks.size() > 1) cli_errors.push_back("one deck, please: " + std::to_string(decks.size()) + " are named");
+    if (decks.empty()) cli_errors.push_back("no deck given");
+    if (decks.size() == 1) opt.deck = decks[0];
 
-    // --- read and check everything before the first step ---
+    // --- read and check the deck and the options in one pass: every error and warning ---
     lpfdm::Scene scene;
     std::string text;
-    lpfdm::Diagnostics diags = lpfdm::load_file(opt.deck, text);
-    if (diags.empty()) diags = lpfdm::parse_deck_text(text, opt.deck, scene);
-    for (const auto& kv : opt.settings) {
-        if (!diags.empty()) break;
-        const std::string e = lpfdm::apply_setting(scene, kv.first, kv.second);
-        if (!e.empty()) return usage_error("--set " + kv.first + ": " + e);
-    }
-    if (diags.empty()) {
+    lpfdm::Diagnostics diags;
+    lpfdm::Unread unread;
+    if (!opt.deck.empty()) {
+        diags = lpfdm::load_file(opt.deck, text);
+        if (diags.empty()) diags = lpfdm::parse_deck_text(text, opt.deck, scene, &unread);
+        else unread.grid = unread.step = unread.materials = unread.clusters = unread.motion = true;
+        // (a file that is no deck, or no text, sets nothing: its --set would only echo that)
+        const bool loaded = !(unread.grid && unread.step && unread.materials && unread.clusters);
+        for (const auto& kv : opt.settings) {
+            const std::string e = loaded ? lpfdm::apply_setting(scene, kv.first, kv.second) : "";
+            if (!e.empty()) cli_errors.push_back("--set " + kv.first + ": " + e);
+        }
         if (opt.refine > 1) {
             if (long(scene.mx) * opt.refine > 1'000'000 || long(scene.my) * opt.refine > 1'000'000)
-                diags.push_back({scene.grid_pos, "--refine " + std::to_string(opt.refine) + " makes the lattice larger than 1e6 cells a side"});
+                cli_errors.push_back("--refine " + std::to_string(opt.refine) + " makes the lattice larger than 1e6 cells a side");
             else
                 lpfdm::refine(scene, int(opt.refine));
         }
         if (opt.steps > 0) scene.steps = opt.steps;
         if (opt.seed >= 0) scene.seed = std::uint64_t(opt.seed);
+        const lpfdm::Diagnostics v = lpfdm::validate(scene, unread);
+        diags.insert(diags.end(), v.begin(), v.end());
+        if (!unread.grid && scene.mx > 0 && scene.my > 0 && scene.cell_m > 0) {
+            const double points = lpfdm::count_points(scene);
+            const double need = lpfdm::estimate_bytes(scene, points), have = physical_memory_bytes();
+            if (have > 0 && need > 0.8 * have)
+                diags.push_back({scene.grid_pos, fmt::format("the scene needs about {:.3g} GiB ({:.0f} points on {} x {} cells); this machine has {:.3g} GiB",
+                                                             need / 1073741824.0, points, scene.mx, scene.my, have / 1073741824.0)});
+        }
+        lpfdm::Diagnostics w = lpfdm::warnings(scene, unread);
+        for (auto& d : w) d.warning = !opt.strict;
+        diags.insert(diags.end(), w.begin(), w.end());
+        lpfdm::sort_diagnostics(diags);
     }
-    if (diags.empty()) diags = lpfdm::validate(scene);
-    if (diags.empty()) {
-        const double points = lpfdm::count_points(scene);
-        const double need = lpfdm::estimate_bytes(scene, points), have = physical_memory_bytes();
-        if (have > 0 && need > 0.8 * have)
-            diags.push_back({scene.grid_pos, fmt::format("the scene needs about {:.3g} GiB ({:.0f} points on {} x {} cells); this machine has {:.3g} GiB",
-                                                         need / 1073741824.0, points, scene.mx, scene.my, have / 1073741824.0)});
+    bool stop = !cli_errors.empty();
+    for (const auto& e : cli_errors) std::fprintf(stderr, "lpfdm: error: %s\n", e.c_str());
+    for (const auto& d : diags) {
+        std::fprintf(stderr, "%s\n", d.str().c_str());
+        stop |= !d.warning;
     }
-    if (!diags.empty()) {
-        for (const auto& d : diags) std::fprintf(stderr, "%s\n", d.str().c_str());
-        return kExitBadInput;
-    }
+    if (!cli_errors.empty()) std::fputs("lpfdm --help lists the options and the deck's cards\n", stderr);
+    if (stop) return kExitBadInput;
 
     // --- outputs: NAME.part until complete ---
     if (!make_dir(opt.outdir)) {
@@ -215,6 +283,15 @@ int main(int argc, char** argv) {
 #endif
     lpfdm::Simulation sim(scene, opt.kernel);
     sim.set_profiling(opt.profile);
+    lpfdm::RunInfo run;
+    run.deck = opt.deck;
+    run.deck_digest = lpfdm::fnv1a64(text);
+    run.settings = opt.setting_text;
+    run.steps = opt.steps;
+    run.refine = opt.refine;
+    run.seed = opt.seed;
+    run.threads = sim.kernel() == lpfdm::Kernel::Reference ? 1 : nthreads;
+    run.kernel = sim.kernel() == lpfdm::Kernel::Reference ? "reference" : sim.wide() ? "fast (AVX2)" : opt.kernel == lpfdm::Kernel::Fast ? "fast (no AVX2 here)" : "scalar";
     std::vector<OutFile> outs;
     for (const auto& o : sim.scene().outputs) {
         OutFile of;
@@ -228,10 +305,12 @@ int main(int argc, char** argv) {
             return kExitBadInput;
         }
         if (o.kind == lpfdm::Output::Points) {
+            lpfdm::write_provenance(of.f, sim, run);
             lpfdm::write_points_header(of.f, sim, opt.deck);
             lpfdm::write_points_frame(of.f, sim, true);
             of.first_frame = false;
         } else {
+            lpfdm::write_provenance(of.f, sim, run);
             lpfdm::write_history_header(of.f, sim, opt.deck);
         }
         outs.push_back(of);
@@ -249,6 +328,8 @@ int main(int argc, char** argv) {
 
     std::signal(SIGINT, on_sigint);
     const long steps = scene.steps;
+    // A history row every EVERY steps; with EVERY above the steps (warned), the last only.
+    auto history_due = [steps](long every, long n) { return n % (every > 0 ? every : 1) == 0 || (every > steps && n == steps); };
     const bool progress = !opt.quiet && isatty(2);
     const auto t0 = std::chrono::steady_clock::now();
     auto last_print = t0;
@@ -289,7 +370,7 @@ int main(int argc, char** argv) {
         for (auto& o : outs) {
             const long every = o.spec->every;
             if (o.spec->kind == lpfdm::Output::History) {
-                if (n % (every > 0 ? every : 1) == 0) lpfdm::write_history_row(o.f, sim);
+                if (history_due(every, n)) lpfdm::write_history_row(o.f, sim);
             } else if ((every > 0 && n % every == 0) || n == steps) {
                 lpfdm::write_points_frame(o.f, sim, o.first_frame);
             }
@@ -298,7 +379,7 @@ int main(int argc, char** argv) {
             for (auto& o : outs) {  // unless this step's row or frame was just written
                 const long every = o.spec->every;
                 if (o.spec->kind == lpfdm::Output::History) {
-                    if (n % (every > 0 ? every : 1) != 0) lpfdm::write_history_row(o.f, sim);
+                    if (!history_due(every, n)) lpfdm::write_history_row(o.f, sim);
                 } else if (!((every > 0 && n % every == 0) || n == steps)) {
                     lpfdm::write_points_frame(o.f, sim, false);
                 }

@@ -16,6 +16,7 @@
 //   s.fixes.push_back({lpfdm::kFixX | lpfdm::kFixY, {0, 0, 20, 0}});
 //   s.gravity_y = -9.81; s.damping = 0.8; s.dt_s = 1e-3; s.steps = 6000;
 //   auto diags = lpfdm::validate(s);            // empty when the scene can run
+//   auto warns = lpfdm::warnings(s);            // legal but probably wrong (units, angles)
 //   lpfdm::Simulation sim(s);                   // points made here; nothing allocated later
 //   for (long n = 0; n < s.steps; ++n) sim.step();
 //   const lpfdm::Points& p = sim.points();      // p.x[k], p.syy[k], ... (structure of arrays)
@@ -225,13 +226,34 @@ struct Pos {
 struct Diagnostic {
     Pos pos;
     std::string message;
+    bool warning = false;  // legal but probably wrong (warnings()); an error stops the run
     std::string str() const {
         std::string where = pos.file.empty() ? std::string("scene") : pos.file;
         if (pos.line > 0) where += ":" + std::to_string(pos.line) + ":" + std::to_string(pos.col);
-        return where + ": error: " + message;
+        return where + (warning ? ": warning: " : ": error: ") + message;
     }
 };
 using Diagnostics = std::vector<Diagnostic>;
+// Diagnostics in the order of the deck: by file, line and column (stable: the messages
+// of one place keep the order they were found in).
+// (std::sort on the indices, the first index breaking ties: std::stable_sort takes its
+// buffer from the nothrow operator new, which a program counting allocations may not
+// replace along with the plain one.)
+inline void sort_diagnostics(std::vector<Diagnostic>& d) {
+    std::vector<std::size_t> order(d.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) {
+        const Pos &a = d[i].pos, &b = d[j].pos;
+        if (a.file != b.file) return a.file < b.file;
+        if (a.line != b.line) return a.line < b.line;
+        if (a.col != b.col) return a.col < b.col;
+        return i < j;
+    });
+    std::vector<Diagnostic> sorted;
+    sorted.reserve(d.size());
+    for (std::size_t k : order) sorted.push_back(std::move(d[k]));
+    d = std::move(sorted);
+}
 // One diagnostic at file:line:col, as a list (built member by member: g++ 12 at -O3 warns
 // that a braced {{file, line, col}, message} may be used uninitialized).
 inline Diagnostics one_error(const std::string& file, int line, int col, std::string message) {
@@ -1463,14 +1485,25 @@ inline std::string apply_setting(Scene& s, const std::string& key_in, double v) 
 
 // -------------------------------------------------------------- checks ---
 
+// What the deck reader could not read: its cards with errors and the cards it missed.
+// validate() and warnings() skip the checks whose answer depends on them, so that one
+// pass reports every problem of a deck and no echo of one (a bad MATERIAL card would
+// also make its clusters "undefined"; a bad STEP card, its dt "not > 0" again).
+struct Unread {
+    bool grid = false;       // GRID bad or missing: no lattice to place anything on
+    bool step = false;       // STEP bad or missing: no dt, no number of steps
+    bool materials = false;  // a MATERIAL card bad, or an unknown card (a misspelt MATERIAL?)
+    bool clusters = false;   // a CLUSTER card bad, or none at all (the reader said so)
+    bool motion = false;     // a MOTION or ADVECT card bad: which pair was meant is unknown
+};
+
 // Everything that would make a scene unrunnable, with the card each problem came from.
-inline Diagnostics validate(const Scene& s) {
+// All problems are reported, not the first; what `unread` names is not checked again.
+inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
     Diagnostics d;
     auto err = [&](const Pos& p, std::string m) { d.push_back({p, std::move(m)}); };
-    if (s.mx <= 0 || s.my <= 0 || !(s.cell_m > 0)) {
-        err(s.grid_pos, "the lattice needs mx > 0, my > 0 cells and a cell size L > 0");
-        return d;
-    }
+    const bool lattice = s.mx > 0 && s.my > 0 && s.cell_m > 0;  // else nothing can be placed
+    if (!lattice && !unread.grid) err(s.grid_pos, "the lattice needs mx > 0, my > 0 cells and a cell size L > 0");
     const double X = s.mx * s.cell_m, Y = s.my * s.cell_m, tol = 1e-3 * s.cell_m;
     // Every number of kDeckKeys in its range (for a material, the keys of its model).
     // SCATTER at most 0.5: beyond it more than 2.3 % of draws fall below zero and the
@@ -1485,7 +1518,7 @@ inline Diagnostics validate(const Scene& s) {
     keys("GRAVITY", 0, s.grid_pos, 0);
     keys("DAMPING", 0, s.damping_pos, 0);
     keys("HOURGLASS", 0, s.grid_pos, 0);
-    keys("STEP", 0, s.step_pos, 0);
+    if (!unread.step) keys("STEP", 0, s.step_pos, 0);
     for (std::size_t a = 0; a < s.outputs.size(); ++a) keys("OUTPUT", a, s.outputs[a].pos, 0);
     for (std::size_t a = 0; a < s.materials.size(); ++a) {
         const Material& m = s.materials[a];
@@ -1497,12 +1530,13 @@ inline Diagnostics validate(const Scene& s) {
         if (m.scatter > 0 && m.phi_deg > 0 && (90 - m.phi_deg) < 2 * m.scatter * m.phi_deg)
             err(m.pos, "SCATTER too large for this PHI: more than 2.3 % of draws would pass 90 degrees");
     }
-    if (s.clusters.empty()) err(s.grid_pos, "the scene has no CLUSTER: nothing to compute");
+    if (s.clusters.empty() && !unread.clusters) err(s.grid_pos, "the scene has no CLUSTER: nothing to compute");
     for (std::size_t a = 0; a < s.clusters.size(); ++a) {
         const Cluster& c = s.clusters[a];
         const Material* m = s.material(c.mat);
-        if (!m) err(c.pos, "material " + std::to_string(c.mat) + " is not defined");
+        if (!m && !unread.materials) err(c.pos, "material " + std::to_string(c.mat) + " is not defined");
         keys("CLUSTER", a, c.pos, 0);
+        if (!lattice) continue;
         if (c.box.x0 > c.box.x1 || c.box.y0 > c.box.y1) { err(c.pos, "the box needs x0 <= x1 and y0 <= y1"); continue; }
         if (c.box.x0 < -tol || c.box.y0 < -tol || c.box.x1 > X + tol || c.box.y1 > Y + tol) {
             err(c.pos, "the cluster box reaches outside the lattice [0, " + std::to_string(X) + "] x [0, " + std::to_string(Y) + "] m");
@@ -1523,16 +1557,18 @@ inline Diagnostics validate(const Scene& s) {
     for (std::size_t a = 0; a < s.fixes.size(); ++a) {
         const Fix& f = s.fixes[a];
         keys("FIX", a, f.pos, 0);
+        if (f.dirs < 1 || f.dirs > 3) err(f.pos, "unknown direction");
+        if (!lattice) continue;
         const long n = node_count(f.box);
         if (n < 0) err(f.pos, "the box needs x0 <= x1 and y0 <= y1");
         else if (n == 0) err(f.pos, "the FIX box holds no node");
-        if (f.dirs < 1 || f.dirs > 3) err(f.pos, "unknown direction");
     }
     for (std::size_t a = 0; a < s.walls.size(); ++a) {
         const Wall& w = s.walls[a];
         keys("WALL", a, w.pos, 0);
         for (std::size_t b = 0; b < a; ++b)
             if (s.walls[b].id == w.id) err(w.pos, "wall " + std::to_string(w.id) + " is defined twice");
+        if (!lattice) continue;
         const long n = node_count(w.box);
         if (n < 0) err(w.pos, "the box needs x0 <= x1 and y0 <= y1");
         else if (n == 0) err(w.pos, "the WALL box holds no node");
@@ -1542,7 +1578,7 @@ inline Diagnostics validate(const Scene& s) {
             detail::node_span(w.box.y0, w.box.y1, s.cell_m, s.my, j0, j1);
             if ((i1 > i0) == (j1 > j0)) err(w.pos, "a SMOOTH wall is one line of nodes, a row or a column (it is driven across that line)");
         }
-        if (std::isfinite(w.vx) && std::isfinite(w.vy) && s.dt_s > 0 && std::hypot(w.vx, w.vy) * s.dt_s > 0.1 * s.cell_m)
+        if (!unread.step && std::isfinite(w.vx) && std::isfinite(w.vy) && s.dt_s > 0 && std::hypot(w.vx, w.vy) * s.dt_s > 0.1 * s.cell_m)
             err(w.pos, "the wall moves " + std::to_string(std::hypot(w.vx, w.vy) * s.dt_s / s.cell_m) +
                            " cells per step; at most 0.1 is allowed (lower the speed or the time step)");
         for (const auto& f : s.fixes) {
@@ -1552,13 +1588,9 @@ inline Diagnostics validate(const Scene& s) {
     }
     if (s.advect == Advect::Points && s.mapping == Mapping::Smooth)
         err(s.advect_pos, "ADVECT POINTS carries increments cell by cell: it works with MAPPING PAPER only");
-    if (s.advect == Advect::Points && s.motion == Motion::Paper)
+    if (s.advect == Advect::Points && s.motion == Motion::Paper && !unread.motion)
         err(s.advect_pos, "ADVECT POINTS needs MOTION CENTRE or BILINEAR: carried from eq. 7a/7b about node [1], the increments grow without bound");
-    for (const auto& o : s.outputs) {
-        if (o.kind == Output::History && s.steps >= 1 && o.every > s.steps)
-            err(o.pos, "EVERY " + std::to_string(o.every) + " is more than the " + std::to_string(s.steps) + " steps: the history would have no rows");
-    }
-    if (!s.materials.empty() && s.dt_s > 0) {
+    if (lattice && !unread.step && !s.materials.empty() && s.dt_s > 0) {
         const double lim = stable_dt(s);
         if (s.dt_s > lim) {
             char buf[160];
@@ -1566,6 +1598,74 @@ inline Diagnostics validate(const Scene& s) {
             err(s.step_pos, buf);
         }
     }
+    return d;
+}
+
+// What is legal but probably a mistake, as warnings (the program's --strict makes them
+// errors). Units are SI and angles degrees, so a number off by a unit's factor runs
+// without complaint; these rules catch the usual slips:
+//   PHI or PSI in (0, 1.6)       radians? (pi/2 = 1.571; no soil has a friction or
+//                                dilation angle below 1.6 degrees worth giving)
+//   PHI or PSI above 60 degrees  beyond any soil; radians times 100, or a typing slip?
+//   E below 1 kPa                kPa or MPa? (the softest soils are about 1 MPa)
+//   RHO below 100 kg/m^3         t/m^3 or g/cm^3? (dry soils weigh 1200-2200 kg/m^3)
+//   NU at or above 0.495         nearly incompressible: K > 100 G, a short time step, and
+//                                eq. 5's one strain per cell locks in plastic flow
+//   dt above 0.95 of the limit   the limit (stable_dt) is an estimate; the shipped decks
+//                                run at up to 0.94 of it, measured stable
+//   OUTPUT EVERY above the steps the run writes its last frame or row only
+// Each warning is at the card it comes from. What `unread` names is not looked at.
+inline Diagnostics warnings(const Scene& s, const Unread& unread = Unread()) {
+    Diagnostics d;
+    char b[256];
+    auto warn = [&](const Pos& p) {
+        Diagnostic w;
+        w.pos = p; w.message = b; w.warning = true;
+        d.push_back(std::move(w));
+    };
+    for (const Material& m : s.materials) {
+        if (m.model == Model::MohrCoulomb) {
+            const std::pair<const char*, double> angles[] = {{"PHI", m.phi_deg}, {"PSI", m.psi_deg}};
+            for (const auto& a : angles) {
+                if (a.second > 0 && a.second < 1.6) {
+                    std::snprintf(b, sizeof b, "%s = %g degrees: is it in radians (%.3g degrees)? angles are in degrees", a.first, a.second,
+                                  a.second * 180 / 3.14159265358979323846);
+                    warn(m.pos);
+                } else if (a.second > 60 && a.second < 90) {
+                    std::snprintf(b, sizeof b, "%s = %g degrees is above 60: more than any soil has", a.first, a.second);
+                    warn(m.pos);
+                }
+            }
+        }
+        if (m.E > 0 && m.E < 1e3) {
+            std::snprintf(b, sizeof b, "E = %g Pa is below 1 kPa: is it in kPa or MPa? the deck's unit is Pa", m.E);
+            warn(m.pos);
+        }
+        if (m.rho > 0 && m.rho < 100) {
+            std::snprintf(b, sizeof b, "RHO = %g kg/m^3 is below 100: is it in t/m^3 or g/cm^3? the deck's unit is kg/m^3", m.rho);
+            warn(m.pos);
+        }
+        if (m.nu >= 0.495 && m.nu < 0.5) {
+            std::snprintf(b, sizeof b, "NU = %g is nearly incompressible (K = %.3g G): the stable time step is short and the cells lock in plastic flow",
+                          m.nu, 2 * (1 + m.nu) / (3 * (1 - 2 * m.nu)));
+            warn(m.pos);
+        }
+    }
+    if (!unread.step && !unread.grid && s.cell_m > 0 && s.dt_s > 0 && !s.materials.empty()) {
+        const double lim = stable_dt(s);
+        if (s.dt_s > 0.95 * lim && s.dt_s <= lim) {
+            std::snprintf(b, sizeof b, "time step %.6g s is %.3f of the stable limit %.6g s: so near it, a run may become unstable", s.dt_s,
+                          s.dt_s / lim, lim);
+            warn(s.step_pos);
+        }
+    }
+    if (!unread.step && s.steps >= 1)
+        for (const Output& o : s.outputs)
+            if (o.every > s.steps) {
+                std::snprintf(b, sizeof b, "EVERY %ld is more than the %ld steps of the run: %s", o.every, s.steps,
+                              o.kind == Output::History ? "only the last row is written" : "only the first and last frames are written");
+                warn(o.pos);
+            }
     return d;
 }
 
@@ -4365,15 +4465,23 @@ private:
 }  // namespace detail
 
 // Parses a deck (decks/README.md) into scene: every card, field and parameter checked, each
-// problem reported with file:line:column. The scene as a whole is checked by validate().
-inline Diagnostics parse_deck_text(const std::string& text, const std::string& file, Scene& sc) {
+// problem reported with file:line:column (the first problem of each card). The scene as a
+// whole is checked by validate(), told by *unread what the cards with errors left out.
+inline Diagnostics parse_deck_text(const std::string& text, const std::string& file, Scene& sc, Unread* unread = nullptr) {
     using namespace detail;
     Diagnostics d;
+    Unread none;
+    Unread& u = unread ? *unread : none;
+    u = Unread();
     if (text.find_first_not_of(" \t\r\n\f\v") == std::string::npos) {
+        u.grid = u.step = u.materials = u.clusters = u.motion = true;
         return one_error(file, 1, 1, "the deck is empty");
     }
     Lexed lx = lex(text, file, d);
-    if (!d.empty()) return d;
+    if (!d.empty()) {  // not text, or its last card cut: nothing is read
+        u.grid = u.step = u.materials = u.clusters = u.motion = true;
+        return d;
+    }
     bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_mapping = false, have_hourglass = false, have_advect = false;
     Pos last{file, 1, 1};
     int cluster_cards = 0;
@@ -4532,20 +4640,36 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             sc.end_pos = kp;
         } else {
             r.fail(kp, "unknown card '" + toks[0].text + "'" + did_you_mean(toks[0].text, card_names()));
+            u.materials = true;  // perhaps a MATERIAL misspelt: its clusters are not "undefined"
             continue;
         }
         r.finish();
+        if (!r.ok()) {
+            u.grid |= kw == "GRID";
+            u.step |= kw == "STEP";
+            u.materials |= kw == "MATERIAL";
+            u.clusters |= kw == "CLUSTER";
+            u.motion |= kw == "MOTION" || kw == "ADVECT";
+        }
     }
+    u.grid |= !have_grid;
+    u.step |= !have_step;
+    u.clusters |= cluster_cards == 0;
     if (!have_grid) d.push_back({last, "no GRID card: the lattice is not defined"});
     if (!have_step) d.push_back({last, "no STEP card: the time step and the number of steps are not defined"});
     if (have_grid && cluster_cards == 0) d.push_back({sc.grid_pos, "no CLUSTER card: the scene holds no material"});
     return d;
 }
 
-// parse_deck_text, then validate(): an empty result means the scene can run.
+// parse_deck_text and validate() in one pass, every error in the order of the deck: an
+// empty result means the scene can run. (Warnings are apart: warnings(sc).)
 inline Diagnostics read_deck_text(const std::string& text, const std::string& file, Scene& sc) {
-    Diagnostics d = parse_deck_text(text, file, sc);
-    return d.empty() ? validate(sc) : d;
+    Unread unread;
+    Diagnostics d = parse_deck_text(text, file, sc, &unread);
+    const Diagnostics v = validate(sc, unread);
+    d.insert(d.end(), v.begin(), v.end());
+    sort_diagnostics(d);
+    return d;
 }
 
 // The whole text of a file, or a diagnostic.
@@ -4586,6 +4710,42 @@ inline Diagnostics read_deck(const std::string& path, Scene& sc) {
 }
 
 // -------------------------------------------------------------- writers ---
+
+// FNV-1a, 64 bits: the digest of a deck's text recorded in the output headers.
+inline std::uint64_t fnv1a64(const std::string& text) {
+    std::uint64_t h = 14695981039346656037ull;
+    for (unsigned char ch : text) { h ^= ch; h *= 1099511628211ull; }
+    return h;
+}
+
+// How a run was made: what the provenance lines of each output file record.
+struct RunInfo {
+    std::string deck;                   // the deck's path as given
+    std::uint64_t deck_digest = 0;      // fnv1a64 of its text
+    std::vector<std::string> settings;  // each --set, KEY=VALUE as given, in order
+    long steps = 0, refine = 1;         // --steps (0: not given), --refine
+    long long seed = -1;                // --seed (-1: not given)
+    int threads = 1;
+    std::string kernel = "fast";
+};
+
+// The provenance lines that open each output file, each beginning "# run: ": the version, the deck
+// and the digest of its text, what the command line changed, and the seed, steps, threads
+// and kernel the run used. Only the threads and kernel lines differ between runs that
+// write the same numbers: comparisons of outputs skip these lines (grep -v '^# run: ').
+inline void write_provenance(std::FILE* f, const Simulation& sim, const RunInfo& r) {
+    std::string deck = r.deck;
+    for (char& ch : deck) if (ch == '\n' || ch == '\r') ch = '?';
+    std::string cl;
+    if (r.steps > 0) cl += fmt::format(" --steps {}", r.steps);
+    if (r.refine > 1) cl += fmt::format(" --refine {}", r.refine);
+    if (r.seed >= 0) cl += fmt::format(" --seed {}", r.seed);
+    for (const std::string& kv : r.settings) cl += " --set " + kv;
+    fmt::print(f, "# run: lpfdm {}\n# run: deck {} (fnv1a64 {:016x})\n", kVersion, deck, r.deck_digest);
+    fmt::print(f, "# run: options{}\n", cl.empty() ? " (none)" : cl);
+    fmt::print(f, "# run: seed {} steps {} dt {:.9g} s\n", sim.scene().seed, sim.scene().steps, sim.scene().dt_s);
+    fmt::print(f, "# run: threads {} kernel {}\n", r.threads, r.kernel);
+}
 
 // Point table: one frame; frames are separated by two blank lines.
 inline void write_points_header(std::FILE* f, const Simulation& sim, const std::string& deck) {

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <sstream>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -661,9 +662,17 @@ TEST_CASE("deck error: walls that select no node, hold fixed nodes or move too f
     CHECK_ONE_ERROR(plus("WALL 0 4 1 4 4 -1 0"), 5, 6, "wall id must lie in [1, 65535]");
 }
 
-TEST_CASE("deck error: a history whose EVERY exceeds the steps would have no rows") {
-    CHECK_ONE_ERROR(plus("OUTPUT HISTORY h.txt EVERY 11"), 5, 1, "EVERY 11 is more than the 10 steps: the history would have no rows");
-    read_ok(plus("OUTPUT HISTORY h.txt EVERY 10"));
+// A run shorter than an output interval (`--steps 100` on a deck writing every 500 steps)
+// runs: it writes its last row and is warned (tests/check_decks.sh runs it).
+TEST_CASE("deck: a history whose EVERY exceeds the steps is warned, not refused") {
+    const Scene s = read_ok(plus("OUTPUT HISTORY h.txt EVERY 11"));
+    const Diagnostics w = lpfdm::warnings(s);
+    INFO(listing(w));
+    REQUIRE(w.size() == 1);
+    CHECK(w[0].warning);
+    CHECK(w[0].pos.line == 5);
+    CHECK(w[0].str() == "t.deck:5:1: warning: EVERY 11 is more than the 10 steps of the run: only the last row is written");
+    CHECK(lpfdm::warnings(read_ok(plus("OUTPUT HISTORY h.txt EVERY 10"))).empty());
     CHECK_ONE_ERROR(plus("OUTPUT HISTORY h.txt EVERY 0"), 5, 28, "EVERY n must lie in [1, 1000000000], found '0'");
     CHECK_ONE_ERROR(plus("OUTPUT POINTS p.txt EVERY 2.5"), 5, 27, "EVERY n must be a whole number");
 }
@@ -812,13 +821,12 @@ TEST_CASE("deck: several independent errors of the scene are all reported, one e
         "FIX X 9 9 9 9\n"                             // 6: no node
         "WALL 1 4 1 4 4 -2000 0\n"                    // 7: too fast
         "STEP 1E-4 10\n"
-        "OUTPUT HISTORY h.txt EVERY 20\n",            // 9: no rows
+        "OUTPUT HISTORY h.txt EVERY 20\n",            // 9: the last row only (a warning)
         s);
     INFO(listing(d));
-    REQUIRE(d.size() == 6);
-    const int lines[] = {3, 4, 5, 6, 7, 9};
-    const char* phrases[] = {"defined twice", "material 2 is not defined", "outside the lattice", "holds no node", "cells per step",
-                             "no rows"};
+    REQUIRE(d.size() == 5);
+    const int lines[] = {3, 4, 5, 6, 7};
+    const char* phrases[] = {"defined twice", "material 2 is not defined", "outside the lattice", "holds no node", "cells per step"};
     int k = 0;
     for (int line : lines) {
         bool found = false;
@@ -897,9 +905,9 @@ TEST_CASE("deck error: a bad CLUSTER card gives one message, not also 'no CLUSTE
     CHECK_ONE_ERROR(kGrid + kMaterial + "CLUSTER 1 0 0 2 2 PPC=0\n" + kStep, 3, 23, "PPC must be a whole number in [1, 32]");
 }
 
-// A deck with a bad card is not checked as a whole: the scene it describes is not the
-// one the user meant, and checking it would add messages for problems that are echoes
-// of the first (a bad MATERIAL card would also make its clusters "undefined").
+// A deck with a bad card is checked as a whole too, but not where the answer depends on
+// what the bad card meant: an unknown card may be a misspelt MATERIAL, so the clusters
+// of an unknown material are not called "undefined" (an echo of the first message).
 TEST_CASE("deck: a card error is reported alone, without echoes from the scene check") {
     Scene s;
     const Diagnostics d = read_text(kBase + "FOO 1\nCLUSTER 7 2 2 4 4\n", s);
@@ -1079,4 +1087,175 @@ TEST_CASE("a misspelt card, parameter or --set key is named with the closest one
     lpfdm::Scene t = read_ok(plus("DAMPING 0.5"));
     CHECK(lpfdm::apply_setting(t, "DAMPING.ALPAH", 0.1).find("(did you mean ALPHA?)") != std::string::npos);
     CHECK(lpfdm::apply_setting(t, "DAMPNIG.ALPHA", 0.1).find("(did you mean DAMPING?)") != std::string::npos);
+}
+
+// ======================================== one pass: every error, and warnings ===
+
+// The reader's errors and the scene check's come from one pass, in the order of the deck:
+// a deck with mistakes of both kinds is fixed in one edit, not in rounds.
+TEST_CASE("deck: errors of the cards and of the scene in one pass, in the order of the deck") {
+    Scene s;
+    const Diagnostics d = read_text(
+        "GRID 4 4 1\n"
+        "MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\n"
+        "CLUSTER 1 0 0 9 2\n"                          // 3:1 outside the lattice (scene)
+        "FIX Q 0 0 4 0\n"                              // 4:5 direction (card)
+        "FIX X 9 9 9 9\n"                              // 5:1 no node (scene)
+        "GRAVITY 0 g\n"                                // 6:11 not a number (card)
+        "WALL 1 4 1 4 4 -2000 0\n"                     // 7:1 too fast (scene)
+        "STEP 1E-4 10\n",
+        s);
+    INFO(listing(d));
+    REQUIRE(d.size() == 5);
+    const int where[][2] = {{3, 1}, {4, 5}, {5, 1}, {6, 11}, {7, 1}};
+    const char* phrases[] = {"outside the lattice", "unknown direction", "holds no node", "expected a number", "cells per step"};
+    for (int k = 0; k < 5; ++k) {
+        CAPTURE(k);
+        CHECK(d[std::size_t(k)].pos.line == where[k][0]);
+        CHECK(d[std::size_t(k)].pos.col == where[k][1]);
+        CHECK(has(d[std::size_t(k)].message, phrases[k]));
+        CHECK(!d[std::size_t(k)].warning);
+    }
+}
+
+// What a bad card leaves out is not checked again: one message per problem.
+TEST_CASE("deck: a bad card's consequences are not reported as more errors") {
+    // a bad STEP: not also "dt must be > 0", nor a wall too fast for the dt it did not set
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 0 10\n", 4, 6, "the time step dt must be > 0");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STEP 1E-4 ten\nWALL 1 4 1 4 4 -1 0\n", 4, 11, "expected a number");
+    // a bad GRID: no box is "outside the lattice", no FIX "holds no node"
+    CHECK_ONE_ERROR("GRID 4 4 -1\n" + kMaterial + kCluster + kStep + "FIX X 0 0 4 0\n", 1, 10, "the cell size L must be > 0");
+    CHECK_ONE_ERROR("GRID 4 4\n" + kMaterial + kCluster + kStep, 1, 9, "missing field: L");
+    // a bad MATERIAL: its clusters are not "undefined"; no GRID: only that is said
+    CHECK_ONE_ERROR(kGrid + "MATERIAL 1 ELASTIC E=5E7 NU=0.7 RHO=2000\n" + kCluster + kStep, 2, 29, "NU must lie in");
+    CHECK_ONE_ERROR(kMaterial + kCluster + kStep, 3, 1, "no GRID card");
+    // a bad ADVECT or MOTION card: not also "ADVECT POINTS needs MOTION CENTRE"
+    CHECK_ONE_ERROR(plus("MOTION CENTR\nADVECT POINTS"), 5, 8, "unknown motion 'CENTR'");
+    // a scene error still shows beside a card error that has nothing to do with it
+    Scene s;
+    const Diagnostics d = read_text(kBase + "FIX Q 0 0 4 0\nFIX X 9 9 9 9\n", s);
+    INFO(listing(d));
+    REQUIRE(d.size() == 2);
+    CHECK(has(d[0].message, "unknown direction"));
+    CHECK(has(d[1].message, "holds no node"));
+}
+
+TEST_CASE("diagnostics sort by file, line and column, keeping the order within a place") {
+    Diagnostics d = lpfdm::one_error("b.deck", 1, 1, "b");
+    for (const auto& e : {lpfdm::one_error("a.deck", 9, 2, "late"), lpfdm::one_error("a.deck", 9, 1, "first"), lpfdm::one_error("a.deck", 9, 1, "second")})
+        d.push_back(e[0]);
+    lpfdm::sort_diagnostics(d);
+    REQUIRE(d.size() == 4);
+    CHECK(d[0].message == "first");
+    CHECK(d[1].message == "second");
+    CHECK(d[2].message == "late");
+    CHECK(d[3].message == "b");
+}
+
+// One warning per rule at the card it concerns, and none for sensible numbers: the warnings
+// are for numbers that are legal but probably in the wrong unit or mistyped.
+TEST_CASE("deck warnings: radians, angles above 60 degrees, kPa, t/m^3, NU near 0.5") {
+    struct Case {
+        const char* material;
+        const char* phrase;
+    } cases[] = {
+        {"MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=0.52 C=1E3", "PHI = 0.52 degrees: is it in radians (29.8 degrees)?"},
+        {"MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=30 C=1E3 PSI=0.1", "PSI = 0.1 degrees: is it in radians"},
+        {"MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=62 C=1E3", "PHI = 62 degrees is above 60"},
+        {"MATERIAL 2 ELASTIC E=50 NU=0.3 RHO=2000", "E = 50 Pa is below 1 kPa"},
+        {"MATERIAL 2 ELASTIC E=5E7 NU=0.3 RHO=2", "RHO = 2 kg/m^3 is below 100"},
+        {"MATERIAL 2 ELASTIC E=5E7 NU=0.495 RHO=2000", "NU = 0.495 is nearly incompressible"},
+    };
+    for (const Case& c : cases) {
+        CAPTURE(c.material);
+        const Scene s = read_ok(plus(c.material));
+        const Diagnostics w = lpfdm::warnings(s);
+        INFO(listing(w));
+        REQUIRE(w.size() == 1);
+        CHECK(w[0].warning);
+        CHECK(w[0].pos.line == 5);
+        CHECK(w[0].pos.col == 1);
+        CHECK(has(w[0].str(), "t.deck:5:1: warning: "));
+        CHECK(has(w[0].message, c.phrase));
+    }
+    for (const char* fine : {"MATERIAL 2 MOHR E=1E3 NU=0.494 RHO=100 PHI=1.6 C=1E3 PSI=0", "MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=60 C=1E3 PSI=1.6",
+                             "MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=0 C=1E3"}) {
+        CAPTURE(fine);
+        const Diagnostics w = lpfdm::warnings(read_ok(plus(fine)));
+        INFO(listing(w));
+        CHECK(w.empty());
+    }
+}
+
+TEST_CASE("deck warnings: a time step above 0.95 of the stable limit; an output interval longer than the run") {
+    Scene s = read_ok(kBase);
+    const double lim = lpfdm::stable_dt(s);
+    s.dt_s = 0.96 * lim;
+    Diagnostics w = lpfdm::warnings(s);
+    INFO(listing(w));
+    REQUIRE(w.size() == 1);
+    CHECK(w[0].pos.line == 4);
+    CHECK(has(w[0].message, "0.960 of the stable limit"));
+    s.dt_s = 0.94 * lim;
+    CHECK(lpfdm::warnings(s).empty());
+    s.dt_s = 1.01 * lim;  // above the limit: an error of validate(), not also a warning
+    CHECK(lpfdm::warnings(s).empty());
+    CHECK(!lpfdm::validate(s).empty());
+    const Scene p = read_ok(plus("OUTPUT POINTS p.txt EVERY 11"));
+    w = lpfdm::warnings(p);
+    REQUIRE(w.size() == 1);
+    CHECK(has(w[0].message, "EVERY 11 is more than the 10 steps of the run: only the first and last frames are written"));
+}
+
+// The shipped decks are meant as written: none draws a warning.
+TEST_CASE("deck warnings: none for the decks in decks/") {
+    for (const auto& e : std::filesystem::directory_iterator("decks")) {
+        if (e.path().extension() != ".deck") continue;
+        CAPTURE(e.path().string());
+        Scene s;
+        const Diagnostics d = lpfdm::read_deck(e.path().string(), s);
+        INFO(listing(d));
+        CHECK(d.empty());
+        const Diagnostics w = lpfdm::warnings(s);
+        INFO(listing(w));
+        CHECK(w.empty());
+    }
+}
+
+// ================================================================ provenance ===
+
+TEST_CASE("provenance: FNV-1a 64 of the deck text") {
+    CHECK(lpfdm::fnv1a64("") == 0xcbf29ce484222325ull);
+    CHECK(lpfdm::fnv1a64("a") == 0xaf63dc4c8601ec8cull);
+    CHECK(lpfdm::fnv1a64("foobar") == 0x85944171f73967e8ull);
+}
+
+TEST_CASE("provenance: the '# run:' lines record version, deck digest, options, seed, steps, threads, kernel") {
+    Scene s = read_ok(kBase + "SEED 7\n");
+    lpfdm::Simulation sim(s);
+    lpfdm::RunInfo r;
+    r.deck = "dir/x.deck";
+    r.deck_digest = lpfdm::fnv1a64(kBase);
+    r.settings = {"MATERIAL1.E=6E7", "STEP.N=10"};
+    r.steps = 10;
+    r.refine = 2;
+    r.threads = 3;
+    r.kernel = "scalar";
+    std::FILE* f = std::tmpfile();
+    REQUIRE(f);
+    lpfdm::write_provenance(f, sim, r);
+    std::rewind(f);
+    std::string text;
+    for (int ch; (ch = std::fgetc(f)) != EOF;) text += char(ch);
+    std::fclose(f);
+    INFO(text);
+    char digest[32];
+    std::snprintf(digest, sizeof digest, "%016llx", static_cast<unsigned long long>(lpfdm::fnv1a64(kBase)));
+    CHECK(has(text, std::string("# run: lpfdm ") + lpfdm::kVersion + "\n"));
+    CHECK(has(text, std::string("# run: deck dir/x.deck (fnv1a64 ") + digest + ")\n"));
+    CHECK(has(text, "# run: options --steps 10 --refine 2 --set MATERIAL1.E=6E7 --set STEP.N=10\n"));
+    CHECK(has(text, "# run: seed 7 steps 10 dt 0.0001 s\n"));
+    CHECK(has(text, "# run: threads 3 kernel scalar\n"));
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) CHECK(line.rfind("# run: ", 0) == 0);
 }

@@ -10,6 +10,7 @@
 #   epmax   top of the colour scale for ep (plastic shear strain) default 0.5
 #   delay   time between frames in 1/100 s                      default 20
 #   ptsize  dot size (gnuplot pointsize)                        default 0.5
+#   keypos  where the key goes inside the plot                  default 'top right'
 #   size    canvas size in pixels "W,H"     default: 900 wide, height to fit
 #   xmin, xmax, ymin, ymax   axis limits in m, each may be set alone;
 #           unset ends come from the extent of all frames together
@@ -59,13 +60,14 @@ set output out
 set palette defined (0 '#440154', 1 '#472c7a', 2 '#3b518b', 3 '#2c718e', \
                      4 '#21908d', 5 '#27ad81', 6 '#5cc863', 7 '#aadc32', 8 '#fde725')
 set cbrange [0:epmax]
-set cblabel 'plastic shear strain e_p'
+set cblabel 'plastic shear strain e_p [-]'
 set size ratio -1
 set xrange [xmin:xmax]
 set yrange [ymin:ymax]
 set xlabel 'x [m]'
 set ylabel 'y [m]'
-set key outside top center horizontal
+if (!exists("keypos")) keypos = 'top right'
+eval sprintf("set key inside %s opaque box samplen 1 width 1", keypos)
 
 do for [i = 0:nframes - 1] {
     label = sprintf("step %s, t = %s s", word(steps, 2*i + 1), word(steps, 2*i + 2))

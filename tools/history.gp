@@ -11,8 +11,8 @@
 #   ycol     column name for y                  default 'ke'
 #   xscale   factor applied to x                default 1
 #   yscale   factor applied to y                default 1
-#   xlabel   x axis label                       default: xcol (scaled by ...)
-#   ylabel   y axis label                       default: ycol (scaled by ...)
+#   xlabel   x axis label                       default: xcol [its unit] (× xscale)
+#   ylabel   y axis label                       default: ycol [its unit] (× yscale)
 #   title    plot title                         default: in
 #   logy     1 = logarithmic y axis (e.g. for ke, unbal)   default 0
 #
@@ -25,8 +25,15 @@ if (!exists("xcol"))   xcol = 'time'
 if (!exists("ycol"))   ycol = 'ke'
 if (!exists("xscale")) xscale = 1
 if (!exists("yscale")) yscale = 1
-if (!exists("xlabel")) xlabel = (xscale == 1) ? xcol : sprintf("%s × %g", xcol, xscale)
-if (!exists("ylabel")) ylabel = (yscale == 1) ? ycol : sprintf("%s × %g", ycol, yscale)
+# The unit of each column of a history (per wall: w<id>_fx _fy in N/m, _dx _dy in m).
+tail2(n) = strlen(n) > 2 ? n[strlen(n) - 1:strlen(n)] : ''
+unit(n) = (n eq 'time') ? 's' : (n eq 'ke') ? 'J/m' : (n eq 'mass_in' || n eq 'mass_out') ? 'kg/m' : \
+          (n eq 'rx' || n eq 'ry') ? 'N/m' : (n eq 'step' || n eq 'unbal') ? '-' : \
+          (n[1:1] eq 'w' && (tail2(n) eq 'fx' || tail2(n) eq 'fy')) ? 'N/m' : \
+          (n[1:1] eq 'w' && (tail2(n) eq 'dx' || tail2(n) eq 'dy')) ? 'm' : '?'
+axis(n, f) = (f == 1) ? sprintf("%s [%s]", n, unit(n)) : sprintf("%s [%s] × %g", n, unit(n), f)
+if (!exists("xlabel")) xlabel = axis(xcol, xscale)
+if (!exists("ylabel")) ylabel = axis(ycol, yscale)
 if (!exists("title"))  title = in
 if (!exists("logy"))   logy = 0
 

@@ -55,7 +55,7 @@ stats in using (qc(column(ify))) name 'Q' nooutput
 set terminal pngcairo size 1000,650 enhanced font 'DejaVu Sans,11'
 set output out
 set xlabel 'axial strain ε_a [%]'
-set ylabel 'deviator stress q / c'
+set ylabel 'deviator stress q / c [-]'
 set title title noenhanced
 set grid
 set key bottom right box opaque

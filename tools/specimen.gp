@@ -77,20 +77,20 @@ set output out
 set palette defined (0 '#440154', 1 '#472c7a', 2 '#3b518b', 3 '#2c718e', \
                      4 '#21908d', 5 '#27ad81', 6 '#5cc863', 7 '#aadc32', 8 '#fde725')
 set cbrange [0:epmax]
-set cblabel 'plastic shear strain e_p'
+set cblabel 'plastic shear strain e_p [-]'
 # Fixed margins keep both panels the same size although only the right
 # one carries the colour box.
 set colorbox user origin screen 0.88, screen mbot / H size screen 0.025, screen 1 - (mtop + mbot) / H
 set size ratio -1
 set xrange [xlo - pad:xhi + pad]
 set yrange [ylo - pad:yhi + pad]
-set xlabel 'x/L'
+set xlabel 'x/L [-]'
 set key off
 
 set multiplot layout 1,2 margins screen 0.08, screen 0.84, screen mbot / H, screen 1 - mtop / H \
     spacing screen 0.06 title title noenhanced
 
-set ylabel 'y/L'
+set ylabel 'y/L [-]'
 unset colorbox
 set title sprintf("step %s, t = %s s", word(info, 3), word(info, 4)) noenhanced
 plot in index 0 using (sel($1)):(sel($2)):7 with points pt 7 ps ptsize lc palette

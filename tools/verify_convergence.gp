@@ -12,8 +12,8 @@ set output out
 set title 'lpfdm verification: error against cell size (2x2 points per cell; p: observed order, finest pair)'
 set logscale xy
 set format y '10^{%L}'
-set xlabel 'cell size / characteristic length'
-set ylabel '|relative error|'
+set xlabel 'cell size / characteristic length [-]'
+set ylabel '|relative error| [-]'
 set key outside right top
 set grid
 plot for [c in cases] dir.'/ladder_'.c.'.dat' using (1.0 / $2):4 with linespoints lw 2 pt 7 title c.ord(c) noenhanced, \

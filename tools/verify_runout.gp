@@ -11,8 +11,8 @@ set title 'Granular column collapse: run-out (front: 99 % of the points behind i
 set logscale xy
 set xrange [0.3:6]
 set yrange [0.1:20]
-set xlabel 'aspect ratio a = H_0 / L_0'
-set ylabel '(L_{/Symbol \245} - L_0) / L_0'
+set xlabel 'aspect ratio a = H_0 / L_0 [-]'
+set ylabel '(L_{/Symbol \245} - L_0) / L_0 [-]'
 set key left top
 set grid
 set datafile separator '\t'

@@ -10,7 +10,7 @@ set title 'lpfdm verification: error against wall time (2x2 points per cell; --r
 set logscale xy
 set format y '10^{%L}'
 set xlabel 'wall time of the run [s] (median of 3 runs; one run above 20 s)'
-set ylabel '|relative error|'
+set ylabel '|relative error| [-]'
 set key outside right top
 set grid
 plot for [c in cases] dir.'/ladder_'.c.'.dat' using 3:4 with linespoints lw 2 pt 7 title c noenhanced
