@@ -23,6 +23,7 @@ constexpr int kExitBadInput = 2, kExitNumerical = 3, kExitInterrupted = 130;
 
 const char* kUsage =
     "usage: lpfdm [options] DECK\n"
+    "       lpfdm [options] --restart STATE DECK\n"
     "Runs the Lagrangian Particle Finite Difference Method on the scene of DECK.\n"
     "\n"
     "options (an option with a value may also be written --opt=value):\n"
@@ -37,16 +38,19 @@ const char* kUsage =
     "                fast       the default: threads, four values per AVX2 register where the processor has it\n"
     "                scalar     fast, one value at a time (no AVX2)\n"
     "                reference  the plain cycle, every cell, point and node, one thread: the definition\n"
+    "  --restart F   continue the run saved in the state file F (OUTPUT STATE) from its step; the deck and the\n"
+    "                options --refine, --seed and --set must be the run's own (--steps may run it further)\n"
     "  --profile     print the time of each phase of the cycle, peak memory and bytes per point\n"
     "  --no-avx2     the same as --kernel scalar\n"
     "  -q            quiet: no progress line and no summary\n"
     "  --help        this text\n"
     "  --version     the version\n"
     "\n"
-    "exit status: 0 done, 2 bad deck or options, 3 numerical trouble, 130 interrupted\n";
+    "exit status: 0 done, 2 bad deck, options or state file, 3 numerical trouble, 130 interrupted\n"
+    "(SIGINT: the step under way is finished, its frame, history row and state written)\n";
 
 struct Options {
-    std::string deck, outdir = ".";
+    std::string deck, outdir = ".", restart;
     long refine = 1, steps = 0;
     long long seed = -1;
     bool quiet = false, profile = false;
@@ -74,6 +78,7 @@ struct OutFile {
     std::FILE* f = nullptr;
     const lpfdm::Output* spec = nullptr;
     bool first_frame = true;
+    std::vector<std::pair<std::string, double>> frames;  // VTU: the frames written (file, time)
 };
 
 bool make_dir(const std::string& d) {
@@ -99,8 +104,8 @@ double physical_memory_bytes() {
 int main(int argc, char** argv) {
     Options opt;
     // The options that take a value; each may also be written --opt=value.
-    const std::vector<std::string> with_value = {"-o", "--refine", "--steps", "--seed", "--threads", "--kernel", "--set"};
-    const std::vector<std::string> options = {"-o", "--refine", "--steps", "--seed", "--threads", "--kernel", "--set", "--profile", "--no-avx2", "-q", "--help", "--version"};
+    const std::vector<std::string> with_value = {"-o", "--refine", "--steps", "--seed", "--threads", "--kernel", "--set", "--restart"};
+    const std::vector<std::string> options = {"-o", "--refine", "--steps", "--seed", "--threads", "--kernel", "--set", "--restart", "--profile", "--no-avx2", "-q", "--help", "--version"};
     for (int a = 1; a < argc; ++a) {
         std::string s = argv[a];
         std::string inline_value;  // --opt=value
@@ -149,6 +154,10 @@ int main(int argc, char** argv) {
             else if (d == "scalar") opt.kernel = lpfdm::Kernel::Scalar;
             else if (d == "reference") opt.kernel = lpfdm::Kernel::Reference;
             else return usage_error("--kernel needs fast, scalar or reference");
+        } else if (s == "--restart") {
+            const char* d = value();
+            if (!d || !*d) return usage_error("--restart needs a state file");
+            opt.restart = d;
         } else if (s == "--set") {
             const char* d = value();
             const std::string kv = d ? d : "";
@@ -187,6 +196,11 @@ int main(int argc, char** argv) {
         if (opt.seed >= 0) scene.seed = std::uint64_t(opt.seed);
     }
     if (diags.empty()) diags = lpfdm::validate(scene);
+    // What a state file must have been written by: the deck and the options that change
+    // the scene (not --steps: a restart may run further).
+    std::string scene_options = fmt::format("refine {} seed {}", opt.refine, opt.seed);
+    for (const auto& kv : opt.settings) scene_options += fmt::format(" set {}={:.17g}", kv.first, kv.second);
+    const std::uint64_t digest = lpfdm::state_digest(text, scene_options);
     if (diags.empty()) {
         const double points = lpfdm::count_points(scene);
         const double need = lpfdm::estimate_bytes(scene, points), have = physical_memory_bytes();
@@ -199,11 +213,6 @@ int main(int argc, char** argv) {
         return kExitBadInput;
     }
 
-    // --- outputs: NAME.part until complete ---
-    if (!make_dir(opt.outdir)) {
-        std::fprintf(stderr, "lpfdm: error: cannot create the output directory '%s': %s\n", opt.outdir.c_str(), std::strerror(errno));
-        return kExitBadInput;
-    }
 #if defined(_OPENMP)
     // One thread unless asked: the output is the same for any number, and threads that
     // share busy cores with other programs wait at every barrier (57 times slower seen).
@@ -215,16 +224,49 @@ int main(int argc, char** argv) {
 #endif
     lpfdm::Simulation sim(scene, opt.kernel);
     sim.set_profiling(opt.profile);
+    // The positions at step 0, by point id (the VTU series' displacement), taken before a
+    // restart replaces the points.
+    std::vector<double> x0(sim.points().x), y0(sim.points().y);
+    if (!opt.restart.empty()) {
+        diags = lpfdm::read_state(opt.restart, sim, digest);
+        if (diags.empty() && sim.step_count() >= scene.steps)
+            diags = lpfdm::one_error(opt.restart, 0, 0, fmt::format("the state is at step {}, where the run ends (--steps N runs it further)", sim.step_count()));
+        if (!diags.empty()) {
+            for (const auto& d : diags) std::fprintf(stderr, "%s\n", d.str().c_str());
+            return kExitBadInput;
+        }
+    }
+
+    // --- outputs: NAME.part until complete ---
+    if (!make_dir(opt.outdir)) {
+        std::fprintf(stderr, "lpfdm: error: cannot create the output directory '%s': %s\n", opt.outdir.c_str(), std::strerror(errno));
+        return kExitBadInput;
+    }
+    // A file written whole as NAME.part, then renamed (VTU frames and collections, states).
+    auto write_whole = [&](const std::string& path, const auto& write) {
+        const std::string part = path + ".part";
+        std::FILE* f = std::fopen(part.c_str(), "wb");
+        bool ok = f && write(f);
+        if (f) ok &= std::fclose(f) == 0;
+        ok = ok && std::rename(part.c_str(), path.c_str()) == 0;
+        if (!ok) std::fprintf(stderr, "lpfdm: error: cannot write '%s': %s\n", path.c_str(), std::strerror(errno));
+        return ok;
+    };
+    bool write_failed = false;
     std::vector<OutFile> outs;
     for (const auto& o : sim.scene().outputs) {
         OutFile of;
         of.final_path = opt.outdir + "/" + o.file;
         of.part_path = of.final_path + ".part";
         of.spec = &o;
+        if (o.kind == lpfdm::Output::Vtu || o.kind == lpfdm::Output::State) {  // files written whole
+            outs.push_back(of);
+            continue;
+        }
         of.f = std::fopen(of.part_path.c_str(), "wb");
         if (!of.f) {
             std::fprintf(stderr, "%s:%d:%d: error: cannot write '%s': %s\n", o.pos.file.c_str(), o.pos.line, o.pos.col, of.part_path.c_str(), std::strerror(errno));
-            for (auto& p : outs) { std::fclose(p.f); std::remove(p.part_path.c_str()); }
+            for (auto& p : outs) if (p.f) { std::fclose(p.f); std::remove(p.part_path.c_str()); }
             return kExitBadInput;
         }
         if (o.kind == lpfdm::Output::Points) {
@@ -236,9 +278,28 @@ int main(int argc, char** argv) {
         }
         outs.push_back(of);
     }
+    // A frame of a VTU series, and its collection written anew.
+    auto vtu_frame = [&](OutFile& o) {
+        const std::string file = lpfdm::vtu_frame_file(o.spec->file, sim.step_count());
+        write_failed |= !write_whole(opt.outdir + "/" + file, [&](std::FILE* f) {
+            lpfdm::write_vtu(f, sim, x0, y0, o.spec->binary);
+            return !std::ferror(f);
+        });
+        o.frames.push_back({file, sim.time()});
+        write_failed |= !write_whole(opt.outdir + "/" + o.spec->file + ".pvd", [&](std::FILE* f) {
+            lpfdm::write_pvd(f, o.frames);
+            return !std::ferror(f);
+        });
+    };
+    auto save_state = [&](OutFile& o) {
+        write_failed |= !write_whole(o.final_path, [&](std::FILE* f) { return lpfdm::write_state(f, sim, digest); });
+    };
+    for (auto& o : outs)
+        if (o.spec->kind == lpfdm::Output::Vtu) vtu_frame(o);
     auto finish_outputs = [&](const std::string& note) {
-        bool ok = true;
+        bool ok = !write_failed;
         for (auto& o : outs) {
+            if (!o.f) continue;
             if (!note.empty()) std::fprintf(o.f, "# %s\n", note.c_str());
             ok &= std::fclose(o.f) == 0;
             ok &= std::rename(o.part_path.c_str(), o.final_path.c_str()) == 0;
@@ -248,14 +309,22 @@ int main(int argc, char** argv) {
     };
 
     std::signal(SIGINT, on_sigint);
-    const long steps = scene.steps;
+    const long steps = scene.steps, first = sim.step_count() + 1;
     const bool progress = !opt.quiet && isatty(2);
     const auto t0 = std::chrono::steady_clock::now();
     auto last_print = t0;
     double particle_steps = 0;
     int status = 0;
     std::string note;
-    for (long n = 1; n <= steps; ++n) {
+    // Whether output o is due at step n: a history row every n steps (every step without
+    // EVERY); a frame or a state every n steps and at the last step (without EVERY only
+    // there; frames also at the first).
+    auto due = [&](const OutFile& o, long n) {
+        const long every = o.spec->every;
+        if (o.spec->kind == lpfdm::Output::History) return n % (every > 0 ? every : 1) == 0;
+        return (every > 0 && n % every == 0) || n == steps;
+    };
+    for (long n = first; n <= steps; ++n) {
         particle_steps += double(sim.points().size());
         sim.step();
         if (!sim.healthy()) {
@@ -276,35 +345,36 @@ int main(int argc, char** argv) {
                 : "a non-finite value appeared";
             std::fprintf(stderr, "lpfdm: error: numerical trouble at step %ld (t = %.6g s): %s%s\n", n, sim.time(), why.c_str(), where.c_str());
             // The points are still finite when the trouble is in the nodal increments: their
-            // state at this step is the last good one, so it is written as the last frame.
+            // state at this step is the last good one, so it is written as the last frame
+            // (no state: the nodes' is not good).
             if (k < 0)
                 for (auto& o : outs) {
-                    if (o.spec->kind != lpfdm::Output::History) lpfdm::write_points_frame(o.f, sim, false);
-                    else if (std::isfinite(sim.kinetic_energy())) lpfdm::write_history_row(o.f, sim);
+                    if (o.spec->kind == lpfdm::Output::Points) lpfdm::write_points_frame(o.f, sim, false);
+                    else if (o.spec->kind == lpfdm::Output::Vtu) vtu_frame(o);
+                    else if (o.spec->kind == lpfdm::Output::History && std::isfinite(sim.kinetic_energy())) lpfdm::write_history_row(o.f, sim);
                 }
             note = fmt::format("run stopped at step {}: numerical trouble; the frames above are the last good ones", n);
             status = kExitNumerical;
             break;
         }
+        // Each output due at this step, and on SIGINT every output not due (the
+        // interrupted step once).
+        const bool stop = g_interrupted;
         for (auto& o : outs) {
-            const long every = o.spec->every;
-            if (o.spec->kind == lpfdm::Output::History) {
-                if (n % (every > 0 ? every : 1) == 0) lpfdm::write_history_row(o.f, sim);
-            } else if ((every > 0 && n % every == 0) || n == steps) {
-                lpfdm::write_points_frame(o.f, sim, o.first_frame);
+            if (!due(o, n) && !stop) continue;
+            switch (o.spec->kind) {
+            case lpfdm::Output::History: lpfdm::write_history_row(o.f, sim); break;
+            case lpfdm::Output::Points: lpfdm::write_points_frame(o.f, sim, o.first_frame); o.first_frame = false; break;
+            case lpfdm::Output::Vtu: vtu_frame(o); break;
+            case lpfdm::Output::State: save_state(o); break;
             }
         }
-        if (g_interrupted) {
-            for (auto& o : outs) {  // unless this step's row or frame was just written
-                const long every = o.spec->every;
-                if (o.spec->kind == lpfdm::Output::History) {
-                    if (n % (every > 0 ? every : 1) != 0) lpfdm::write_history_row(o.f, sim);
-                } else if (!((every > 0 && n % every == 0) || n == steps)) {
-                    lpfdm::write_points_frame(o.f, sim, false);
-                }
-            }
+        if (stop) {
             note = fmt::format("run interrupted at step {} of {}", n, steps);
-            std::fprintf(stderr, "\nlpfdm: interrupted at step %ld of %ld; the last frame and a history row were written\n", n, steps);
+            bool saved = false;
+            for (const auto& o : outs) saved |= o.spec->kind == lpfdm::Output::State;
+            std::fprintf(stderr, "\nlpfdm: interrupted at step %ld of %ld; the last frame and a history row were written%s\n", n, steps,
+                         saved ? ", and the state (--restart continues it)" : "");
             status = kExitInterrupted;
             break;
         }
@@ -314,7 +384,7 @@ int main(int argc, char** argv) {
                 last_print = now;
                 const double el = std::chrono::duration<double>(now - t0).count();
                 std::fprintf(stderr, "\rstep %ld/%ld (%3.0f%%)  ke %.4g J/m  %.0f s left   ", n, steps, 100.0 * n / steps, sim.kinetic_energy(),
-                             el / n * (steps - n));
+                             el / double(n - first + 1) * double(steps - n));
             }
         }
     }

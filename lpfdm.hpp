@@ -296,9 +296,10 @@ struct Wall {
 };
 
 struct Output {
-    enum Kind { Points, History } kind = Points;
-    std::string file;
-    long every = 0;  // 0: points: first and last frame only; history: every step
+    enum Kind { Points, History, Vtu, State } kind = Points;
+    std::string file;  // VTU: the series' name (NAME.pvd, NAME_<step>.vtu)
+    long every = 0;  // 0: points, VTU: first and last frame only; history: every step; state: the last step only
+    bool binary = false;  // VTU: the arrays as appended raw binary (else ASCII)
     Pos pos;
 };
 
@@ -438,7 +439,7 @@ inline const DeckCard kDeckCards[] = {
     {"ADVECT", "EQ12|POINTS", "", "how increments follow the material: eq. 12, or carried by the points"},
     {"SEED", "", "", "seed of the strength scatter"},
     {"STEP", "", "", "n steps of dt seconds"},
-    {"OUTPUT", "POINTS|HISTORY file", "", "a point table or a history, a frame or row every n steps"},
+    {"OUTPUT", "POINTS|HISTORY|VTU|STATE file", "[BINARY]", "a point table, a history, a VTK series (VTU) or a restart file (STATE), every n steps"},
     {"END", "", "", "the end of the deck (optional)"},
 };
 
@@ -1688,6 +1689,34 @@ public:
     }
     double max_du() const { return max_du_; }                         // largest nodal increment of the last step [m]
 
+    // Restart files (write_state, read_state). What a step reads besides the scene and the
+    // points: f(name, member) for the step count and the running sums, the whole lattice's
+    // nodal and cell arrays (the increments eq. 12 compensates and eq. 13 advances, the
+    // node masses eq. 12 compares with the next step's, the cell masses eq. 5 tests), and
+    // each wall's travel, line and velocity. The random numbers are drawn when the points
+    // are made (their c0 and n_phi keep them); no generator state lives on.
+    template <class F> void each_state(F&& f) { visit_state(*this, f); }
+    template <class F> void each_state(F&& f) const { visit_state(*this, f); }
+    // After each_state and the points' arrays were set from a file: the fast kernel's
+    // record of the active lattice made anew from the points (every node taken as live,
+    // which only costs the first step a visit of the whole lattice), the threads' point
+    // chunks and scratch sized to the points. Either kernel may continue either's state.
+    void resumed() {
+        Landing t;
+        for (std::size_t k = 0; k < p_.size(); ++k) {
+            const int c = p_.cell[k];
+            t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
+            const int i = p_.x[k] >= 0 ? std::min(mx_ - 1, int(p_.x[k] * invL_)) : c % mx_;
+            t.imin = std::min(t.imin, i); t.imax = std::max(t.imax, i);
+        }
+        occupied_ = landed(t);
+        strained_ = occupied_.grow(2, mx_, my_);
+        live_nodes_ = integrated_ = {0, mx_ + 1, 0, my_ + 1};
+        parts_known_ = false;
+        chunk_team_ = 0;
+        p_.each_array([&](const char*, auto& v, Points::Use, bool state) { if (!state && !v.empty()) v.resize(p_.size()); });
+    }
+
     // The phases of step(), in order; public so that tests and lessons can step
     // through one cycle. Normal use calls step().
     void cell_strains();
@@ -1698,6 +1727,19 @@ public:
     void integrate();
 
 private:
+    template <class S, class F> static void visit_state(S& s, F& f) {
+        f("step", s.step_); f("mass_in", s.mass_in_); f("mass_out", s.mass_out_); f("mass_initial", s.mass0_);
+        f("ke", s.ke_); f("max_du", s.max_du_); f("rx", s.rx_); f("ry", s.ry_);
+        f("du_x", s.dux_); f("du_y", s.duy_); f("force_x", s.fx_); f("force_y", s.fy_);
+        f("node_mass", s.nmass_); f("node_mass_prev", s.nmass_prev_);
+        f("cell_mass", s.cmass_); f("cell_volume", s.cvol_); f("cell_vsxx", s.svxx_); f("cell_vsyy", s.svyy_); f("cell_vsxy", s.svxy_);
+        f("cell_strain", s.strain_); f("cell_hourglass_x", s.hgx_); f("cell_hourglass_y", s.hgy_); f("cell_carried", s.carried_);
+        for (std::size_t w = 0; w < s.walls_.size(); ++w) {
+            f("wall_shift_i", s.walls_[w].shift_i); f("wall_shift_j", s.walls_[w].shift_j);
+            f("wall_fx", s.walls_[w].fx); f("wall_fy", s.walls_[w].fy); f("wall_dx", s.walls_[w].dx); f("wall_dy", s.walls_[w].dy);
+            f("wall_vx", s.sc_.walls[w].vx); f("wall_vy", s.sc_.walls[w].vy);
+        }
+    }
     void setup();
     void create_points();
     void remove_departed();
@@ -3918,17 +3960,25 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
         } else if (kw == "OUTPUT") {
             Output o;
             o.pos = kp;
-            const Token* kind = r.field("kind (POINTS or HISTORY)");
+            const Token* kind = r.field("kind (POINTS, HISTORY, VTU or STATE)");
             if (kind) {
                 const std::string u = upper(kind->text);
                 if (u == "POINTS") o.kind = Output::Points;
                 else if (u == "HISTORY") o.kind = Output::History;
-                else r.fail(kind->pos, "unknown output '" + kind->text + "' (POINTS or HISTORY)");
+                else if (u == "VTU") o.kind = Output::Vtu;
+                else if (u == "STATE") o.kind = Output::State;
+                else r.fail(kind->pos, "unknown output '" + kind->text + "' (POINTS, HISTORY, VTU or STATE)" +
+                                           did_you_mean(kind->text, {"POINTS", "HISTORY", "VTU", "STATE"}));
             }
             const Token* f = r.field("file name");
             if (f) o.file = f->text;
             if (f && (o.file.find('/') != std::string::npos || o.file == "." || o.file == ".."))
                 r.fail(f->pos, "the file name must not contain a directory (use -o DIR)");
+            if (r.ok() && r.more_positional() && upper(r.peek()->text) == "BINARY") {  // OUTPUT VTU name BINARY
+                const Token* b = r.field("BINARY");
+                if (o.kind == Output::Vtu) o.binary = true;
+                else r.fail(b->pos, "BINARY is a word of OUTPUT VTU only (point tables and histories are text)");
+            }
             for (const auto& prev : sc.outputs)
                 if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
             sc.outputs.push_back(o);
@@ -4068,6 +4118,310 @@ inline void write_history_row(std::FILE* f, const Simulation& sim) {
     for (const auto& w : sim.walls()) fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g}", w.fx, w.fy, w.dx, w.dy);
     fmt::format_to(std::back_inserter(b), " {:.6g} {:.9g} {:.9g}\n", sim.unbalanced_ratio(), sim.reaction_x(), sim.reaction_y());
     std::fwrite(b.data(), 1, b.size(), f);
+}
+
+// VTK XML files (ParaView, VisIt), written without the VTK library. One frame of the
+// points is an UnstructuredGrid of vertex cells with every point field as PointData:
+//   stress        sxx sxy 0 / sxy syy 0 / 0 0 szz, the full 3 x 3 tensor (9 components) [Pa]
+//   ep, yielded   accumulated plastic shear strain, 1 once yielded (0 without Mohr-Coulomb)
+//   material, id  material id, point number (stable across frames)
+//   velocity      what the point moves in the next step (its cell's motion rule applied to
+//                 the nodal increments) over dt: the velocity at t + dt/2 [m/s]
+//   displacement  position minus the position at step 0 (x0, y0: by point id) [m]
+// binary: the arrays as raw bytes in an AppendedData block (each behind its byte count,
+// UInt64), else ASCII with the point table's digits. z is 0. The frame's time and step
+// are the FieldData TIME and STEP.
+inline void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<double>& x0, const std::vector<double>& y0, bool binary) {
+    const Points& p = sim.points();
+    const std::size_t n = p.size();
+    const bool plastic = !p.plastic_shear.empty();
+    const int mx = sim.mx();
+    const double L = sim.cell_size(), dt = sim.scene().dt_s;
+    const std::vector<double>&ux = sim.du_x(), &uy = sim.du_y();
+    // The point's increment in the next step, as the point pass makes it (eq. 7a/7b or the
+    // scene's MOTION), without the stop at a fixed cell edge.
+    auto step_of = [&](std::size_t k, double& dx, double& dy) {
+        const int c = p.cell[std::size_t(k)], ci = c % mx, cj = c / mx;
+        const StrainIncrement e = sim.strain_of_cell(ci, cj);
+        const int n1 = sim.node(ci, cj), n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
+        const double ax[4] = {ux[std::size_t(n1)], ux[std::size_t(n2)], ux[std::size_t(n3)], ux[std::size_t(n4)]};
+        const double ay[4] = {uy[std::size_t(n1)], uy[std::size_t(n2)], uy[std::size_t(n3)], uy[std::size_t(n4)]};
+        const double xi = ci * L, yj = cj * L;
+        double x = 0, y = 0, ddx = 0, ddy = 0;
+        if (sim.scene().motion == Motion::Paper) {
+            move_point_paper(p.x[k], p.y[k], e, xi, yj, ax[0], ay[0], x, y);
+        } else if (sim.scene().motion == Motion::Centre) {
+            move_point_centre(p.x[k], p.y[k], e, xi, yj, L, 0.25 * (ax[0] + ax[1] + ax[2] + ax[3]), 0.25 * (ay[0] + ay[1] + ay[2] + ay[3]), x, y, ddx, ddy);
+        } else {
+            move_point_bilinear(p.x[k], p.y[k], xi, yj, 1 / L, ax, ay, x, y, ddx, ddy);
+        }
+        dx = x - p.x[k]; dy = y - p.y[k];
+    };
+    // Each array: its name, VTK type, components, and value(k, component).
+    enum Type { F64, I32, U8, I64 };
+    struct Array {
+        const char* name;
+        Type type;
+        int comps;
+        std::function<double(std::size_t, int)> value;
+    };
+    auto origin = [&](const std::vector<double>& v0, std::size_t k) {
+        const std::size_t id = std::size_t(p.id[k]);
+        return id < v0.size() ? v0[id] : 0.0;
+    };
+    const std::vector<Array> point_data = {
+        {"stress", F64, 9, [&](std::size_t k, int c) {
+             const double t[9] = {p.sxx[k], p.sxy[k], 0, p.sxy[k], p.syy[k], 0, 0, 0, p.szz[k]};
+             return t[c];
+         }},
+        {"ep", F64, 1, [&](std::size_t k, int) { return plastic ? p.plastic_shear[k] : 0.0; }},
+        {"yielded", U8, 1, [&](std::size_t k, int) { return plastic ? double(p.yielded[k]) : 0.0; }},
+        {"material", I32, 1, [&](std::size_t k, int) { return double(sim.material_id(k)); }},
+        {"velocity", F64, 3, [&](std::size_t k, int c) {
+             if (c == 2) return 0.0;
+             double dx, dy;
+             step_of(k, dx, dy);
+             return (c == 0 ? dx : dy) / dt;
+         }},
+        {"displacement", F64, 3, [&](std::size_t k, int c) { return c == 0 ? p.x[k] - origin(x0, k) : c == 1 ? p.y[k] - origin(y0, k) : 0.0; }},
+        {"id", I32, 1, [&](std::size_t k, int) { return double(p.id[k]); }},
+    };
+    const Array coords = {"Points", F64, 3, [&](std::size_t k, int c) { return c == 0 ? p.x[k] : c == 1 ? p.y[k] : 0.0; }};
+    const Array cells[3] = {{"connectivity", I64, 1, [](std::size_t k, int) { return double(k); }},
+                            {"offsets", I64, 1, [](std::size_t k, int) { return double(k + 1); }},
+                            {"types", U8, 1, [](std::size_t, int) { return 1.0; }}};  // VTK_VERTEX
+    static const char* type_name[] = {"Float64", "Int32", "UInt8", "Int64"};
+    static const std::size_t type_size[] = {8, 4, 1, 8};
+    const std::uint16_t one = 1;
+    const bool little = *reinterpret_cast<const unsigned char*>(&one) == 1;
+
+    fmt::memory_buffer b;
+    auto out = std::back_inserter(b);
+    auto flush = [&]() { std::fwrite(b.data(), 1, b.size(), f); b.clear(); };
+    std::uint64_t offset = 0;  // of the next array in the appended block
+    auto array = [&](const Array& a, const char* indent) {
+        fmt::format_to(out, "{}<DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"{}\"", indent, type_name[a.type], a.name, a.comps,
+                       binary ? "appended" : "ascii");
+        if (binary) {
+            fmt::format_to(out, " offset=\"{}\"/>\n", offset);
+            offset += 8 + std::uint64_t(n) * std::uint64_t(a.comps) * type_size[a.type];
+            return;
+        }
+        fmt::format_to(out, ">\n");
+        for (std::size_t k = 0; k < n; ++k) {
+            for (int c = 0; c < a.comps; ++c) {
+                const double v = a.value(k, c);
+                if (a.type == F64) fmt::format_to(out, "{}{:.9g}", c ? " " : "", v);
+                else fmt::format_to(out, "{}{}", c ? " " : "", std::int64_t(v));
+            }
+            fmt::format_to(out, "\n");
+            if (b.size() > (1 << 20)) flush();
+        }
+        fmt::format_to(out, "{}</DataArray>\n", indent);
+    };
+    fmt::format_to(out, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"{}\" header_type=\"UInt64\">\n",
+                   little ? "LittleEndian" : "BigEndian");
+    fmt::format_to(out, "  <UnstructuredGrid>\n    <FieldData>\n");
+    fmt::format_to(out, "      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" format=\"ascii\">{:.17g}</DataArray>\n", sim.time());
+    fmt::format_to(out, "      <DataArray type=\"Int64\" Name=\"STEP\" NumberOfTuples=\"1\" format=\"ascii\">{}</DataArray>\n", sim.step_count());
+    fmt::format_to(out, "    </FieldData>\n    <Piece NumberOfPoints=\"{0}\" NumberOfCells=\"{0}\">\n", n);
+    fmt::format_to(out, "      <PointData Scalars=\"ep\" Vectors=\"velocity\" Tensors=\"stress\">\n");
+    for (const Array& a : point_data) array(a, "        ");
+    fmt::format_to(out, "      </PointData>\n      <Points>\n");
+    array(coords, "        ");
+    fmt::format_to(out, "      </Points>\n      <Cells>\n");
+    for (const Array& a : cells) array(a, "        ");
+    fmt::format_to(out, "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n");
+    if (binary) {
+        fmt::format_to(out, "  <AppendedData encoding=\"raw\">\n   _");
+        auto raw = [&](const void* v, std::size_t bytes) {
+            const char* c = static_cast<const char*>(v);
+            b.append(c, c + bytes);
+        };
+        auto block = [&](const Array& a) {
+            const std::uint64_t bytes = std::uint64_t(n) * std::uint64_t(a.comps) * type_size[a.type];
+            raw(&bytes, sizeof bytes);
+            for (std::size_t k = 0; k < n; ++k) {
+                for (int c = 0; c < a.comps; ++c) {
+                    const double v = a.value(k, c);
+                    if (a.type == F64) raw(&v, 8);
+                    else if (a.type == I64) { const std::int64_t i = std::int64_t(v); raw(&i, 8); }
+                    else if (a.type == I32) { const std::int32_t i = std::int32_t(v); raw(&i, 4); }
+                    else { const std::uint8_t i = std::uint8_t(v); raw(&i, 1); }
+                }
+                if (b.size() > (1 << 20)) flush();
+            }
+        };
+        for (const Array& a : point_data) block(a);
+        block(coords);
+        for (const Array& a : cells) block(a);
+        fmt::format_to(out, "\n  </AppendedData>\n");
+    }
+    fmt::format_to(out, "</VTKFile>\n");
+    flush();
+}
+
+// The file of frame `step` of VTU series `name`: name_<step>.vtu, the step in at least
+// six digits, so that the files sort in step order.
+inline std::string vtu_frame_file(const std::string& name, long step) { return fmt::format("{}_{:06d}.vtu", name, step); }
+
+// A ParaView collection of the frames (file, time) written: it opens the series at once.
+inline void write_pvd(std::FILE* f, const std::vector<std::pair<std::string, double>>& frames) {
+    fmt::print(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n");
+    for (const auto& fr : frames) fmt::print(f, "    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n", fr.second, fr.first);
+    fmt::print(f, "  </Collection>\n</VTKFile>\n");
+}
+
+// Restart files (OUTPUT STATE, lpfdm --restart): everything the next step reads, in a
+// versioned binary with a checksum. Layout, in the machine's byte order:
+//   "lpfdm state\n"  u32 version  u32 0x01020304 (byte order)  u64 file size  u64 digest,
+//   items: u8 name length, name, u8 bytes per value, u64 values, the values' bytes
+//          (Simulation::each_state in order, then "point_count" and every array of
+//          Points::each_array that is a point's state, as "point_<name>"),
+//   u64 checksum: FNV-1a of every byte before it.
+// The digest is state_digest's of the deck text and of the options that change the
+// scene: a state continues only the run it came from.
+inline constexpr char kStateMagic[] = "lpfdm state\n";
+inline constexpr std::uint32_t kStateVersion = 1;
+namespace detail {
+inline std::uint64_t fnv1a(const void* data, std::size_t n, std::uint64_t h = 14695981039346656037ull) {
+    const unsigned char* c = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) { h ^= c[i]; h *= 1099511628211ull; }
+    return h;
+}
+template <class T> struct IsVector : std::false_type {};
+template <class T, class A> struct IsVector<std::vector<T, A>> : std::true_type {};
+// The bytes, bytes per value and values of a state item (a number or a vector of them).
+template <class M> void item_span(M& m, void*& data, std::size_t& size, std::size_t& count) {
+    if constexpr (IsVector<std::remove_const_t<M>>::value) {
+        static_assert(std::is_trivially_copyable_v<typename std::remove_const_t<M>::value_type>, "state items are plain values");
+        data = const_cast<void*>(static_cast<const void*>(m.data())); size = sizeof(m[0]); count = m.size();
+    } else {
+        static_assert(std::is_trivially_copyable_v<std::remove_const_t<M>>, "state items are plain values");
+        data = const_cast<void*>(static_cast<const void*>(&m)); size = sizeof(M); count = 1;
+    }
+}
+}  // namespace detail
+inline std::uint64_t state_digest(const std::string& deck_text, const std::string& options) {
+    return detail::fnv1a(options.data(), options.size(), detail::fnv1a(deck_text.data(), deck_text.size()));
+}
+
+// sim's state as a restart file. Returns whether every byte was written.
+inline bool write_state(std::FILE* f, const Simulation& sim, std::uint64_t digest) {
+    std::string b(kStateMagic, sizeof kStateMagic - 1);
+    auto raw = [&](const void* v, std::size_t bytes) { b.append(static_cast<const char*>(v), bytes); };
+    const std::uint32_t version = kStateVersion, order = 0x01020304;
+    const std::uint64_t size_slot = 0;
+    raw(&version, 4); raw(&order, 4);
+    const std::size_t size_at = b.size();
+    raw(&size_slot, 8); raw(&digest, 8);
+    auto item = [&](const char* name, const auto& m) {
+        void* data; std::size_t size, count;
+        detail::item_span(m, data, size, count);
+        const std::uint8_t len = std::uint8_t(std::strlen(name)), sz = std::uint8_t(size);
+        const std::uint64_t cnt = count;
+        raw(&len, 1); raw(name, len); raw(&sz, 1); raw(&cnt, 8); raw(data, size * count);
+    };
+    sim.each_state(item);
+    const Points& p = sim.points();
+    const std::uint64_t n = p.size();
+    item("point_count", n);
+    p.each_array([&](const char* name, const auto& v, Points::Use, bool state) { if (state) item(("point_" + std::string(name)).c_str(), v); });
+    const std::uint64_t total = b.size() + 8;
+    std::memcpy(&b[size_at], &total, 8);
+    const std::uint64_t sum = detail::fnv1a(b.data(), b.size());
+    raw(&sum, 8);
+    return std::fwrite(b.data(), 1, b.size(), f) == b.size();
+}
+
+// Continues sim (made from the same deck and options, not yet stepped) from the restart
+// file at path. A file that is not a state, of another version or byte order, truncated,
+// corrupt (checksum), of another deck (digest) or that does not fit the scene is refused
+// with one diagnostic, and sim is left as it was.
+inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uint64_t digest) {
+    auto error = [&](const std::string& m) { return one_error(path, 0, 0, m); };
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) return error("cannot read the state file: it is a directory");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return error(std::string("cannot open the state file: ") + std::strerror(errno));
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    const std::string b = ss.str();
+    const std::size_t magic = sizeof kStateMagic - 1, head = magic + 4 + 4 + 8 + 8;
+    if (b.size() < magic || b.compare(0, magic, kStateMagic) != 0) return error("not an lpfdm state file (it does not begin with 'lpfdm state')");
+    if (b.size() < head + 8) return error(fmt::format("the state file is truncated: {} bytes, not even its header", b.size()));
+    auto get = [&](std::size_t at, auto& v) { std::memcpy(&v, b.data() + at, sizeof v); };
+    std::uint32_t version = 0, order = 0;
+    std::uint64_t total = 0, dig = 0, sum = 0;
+    get(magic, version); get(magic + 4, order); get(magic + 8, total); get(magic + 16, dig);
+    if (order != 0x01020304) return error("the state file was written on a machine of the other byte order");
+    if (version != kStateVersion) return error(fmt::format("the state file has format version {}; this lpfdm {} reads version {}", version, kVersion, kStateVersion));
+    if (b.size() < total) return error(fmt::format("the state file is truncated: {} of its {} bytes", b.size(), total));
+    if (b.size() > total || total < head + 8) return error(fmt::format("the state file is corrupt: {} bytes, its header says {}", b.size(), total));
+    get(total - 8, sum);
+    if (detail::fnv1a(b.data(), total - 8) != sum) return error("the state file is corrupt: its checksum does not match its contents");
+    if (dig != digest)
+        return error(fmt::format("the state file was written by a run of another deck, or with other --refine, --seed or --set options (digest {:016x}, this run {:016x})", dig, digest));
+    // Twice through the items: first every check, then (apply) the copy.
+    Points& p = sim.points();
+    const std::size_t made = p.size();  // the points at step 0: no more can be left
+    std::size_t at = head, n = 0, cell_at = 0, group_at = 0;
+    std::string problem;
+    auto next = [&](const char* name, auto& m, std::size_t want, bool apply) {
+        if (!problem.empty()) return;
+        void* data; std::size_t size, count;
+        detail::item_span(m, data, size, count);
+        std::uint8_t len = 0, sz = 0;
+        std::uint64_t cnt = 0;
+        if (at + 1 > total - 8) { problem = fmt::format("it ends before '{}'", name); return; }
+        get(at, len);
+        if (at + 1 + len + 9 > total - 8) { problem = fmt::format("it ends before '{}'", name); return; }
+        const std::string got = b.substr(at + 1, len);
+        get(at + 1 + len, sz); get(at + 2 + len, cnt);
+        at += 10 + len;
+        if (got != name) { problem = fmt::format("it holds '{}' where '{}' belongs", got, name); return; }
+        if (sz != size || cnt != want) { problem = fmt::format("'{}' holds {} values of {} bytes, this scene needs {} of {}", name, cnt, sz, want, size); return; }
+        if (cnt * sz > total - 8 - at) { problem = fmt::format("it ends inside '{}'", name); return; }
+        if (apply) {
+            if constexpr (detail::IsVector<std::remove_reference_t<decltype(m)>>::value) m.resize(std::size_t(cnt));
+            detail::item_span(m, data, size, count);
+            if (cnt) std::memcpy(data, b.data() + at, std::size_t(cnt) * sz);
+        }
+        at += std::size_t(cnt) * sz;
+    };
+    for (const bool apply : {false, true}) {
+        at = head;
+        sim.each_state([&](const char* name, auto& m) {
+            std::size_t size = 0, count = 0;
+            void* data;
+            detail::item_span(m, data, size, count);
+            next(name, m, count, apply);
+        });
+        std::uint64_t count = 0;
+        next("point_count", count, 1, false);
+        if (problem.empty()) {
+            get(at - 8, count);
+            if (count > made) problem = fmt::format("it holds {} points, this scene makes {}", count, made);
+            n = std::size_t(count);
+        }
+        p.each_array([&](const char* name, auto& v, Points::Use, bool state) {
+            if (!state) return;
+            const std::string item = "point_" + std::string(name);
+            if (item == "point_cell") cell_at = at + 10 + item.size();
+            if (item == "point_group") group_at = at + 10 + item.size();
+            next(item.c_str(), v, v.empty() ? 0 : n, apply);
+        });
+        if (problem.empty() && at != total - 8) problem = "it holds more than this scene's state";
+        for (std::size_t k = 0; k < n && problem.empty() && !apply; ++k) {
+            std::int32_t c;
+            std::uint16_t g;
+            get(cell_at + 4 * k, c); get(group_at + 2 * k, g);
+            if (c < 0 || c >= sim.mx() * sim.my() || g >= sim.groups().size()) problem = "a point lies outside the lattice";
+        }
+        if (!problem.empty()) return error("the state file does not fit this scene: " + problem);
+    }
+    sim.resumed();
+    return {};
 }
 #endif  // LPFDM_NO_IO
 
