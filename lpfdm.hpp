@@ -4079,11 +4079,23 @@ inline Diagnostics read_deck(const std::string& path, Scene& sc) {
 
 // -------------------------------------------------------------- writers ---
 
+// The column names of a point table and of a history, on the first line of each: a line
+// without '#', so that numpy.genfromtxt(names=True), pandas.read_csv(sep=r"\s+",
+// comment="#") and gnuplot's columnheader take their names from it (every other line
+// of a header is a '#' comment; the names are repeated there).
+inline const char* kPointColumns = "x y sxx syy sxy szz ep yielded mat id";
+inline std::string history_columns(const Simulation& sim) {
+    std::string h = "step time ke mass_in mass_out";
+    for (const auto& w : sim.scene().walls) h += fmt::format(" w{0}_fx w{0}_fy w{0}_dx w{0}_dy", w.id);
+    return h + " unbal rx ry";
+}
+
 // Point table: one frame; frames are separated by two blank lines.
 inline void write_points_header(std::FILE* f, const Simulation& sim, const std::string& deck) {
+    fmt::print(f, "{}\n", kPointColumns);
     fmt::print(f, "# lpfdm {} point table\n# deck: {}\n# title: {}\n", kVersion, deck, sim.scene().title);
     fmt::print(f, "# units: m, Pa (tension positive); lattice {} x {} cells of {} m\n", sim.mx(), sim.my(), sim.cell_size());
-    fmt::print(f, "# columns: x y sxx syy sxy szz ep yielded mat id\n");
+    fmt::print(f, "# columns: {}\n", kPointColumns);
     fmt::print(f, "#   ep = accumulated plastic shear strain |d_eps1^p - d_eps3^p|; yielded = 1 once the point has yielded (softened)\n");
 }
 
@@ -4103,12 +4115,12 @@ inline void write_points_frame(std::FILE* f, const Simulation& sim, bool first) 
 
 // History: step time ke mass_in mass_out, per wall fx fy dx dy, then more.
 inline void write_history_header(std::FILE* f, const Simulation& sim, const std::string& deck) {
+    const std::string h = history_columns(sim);
+    fmt::print(f, "{}\n", h);
     fmt::print(f, "# lpfdm {} history\n# deck: {}\n# title: {}\n", kVersion, deck, sim.scene().title);
     fmt::print(f, "# units: s, J/m, kg/m, N/m, m; wall force = force the wall exerts on the material\n");
     fmt::print(f, "# unbal = max unbalanced nodal force / mean gross nodal force; rx ry = reactions of the fixed nodes\n");
-    std::string h = "# step time ke mass_in mass_out";
-    for (const auto& w : sim.scene().walls) h += fmt::format(" w{0}_fx w{0}_fy w{0}_dx w{0}_dy", w.id);
-    fmt::print(f, "{} unbal rx ry\n", h);
+    fmt::print(f, "# {}\n", h);
 }
 
 inline void write_history_row(std::FILE* f, const Simulation& sim) {
