@@ -4142,7 +4142,7 @@ inline void write_history_row(std::FILE* f, const Simulation& sim) {
 //   displacement  position minus the position at step 0 (x0, y0: by point id) [m]
 // binary: the arrays as raw bytes in an AppendedData block (each behind its byte count,
 // UInt64), else ASCII with the point table's digits. z is 0. The frame's time and step
-// are the FieldData TIME and STEP.
+// are the FieldData TimeValue (VTK's name for it) and STEP.
 inline void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<double>& x0, const std::vector<double>& y0, bool binary) {
     const Points& p = sim.points();
     const std::size_t n = p.size();
@@ -4234,7 +4234,7 @@ inline void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<dou
     fmt::format_to(out, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"{}\" header_type=\"UInt64\">\n",
                    little ? "LittleEndian" : "BigEndian");
     fmt::format_to(out, "  <UnstructuredGrid>\n    <FieldData>\n");
-    fmt::format_to(out, "      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" format=\"ascii\">{:.17g}</DataArray>\n", sim.time());
+    fmt::format_to(out, "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{:.15g}</DataArray>\n", sim.time());
     fmt::format_to(out, "      <DataArray type=\"Int64\" Name=\"STEP\" NumberOfTuples=\"1\" format=\"ascii\">{}</DataArray>\n", sim.step_count());
     fmt::format_to(out, "    </FieldData>\n    <Piece NumberOfPoints=\"{0}\" NumberOfCells=\"{0}\">\n", n);
     fmt::format_to(out, "      <PointData Scalars=\"ep\" Vectors=\"velocity\" Tensors=\"stress\">\n");
@@ -4280,7 +4280,7 @@ inline std::string vtu_frame_file(const std::string& name, long step) { return f
 // A ParaView collection of the frames (file, time) written: it opens the series at once.
 inline void write_pvd(std::FILE* f, const std::vector<std::pair<std::string, double>>& frames) {
     fmt::print(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n");
-    for (const auto& fr : frames) fmt::print(f, "    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n", fr.second, fr.first);
+    for (const auto& fr : frames) fmt::print(f, "    <DataSet timestep=\"{:.15g}\" part=\"0\" file=\"{}\"/>\n", fr.second, fr.first);
     fmt::print(f, "  </Collection>\n</VTKFile>\n");
 }
 

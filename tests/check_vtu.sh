@@ -126,7 +126,7 @@ for (file, t), fr in zip(listed, frames):
     ok(name + " is an UnstructuredGrid", root.get("type") == "UnstructuredGrid", root.get("type"))
     ok(name + " point count", int(piece.get("NumberOfPoints")) == n and int(piece.get("NumberOfCells")) == n,
        "%s points, the table's frame has %d" % (piece.get("NumberOfPoints"), n))
-    ok(name + " TIME", abs(float(a["TIME"][1][0]) - fr["time"]) <= 1e-12, a["TIME"][1][0])
+    ok(name + " TimeValue", abs(float(a["TimeValue"][1][0]) - fr["time"]) <= 1e-12, a["TimeValue"][1][0])
     c, xyz = a["Points"]
     ok(name + " coordinates are the table's", c == 3 and all(xyz[3 * k] == r[0] and xyz[3 * k + 1] == r[1] and float(xyz[3 * k + 2]) == 0 for k, r in enumerate(rows)),
        "first point (%s, %s), table (%s, %s)" % (xyz[0], xyz[1], rows[0][0], rows[0][1]))
