@@ -78,7 +78,7 @@ struct OutFile {
     std::FILE* f = nullptr;
     const lpfdm::Output* spec = nullptr;
     bool first_frame = true;
-    std::vector<std::pair<std::string, double>> frames;  // VTU: the frames written (file, time)
+    std::vector<std::pair<std::string, double>> frames, node_frames;  // VTU: the frames written (file, time)
 };
 
 bool make_dir(const std::string& d) {
@@ -288,6 +288,17 @@ int main(int argc, char** argv) {
         o.frames.push_back({file, sim.time()});
         write_failed |= !write_whole(opt.outdir + "/" + o.spec->file + ".pvd", [&](std::FILE* f) {
             lpfdm::write_pvd(f, o.frames);
+            return !std::ferror(f);
+        });
+        if (!o.spec->nodes) return;
+        const std::string nodes = lpfdm::vtu_frame_file(o.spec->file, sim.step_count(), true);
+        write_failed |= !write_whole(opt.outdir + "/" + nodes, [&](std::FILE* f) {
+            lpfdm::write_vti(f, sim, o.spec->binary);
+            return !std::ferror(f);
+        });
+        o.node_frames.push_back({nodes, sim.time()});
+        write_failed |= !write_whole(opt.outdir + "/" + o.spec->file + "_nodes.pvd", [&](std::FILE* f) {
+            lpfdm::write_pvd(f, o.node_frames);
             return !std::ferror(f);
         });
     };

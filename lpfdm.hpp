@@ -300,6 +300,7 @@ struct Output {
     std::string file;  // VTU: the series' name (NAME.pvd, NAME_<step>.vtu)
     long every = 0;  // 0: points, VTU: first and last frame only; history: every step; state: the last step only
     bool binary = false;  // VTU: the arrays as appended raw binary (else ASCII)
+    bool nodes = false;   // VTU: the lattice's nodes too, as a second series (NAME_nodes.pvd)
     Pos pos;
 };
 
@@ -439,7 +440,7 @@ inline const DeckCard kDeckCards[] = {
     {"ADVECT", "EQ12|POINTS", "", "how increments follow the material: eq. 12, or carried by the points"},
     {"SEED", "", "", "seed of the strength scatter"},
     {"STEP", "", "", "n steps of dt seconds"},
-    {"OUTPUT", "POINTS|HISTORY|VTU|STATE file", "[BINARY]", "a point table, a history, a VTK series (VTU) or a restart file (STATE), every n steps"},
+    {"OUTPUT", "POINTS|HISTORY|VTU|STATE file", "[BINARY] [NODES]", "a point table, a history, a VTK series (VTU) or a restart file (STATE), every n steps"},
     {"END", "", "", "the end of the deck (optional)"},
 };
 
@@ -3974,10 +3975,13 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             if (f) o.file = f->text;
             if (f && (o.file.find('/') != std::string::npos || o.file == "." || o.file == ".."))
                 r.fail(f->pos, "the file name must not contain a directory (use -o DIR)");
-            if (r.ok() && r.more_positional() && upper(r.peek()->text) == "BINARY") {  // OUTPUT VTU name BINARY
-                const Token* b = r.field("BINARY");
-                if (o.kind == Output::Vtu) o.binary = true;
-                else r.fail(b->pos, "BINARY is a word of OUTPUT VTU only (point tables and histories are text)");
+            // OUTPUT VTU name [BINARY] [NODES], in either order
+            while (r.ok() && r.more_positional() && (upper(r.peek()->text) == "BINARY" || upper(r.peek()->text) == "NODES")) {
+                const Token* b = r.field("BINARY or NODES");
+                const bool binary = upper(b->text) == "BINARY";
+                if (o.kind != Output::Vtu) r.fail(b->pos, upper(b->text) + " is a word of OUTPUT VTU only" + (binary ? " (point tables and histories are text)" : ""));
+                else if (binary ? o.binary : o.nodes) r.fail(b->pos, upper(b->text) + " given twice");
+                else (binary ? o.binary : o.nodes) = true;
             }
             for (const auto& prev : sc.outputs)
                 if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
@@ -4132,18 +4136,110 @@ inline void write_history_row(std::FILE* f, const Simulation& sim) {
     std::fwrite(b.data(), 1, b.size(), f);
 }
 
-// VTK XML files (ParaView, VisIt), written without the VTK library. One frame of the
-// points is an UnstructuredGrid of vertex cells with every point field as PointData:
+// VTK XML files (ParaView, VisIt), written without the VTK library.
+namespace detail {
+// A data array of a VTK XML file: its name, VTK type, components, and value(k, component)
+// of tuple k.
+struct VtkArray {
+    enum Type { F64, I32, U8, I64 } type;
+    const char* name;
+    int comps;
+    std::function<double(std::size_t, int)> value;
+};
+// Writes a VTK XML file: text() for the elements, array() for each DataArray (its values
+// inline as ASCII, or, binary, as raw bytes in the AppendedData block that finish()
+// writes, each behind its byte count, UInt64), finish() for the end.
+class VtkXml {
+public:
+    VtkXml(std::FILE* f, bool binary) : f_(f), binary_(binary) {}
+    void text(const std::string& s) { b_.append(s.data(), s.data() + s.size()); }
+    // <VTKFile type="..."> in this machine's byte order.
+    void open(const char* type) {
+        const std::uint16_t one = 1;
+        const bool little = *reinterpret_cast<const unsigned char*>(&one) == 1;
+        text(fmt::format("<?xml version=\"1.0\"?>\n<VTKFile type=\"{}\" version=\"1.0\" byte_order=\"{}\" header_type=\"UInt64\">\n", type,
+                         little ? "LittleEndian" : "BigEndian"));
+    }
+    // The frame's time and step, as FieldData (TimeValue: VTK's name for the time).
+    void time(double t, long step) {
+        text(fmt::format("    <FieldData>\n      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{:.15g}</DataArray>\n", t));
+        text(fmt::format("      <DataArray type=\"Int64\" Name=\"STEP\" NumberOfTuples=\"1\" format=\"ascii\">{}</DataArray>\n    </FieldData>\n", step));
+    }
+    void array(const VtkArray& a, std::size_t n, const char* indent) {
+        text(fmt::format("{}<DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"{}\"", indent, kTypeName[a.type], a.name, a.comps,
+                         binary_ ? "appended" : "ascii"));
+        if (binary_) {
+            text(fmt::format(" offset=\"{}\"/>\n", offset_));
+            offset_ += 8 + std::uint64_t(n) * std::uint64_t(a.comps) * kTypeSize[a.type];
+            appended_.push_back({&a, n});
+            return;
+        }
+        text(">\n");
+        auto out = std::back_inserter(b_);
+        for (std::size_t k = 0; k < n; ++k) {
+            for (int c = 0; c < a.comps; ++c) {
+                const double v = a.value(k, c);
+                if (a.type == VtkArray::F64) fmt::format_to(out, "{}{:.9g}", c ? " " : "", v);
+                else fmt::format_to(out, "{}{}", c ? " " : "", std::int64_t(v));
+            }
+            b_.push_back('\n');
+            if (b_.size() > (1 << 20)) flush();
+        }
+        text(fmt::format("{}</DataArray>\n", indent));
+    }
+    void finish() {
+        if (binary_) {
+            text("  <AppendedData encoding=\"raw\">\n   _");
+            for (const auto& ap : appended_) {
+                const VtkArray& a = *ap.first;
+                const std::size_t n = ap.second;
+                const std::uint64_t bytes = std::uint64_t(n) * std::uint64_t(a.comps) * kTypeSize[a.type];
+                raw(&bytes, sizeof bytes);
+                for (std::size_t k = 0; k < n; ++k) {
+                    for (int c = 0; c < a.comps; ++c) {
+                        const double v = a.value(k, c);
+                        if (a.type == VtkArray::F64) raw(&v, 8);
+                        else if (a.type == VtkArray::I64) { const std::int64_t i = std::int64_t(v); raw(&i, 8); }
+                        else if (a.type == VtkArray::I32) { const std::int32_t i = std::int32_t(v); raw(&i, 4); }
+                        else { const std::uint8_t i = std::uint8_t(v); raw(&i, 1); }
+                    }
+                    if (b_.size() > (1 << 20)) flush();
+                }
+            }
+            text("\n  </AppendedData>\n");
+        }
+        text("</VTKFile>\n");
+        flush();
+    }
+
+private:
+    static constexpr const char* kTypeName[] = {"Float64", "Int32", "UInt8", "Int64"};
+    static constexpr std::size_t kTypeSize[] = {8, 4, 1, 8};
+    void raw(const void* v, std::size_t bytes) {
+        const char* c = static_cast<const char*>(v);
+        b_.append(c, c + bytes);
+    }
+    void flush() { std::fwrite(b_.data(), 1, b_.size(), f_); b_.clear(); }
+    std::FILE* f_;
+    bool binary_;
+    fmt::memory_buffer b_;
+    std::uint64_t offset_ = 0;  // of the next array in the appended block
+    std::vector<std::pair<const VtkArray*, std::size_t>> appended_;
+};
+}  // namespace detail
+
+// One frame of the points as a VTK XML UnstructuredGrid of vertex cells, with every
+// point field as PointData:
 //   stress        sxx sxy 0 / sxy syy 0 / 0 0 szz, the full 3 x 3 tensor (9 components) [Pa]
 //   ep, yielded   accumulated plastic shear strain, 1 once yielded (0 without Mohr-Coulomb)
 //   material, id  material id, point number (stable across frames)
 //   velocity      what the point moves in the next step (its cell's motion rule applied to
 //                 the nodal increments) over dt: the velocity at t + dt/2 [m/s]
 //   displacement  position minus the position at step 0 (x0, y0: by point id) [m]
-// binary: the arrays as raw bytes in an AppendedData block (each behind its byte count,
-// UInt64), else ASCII with the point table's digits. z is 0. The frame's time and step
-// are the FieldData TimeValue (VTK's name for it) and STEP.
+// binary: the arrays as raw bytes in an AppendedData block, else ASCII with the point
+// table's digits. z is 0.
 inline void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<double>& x0, const std::vector<double>& y0, bool binary) {
+    using detail::VtkArray;
     const Points& p = sim.points();
     const std::size_t n = p.size();
     const bool plastic = !p.plastic_shear.empty();
@@ -4169,113 +4265,75 @@ inline void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<dou
         }
         dx = x - p.x[k]; dy = y - p.y[k];
     };
-    // Each array: its name, VTK type, components, and value(k, component).
-    enum Type { F64, I32, U8, I64 };
-    struct Array {
-        const char* name;
-        Type type;
-        int comps;
-        std::function<double(std::size_t, int)> value;
-    };
     auto origin = [&](const std::vector<double>& v0, std::size_t k) {
         const std::size_t id = std::size_t(p.id[k]);
         return id < v0.size() ? v0[id] : 0.0;
     };
-    const std::vector<Array> point_data = {
-        {"stress", F64, 9, [&](std::size_t k, int c) {
+    const VtkArray point_data[] = {
+        {VtkArray::F64, "stress", 9, [&](std::size_t k, int c) {
              const double t[9] = {p.sxx[k], p.sxy[k], 0, p.sxy[k], p.syy[k], 0, 0, 0, p.szz[k]};
              return t[c];
          }},
-        {"ep", F64, 1, [&](std::size_t k, int) { return plastic ? p.plastic_shear[k] : 0.0; }},
-        {"yielded", U8, 1, [&](std::size_t k, int) { return plastic ? double(p.yielded[k]) : 0.0; }},
-        {"material", I32, 1, [&](std::size_t k, int) { return double(sim.material_id(k)); }},
-        {"velocity", F64, 3, [&](std::size_t k, int c) {
+        {VtkArray::F64, "ep", 1, [&](std::size_t k, int) { return plastic ? p.plastic_shear[k] : 0.0; }},
+        {VtkArray::U8, "yielded", 1, [&](std::size_t k, int) { return plastic ? double(p.yielded[k]) : 0.0; }},
+        {VtkArray::I32, "material", 1, [&](std::size_t k, int) { return double(sim.material_id(k)); }},
+        {VtkArray::F64, "velocity", 3, [&](std::size_t k, int c) {
              if (c == 2) return 0.0;
              double dx, dy;
              step_of(k, dx, dy);
              return (c == 0 ? dx : dy) / dt;
          }},
-        {"displacement", F64, 3, [&](std::size_t k, int c) { return c == 0 ? p.x[k] - origin(x0, k) : c == 1 ? p.y[k] - origin(y0, k) : 0.0; }},
-        {"id", I32, 1, [&](std::size_t k, int) { return double(p.id[k]); }},
+        {VtkArray::F64, "displacement", 3, [&](std::size_t k, int c) { return c == 0 ? p.x[k] - origin(x0, k) : c == 1 ? p.y[k] - origin(y0, k) : 0.0; }},
+        {VtkArray::I32, "id", 1, [&](std::size_t k, int) { return double(p.id[k]); }},
     };
-    const Array coords = {"Points", F64, 3, [&](std::size_t k, int c) { return c == 0 ? p.x[k] : c == 1 ? p.y[k] : 0.0; }};
-    const Array cells[3] = {{"connectivity", I64, 1, [](std::size_t k, int) { return double(k); }},
-                            {"offsets", I64, 1, [](std::size_t k, int) { return double(k + 1); }},
-                            {"types", U8, 1, [](std::size_t, int) { return 1.0; }}};  // VTK_VERTEX
-    static const char* type_name[] = {"Float64", "Int32", "UInt8", "Int64"};
-    static const std::size_t type_size[] = {8, 4, 1, 8};
-    const std::uint16_t one = 1;
-    const bool little = *reinterpret_cast<const unsigned char*>(&one) == 1;
+    const VtkArray coords = {VtkArray::F64, "Points", 3, [&](std::size_t k, int c) { return c == 0 ? p.x[k] : c == 1 ? p.y[k] : 0.0; }};
+    const VtkArray cells[] = {{VtkArray::I64, "connectivity", 1, [](std::size_t k, int) { return double(k); }},
+                              {VtkArray::I64, "offsets", 1, [](std::size_t k, int) { return double(k + 1); }},
+                              {VtkArray::U8, "types", 1, [](std::size_t, int) { return 1.0; }}};  // VTK_VERTEX
+    detail::VtkXml x(f, binary);
+    x.open("UnstructuredGrid");
+    x.text("  <UnstructuredGrid>\n");
+    x.time(sim.time(), sim.step_count());
+    x.text(fmt::format("    <Piece NumberOfPoints=\"{0}\" NumberOfCells=\"{0}\">\n      <PointData Scalars=\"ep\" Vectors=\"velocity\" Tensors=\"stress\">\n", n));
+    for (const VtkArray& a : point_data) x.array(a, n, "        ");
+    x.text("      </PointData>\n      <Points>\n");
+    x.array(coords, n, "        ");
+    x.text("      </Points>\n      <Cells>\n");
+    for (const VtkArray& a : cells) x.array(a, n, "        ");
+    x.text("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n");
+    x.finish();
+}
 
-    fmt::memory_buffer b;
-    auto out = std::back_inserter(b);
-    auto flush = [&]() { std::fwrite(b.data(), 1, b.size(), f); b.clear(); };
-    std::uint64_t offset = 0;  // of the next array in the appended block
-    auto array = [&](const Array& a, const char* indent) {
-        fmt::format_to(out, "{}<DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"{}\"", indent, type_name[a.type], a.name, a.comps,
-                       binary ? "appended" : "ascii");
-        if (binary) {
-            fmt::format_to(out, " offset=\"{}\"/>\n", offset);
-            offset += 8 + std::uint64_t(n) * std::uint64_t(a.comps) * type_size[a.type];
-            return;
-        }
-        fmt::format_to(out, ">\n");
-        for (std::size_t k = 0; k < n; ++k) {
-            for (int c = 0; c < a.comps; ++c) {
-                const double v = a.value(k, c);
-                if (a.type == F64) fmt::format_to(out, "{}{:.9g}", c ? " " : "", v);
-                else fmt::format_to(out, "{}{}", c ? " " : "", std::int64_t(v));
-            }
-            fmt::format_to(out, "\n");
-            if (b.size() > (1 << 20)) flush();
-        }
-        fmt::format_to(out, "{}</DataArray>\n", indent);
+// One frame of the lattice as a VTK XML ImageData (its nodes the image's points, node
+// (i, j) at (i L, j L)), with PointData mass (eq. 10, kg/m), velocity (the nodal
+// increment over dt: at t + dt/2, m/s) and force (the net nodal force of the last step,
+// gravity included, N/m). binary as for write_vtu.
+inline void write_vti(std::FILE* f, const Simulation& sim, bool binary) {
+    using detail::VtkArray;
+    const std::size_t n = sim.node_mass().size();
+    const double dt = sim.scene().dt_s;
+    const VtkArray node_data[] = {
+        {VtkArray::F64, "mass", 1, [&](std::size_t k, int) { return sim.node_mass()[k]; }},
+        {VtkArray::F64, "velocity", 3, [&](std::size_t k, int c) { return c == 0 ? sim.du_x()[k] / dt : c == 1 ? sim.du_y()[k] / dt : 0.0; }},
+        {VtkArray::F64, "force", 3, [&](std::size_t k, int c) { return c == 0 ? sim.force_x()[k] : c == 1 ? sim.force_y()[k] : 0.0; }},
     };
-    fmt::format_to(out, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"{}\" header_type=\"UInt64\">\n",
-                   little ? "LittleEndian" : "BigEndian");
-    fmt::format_to(out, "  <UnstructuredGrid>\n    <FieldData>\n");
-    fmt::format_to(out, "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{:.15g}</DataArray>\n", sim.time());
-    fmt::format_to(out, "      <DataArray type=\"Int64\" Name=\"STEP\" NumberOfTuples=\"1\" format=\"ascii\">{}</DataArray>\n", sim.step_count());
-    fmt::format_to(out, "    </FieldData>\n    <Piece NumberOfPoints=\"{0}\" NumberOfCells=\"{0}\">\n", n);
-    fmt::format_to(out, "      <PointData Scalars=\"ep\" Vectors=\"velocity\" Tensors=\"stress\">\n");
-    for (const Array& a : point_data) array(a, "        ");
-    fmt::format_to(out, "      </PointData>\n      <Points>\n");
-    array(coords, "        ");
-    fmt::format_to(out, "      </Points>\n      <Cells>\n");
-    for (const Array& a : cells) array(a, "        ");
-    fmt::format_to(out, "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n");
-    if (binary) {
-        fmt::format_to(out, "  <AppendedData encoding=\"raw\">\n   _");
-        auto raw = [&](const void* v, std::size_t bytes) {
-            const char* c = static_cast<const char*>(v);
-            b.append(c, c + bytes);
-        };
-        auto block = [&](const Array& a) {
-            const std::uint64_t bytes = std::uint64_t(n) * std::uint64_t(a.comps) * type_size[a.type];
-            raw(&bytes, sizeof bytes);
-            for (std::size_t k = 0; k < n; ++k) {
-                for (int c = 0; c < a.comps; ++c) {
-                    const double v = a.value(k, c);
-                    if (a.type == F64) raw(&v, 8);
-                    else if (a.type == I64) { const std::int64_t i = std::int64_t(v); raw(&i, 8); }
-                    else if (a.type == I32) { const std::int32_t i = std::int32_t(v); raw(&i, 4); }
-                    else { const std::uint8_t i = std::uint8_t(v); raw(&i, 1); }
-                }
-                if (b.size() > (1 << 20)) flush();
-            }
-        };
-        for (const Array& a : point_data) block(a);
-        block(coords);
-        for (const Array& a : cells) block(a);
-        fmt::format_to(out, "\n  </AppendedData>\n");
-    }
-    fmt::format_to(out, "</VTKFile>\n");
-    flush();
+    detail::VtkXml x(f, binary);
+    x.open("ImageData");
+    x.text(fmt::format("  <ImageData WholeExtent=\"0 {0} 0 {1} 0 0\" Origin=\"0 0 0\" Spacing=\"{2:.17g} {2:.17g} {2:.17g}\">\n", sim.mx(), sim.my(), sim.cell_size()));
+    x.time(sim.time(), sim.step_count());
+    x.text(fmt::format("    <Piece Extent=\"0 {} 0 {} 0 0\">\n      <PointData Scalars=\"mass\" Vectors=\"velocity\">\n", sim.mx(), sim.my()));
+    for (const VtkArray& a : node_data) x.array(a, n, "        ");
+    x.text("      </PointData>\n      <CellData>\n      </CellData>\n    </Piece>\n  </ImageData>\n");
+    x.finish();
 }
 
 // The file of frame `step` of VTU series `name`: name_<step>.vtu, the step in at least
-// six digits, so that the files sort in step order.
-inline std::string vtu_frame_file(const std::string& name, long step) { return fmt::format("{}_{:06d}.vtu", name, step); }
+// six digits, so that the files sort in step order; with nodes, the lattice's frame
+// name_nodes_<step>.vti.
+inline std::string vtu_frame_file(const std::string& name, long step, bool nodes = false) {
+    if (nodes) return fmt::format("{}_nodes_{:06d}.vti", name, step);
+    return fmt::format("{}_{:06d}.vtu", name, step);
+}
 
 // A ParaView collection of the frames (file, time) written: it opens the series at once.
 inline void write_pvd(std::FILE* f, const std::vector<std::pair<std::string, double>>& frames) {

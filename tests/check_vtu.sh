@@ -7,8 +7,11 @@
 #     (a 9-component tensor), ep, yielded, material and id; displacement is the position
 #     minus the frame-0 position of the same id; velocity is the next frame's position
 #     minus this one's over dt (frames every step);
+#   - NODES: NAME_nodes.pvd lists an ImageData frame of the lattice per frame; the node
+#     masses add up to the history's mass inside, the wall's nodes move at its velocity,
+#     the fixed nodes not at all;
 #   - the BINARY series: the XML before the appended block parses, and the raw arrays
-#     decode to the ASCII series' values;
+#     decode to the ASCII series' values (points and nodes);
 #   - the deck reader: BINARY on another output and an unknown kind are refused.
 #
 # usage: tests/check_vtu.sh EXE
@@ -38,10 +41,11 @@ WALL 1 3 0.5 3 2.5 -0.5 0
 GRAVITY 0 -98.1
 STEP 1E-4 12
 OUTPUT POINTS p.txt EVERY 1
-OUTPUT VTU heap EVERY 1
+OUTPUT HISTORY h.txt EVERY 1
+OUTPUT VTU heap NODES EVERY 1
 END
 EOF
-sed -e 's/^OUTPUT VTU heap EVERY 1/OUTPUT VTU heap BINARY EVERY 1/' "$tmp/a.deck" >"$tmp/b.deck"
+sed -e 's/^OUTPUT VTU heap NODES EVERY 1/OUTPUT VTU heap BINARY NODES EVERY 1/' "$tmp/a.deck" >"$tmp/b.deck"
 python=""
 for p in python3 /usr/bin/python3; do
     if "$p" -c 'import xml.etree.ElementTree' 2>/dev/null; then python=$p; break; fi
@@ -76,15 +80,15 @@ for line in open(os.path.join(tmp, "a", "p.txt")):
         frames[-1]["rows"].append(w)
 ok("point table frames", len(frames) == 13, "%d frames, expected 13" % len(frames))
 
-def series(d):
-    pvd = ET.parse(os.path.join(tmp, d, "heap.pvd")).getroot()
+def series(d, name="heap"):
+    pvd = ET.parse(os.path.join(tmp, d, name + ".pvd")).getroot()
     ds = pvd.findall("./Collection/DataSet")
     return pvd, [(x.get("file"), float(x.get("timestep"))) for x in ds]
 
 def arrays_ascii(path):
     root = ET.parse(path).getroot()
     out = {}
-    piece = root.find("./UnstructuredGrid/Piece")
+    piece = root.find("./*/Piece")
     for a in root.iter("DataArray"):
         name = a.get("Name") or "Points"
         out[name] = (int(a.get("NumberOfComponents") or 1), a.text.split())
@@ -107,7 +111,7 @@ def arrays_binary(path):
         n = nbytes // struct.calcsize(f)
         vals = struct.unpack_from("<%d%s" % (n, f), raw, off + 8)
         out[a.get("Name") or "Points"] = (int(a.get("NumberOfComponents") or 1), [repr(v) for v in vals])
-    return root, root.find("./UnstructuredGrid/Piece"), out
+    return root, root.find("./*/Piece"), out
 
 pvd, listed = series("a")
 ok("pvd is a Collection", pvd.get("type") == "Collection", pvd.get("type"))
@@ -164,6 +168,31 @@ for i in range(len(frames) - 1):
     ok("heap_%06d.vtu velocity" % frames[i]["step"], bad == 0, "%d components are not the next step's motion over dt" % bad)
 ok("the points move", moved > 0, "no point moved")
 
+# The lattice's series (NODES): 9 x 7 nodes of 0.5 m.
+mass_in = {}
+for line in open(os.path.join(tmp, "a", "h.txt")):
+    w = line.split()
+    if w and not line.startswith("#") and w[0] != "step":
+        mass_in[int(w[0])] = float(w[3])
+_, nodes = series("a", "heap_nodes")
+ok("nodes pvd lists every frame", [f for f, _ in nodes] == ["heap_nodes_%06d.vti" % fr["step"] for fr in frames] and
+   [t for _, t in nodes] == [t for _, t in listed], "lists %s" % [f for f, _ in nodes][:4])
+node_frames = []
+for (file, t), fr in zip(nodes, frames):
+    root, piece, a = arrays_ascii(os.path.join(tmp, "a", file))
+    node_frames.append(a)
+    img = root.find("./ImageData")
+    ok(file + " is the lattice", root.get("type") == "ImageData" and img.get("WholeExtent") == "0 8 0 6 0 0" and img.get("Spacing").split() == ["0.5"] * 3
+       and piece.get("Extent") == "0 8 0 6 0 0", "%s %s" % (root.get("type"), img.attrib if img is not None else None))
+    m = [float(v) for v in a["mass"][1]]
+    v = [float(x) for x in a["velocity"][1]]
+    ok(file + " arrays", len(m) == 63 and len(v) == 189 and len(a["force"][1]) == 189, "%d masses, %d velocity values" % (len(m), len(v)))
+    if fr["step"] > 0:
+        ok(file + " mass", abs(sum(m) - mass_in[fr["step"]]) <= 1e-9 * mass_in[fr["step"]], "nodes %r, history %r" % (sum(m), mass_in[fr["step"]]))
+        wall = [(v[3 * (j * 9 + 6)], v[3 * (j * 9 + 6) + 1]) for j in range(1, 6)]
+        ok(file + " wall nodes at the wall's velocity", all(abs(vx + 0.5) <= 1e-12 and vy == 0 for vx, vy in wall), "%s" % wall)
+        ok(file + " fixed nodes still", all(v[3 * i] == 0 and v[3 * i + 1] == 0 for i in range(9)), "%s" % v[:27])
+
 # The BINARY series against the ASCII one.
 _, listed_b = series("b")
 ok("binary pvd", listed_b == listed, "lists other frames")
@@ -179,6 +208,13 @@ for (file, _), a in zip(listed_b, ascii_frames):
             why = name
             break
     ok(file + " binary = ascii", same, "array %s differs" % why)
+_, nodes_b = series("b", "heap_nodes")
+ok("binary nodes pvd", nodes_b == nodes, "lists other frames")
+for (file, _), a in zip(nodes_b, node_frames):
+    _, _, b = arrays_binary(os.path.join(tmp, "b", file))
+    why = [name for name in ("mass", "velocity", "force") if len(a[name][1]) != len(b.get(name, (0, []))[1]) or
+           any(abs(float(x) - float(y)) > 1e-8 * (abs(float(y)) + 1e-6) for x, y in zip(a[name][1], b[name][1]))]
+    ok(file + " binary = ascii", not why, "arrays %s differ" % why)
 EOF
 while read -r word rest; do
     case $word in
@@ -189,6 +225,10 @@ while read -r word rest; do
 done <"$tmp/result"
 
 # The deck reader.
+printf 'GRID 4 4 1\nMATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000\nCLUSTER 1 0 0 2 2\nSTEP 1E-4 2\nOUTPUT HISTORY h.txt NODES\n' >"$tmp/e.deck"
+"$exe" -q -o "$tmp/e" "$tmp/e.deck" >/dev/null 2>"$tmp/e.err"; rc=$?
+if [ $rc -eq 2 ] && grep -q "e.deck:5:22: error: NODES is a word of OUTPUT VTU only" "$tmp/e.err" && [ ! -e "$tmp/e" ]; then pass
+else fail "NODES on a history" "exit status $rc: $(head -n 1 "$tmp/e.err")"; fi
 printf 'GRID 4 4 1\nMATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000\nCLUSTER 1 0 0 2 2\nSTEP 1E-4 2\nOUTPUT POINTS p.txt BINARY\n' >"$tmp/c.deck"
 printf 'GRID 4 4 1\nMATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000\nCLUSTER 1 0 0 2 2\nSTEP 1E-4 2\nOUTPUT VTX v\n' >"$tmp/d.deck"
 "$exe" -q -o "$tmp/c" "$tmp/c.deck" >/dev/null 2>"$tmp/c.err"; rc=$?
