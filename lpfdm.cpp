@@ -226,7 +226,9 @@ int main(int argc, char** argv) {
     sim.set_profiling(opt.profile);
     // The positions at step 0, by point id (the VTU series' displacement), taken before a
     // restart replaces the points.
-    std::vector<double> x0(sim.points().x), y0(sim.points().y);
+    std::vector<double> x0, y0;
+    for (const auto& o : scene.outputs)
+        if (o.kind == lpfdm::Output::Vtu) { x0 = sim.points().x; y0 = sim.points().y; }
     if (!opt.restart.empty()) {
         diags = lpfdm::read_state(opt.restart, sim, digest);
         if (diags.empty() && sim.step_count() >= scene.steps)
@@ -357,11 +359,10 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "lpfdm: error: numerical trouble at step %ld (t = %.6g s): %s%s\n", n, sim.time(), why.c_str(), where.c_str());
             // The points are still finite when the trouble is in the nodal increments: their
             // state at this step is the last good one, so it is written as the last frame
-            // (no state: the nodes' is not good).
+            // (not to a VTU series, whose velocities come from the nodes, nor a state).
             if (k < 0)
                 for (auto& o : outs) {
                     if (o.spec->kind == lpfdm::Output::Points) lpfdm::write_points_frame(o.f, sim, false);
-                    else if (o.spec->kind == lpfdm::Output::Vtu) vtu_frame(o);
                     else if (o.spec->kind == lpfdm::Output::History && std::isfinite(sim.kinetic_energy())) lpfdm::write_history_row(o.f, sim);
                 }
             note = fmt::format("run stopped at step {}: numerical trouble; the frames above are the last good ones", n);
