@@ -1690,19 +1690,26 @@ public:
     }
     double max_du() const { return max_du_; }                         // largest nodal increment of the last step [m]
 
-    // Restart files (write_state, read_state). What a step reads besides the scene and the
-    // points: f(name, member) for the step count and the running sums, the whole lattice's
-    // nodal and cell arrays (the increments eq. 12 compensates and eq. 13 advances, the
-    // node masses eq. 12 compares with the next step's, the cell masses eq. 5 tests), and
-    // each wall's travel, line and velocity. The random numbers are drawn when the points
-    // are made (their c0 and n_phi keep them); no generator state lives on.
+    // Restart files (write_state, read_state). What a step reads from the steps before it,
+    // besides the scene and the points: f(name, member) for the step count and the running
+    // sums, the nodal increments (eq. 12 compensates them, eq. 13 advances them), the node
+    // masses (eq. 12 compares the next step's with them), the cell masses (eq. 5 skips the
+    // empty cells), and each wall's travel, line and velocity. Every other lattice array
+    // is made by a step before that step reads it (resumed() clears them). The random
+    // numbers are drawn when the points are made (their c0 and n_phi keep them): no
+    // generator state lives on. None of it depends on the kernel or the threads.
     template <class F> void each_state(F&& f) { visit_state(*this, f); }
     template <class F> void each_state(F&& f) const { visit_state(*this, f); }
-    // After each_state and the points' arrays were set from a file: the fast kernel's
-    // record of the active lattice made anew from the points (every node taken as live,
-    // which only costs the first step a visit of the whole lattice), the threads' point
-    // chunks and scratch sized to the points. Either kernel may continue either's state.
+    // After each_state and the points' arrays were set from a file: the lattice arrays a
+    // step makes before it reads them cleared (outside the fast kernel's boxes they must be
+    // zero), the fast kernel's record of the active lattice made anew from the points
+    // (every node taken as live, which only costs the first step a visit of the whole
+    // lattice), the threads' point chunks and scratch sized to the points. Either kernel
+    // may continue either's state.
     void resumed() {
+        for (auto* v : {&fx_, &fy_, &nmass_prev_, &cvol_, &svxx_, &svyy_, &svxy_, &hgx_, &hgy_}) std::fill(v->begin(), v->end(), 0.0);
+        std::fill(strain_.begin(), strain_.end(), CellStrain{});
+        std::fill(carried_.begin(), carried_.end(), Carried{});
         Landing t;
         for (std::size_t k = 0; k < p_.size(); ++k) {
             const int c = p_.cell[k];
@@ -1731,10 +1738,7 @@ private:
     template <class S, class F> static void visit_state(S& s, F& f) {
         f("step", s.step_); f("mass_in", s.mass_in_); f("mass_out", s.mass_out_); f("mass_initial", s.mass0_);
         f("ke", s.ke_); f("max_du", s.max_du_); f("rx", s.rx_); f("ry", s.ry_);
-        f("du_x", s.dux_); f("du_y", s.duy_); f("force_x", s.fx_); f("force_y", s.fy_);
-        f("node_mass", s.nmass_); f("node_mass_prev", s.nmass_prev_);
-        f("cell_mass", s.cmass_); f("cell_volume", s.cvol_); f("cell_vsxx", s.svxx_); f("cell_vsyy", s.svyy_); f("cell_vsxy", s.svxy_);
-        f("cell_strain", s.strain_); f("cell_hourglass_x", s.hgx_); f("cell_hourglass_y", s.hgy_); f("cell_carried", s.carried_);
+        f("du_x", s.dux_); f("du_y", s.duy_); f("node_mass", s.nmass_); f("cell_mass", s.cmass_);
         for (std::size_t w = 0; w < s.walls_.size(); ++w) {
             f("wall_shift_i", s.walls_[w].shift_i); f("wall_shift_j", s.walls_[w].shift_j);
             f("wall_fx", s.walls_[w].fx); f("wall_fy", s.walls_[w].fy); f("wall_dx", s.walls_[w].dx); f("wall_dy", s.walls_[w].dy);
@@ -4342,8 +4346,9 @@ inline void write_pvd(std::FILE* f, const std::vector<std::pair<std::string, dou
     fmt::print(f, "  </Collection>\n</VTKFile>\n");
 }
 
-// Restart files (OUTPUT STATE, lpfdm --restart): everything the next step reads, in a
-// versioned binary with a checksum. Layout, in the machine's byte order:
+// Restart files (OUTPUT STATE, lpfdm --restart): everything the next step reads from the
+// steps before it, in a versioned binary with a checksum, the same bytes whichever kernel
+// and threads wrote it. Layout, in the machine's byte order:
 //   "lpfdm state\n"  u32 version  u32 0x01020304 (byte order)  u64 file size  u64 digest,
 //   items: u8 name length, name, u8 bytes per value, u64 values, the values' bytes
 //          (Simulation::each_state in order, then "point_count" and every array of

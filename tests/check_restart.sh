@@ -4,7 +4,8 @@
 #     bytes as the run that was never stopped: the frames of its point table after k,
 #     its history rows after k, its last VTU frame and its last state; with the fast
 #     kernel and the reference kernel, one and two threads, and across kernels (a state
-#     of one continued by the other);
+#     of one continued by the other); the state files of every kernel and thread count
+#     are the same bytes;
 #   - SIGINT: exit status 130, the state of the interrupted step written, and --restart
 #     from it gives the uninterrupted run's frames and rows;
 #   - a state file that is truncated, corrupt, of another format version, of another
@@ -93,6 +94,10 @@ continued "fast, 2 threads" fast 2 fast 2
 continued "reference" reference 1 reference 1
 continued "fast to reference" fast 2 reference 1
 continued "reference to fast, 2 threads" reference 1 fast 2
+for other in "fast, 2 threads" "reference"; do
+    check "the state at step 60 of '$other' is the fast kernel's" $(cmp -s "$tmp/fast, 1 thread-a/s.state" "$tmp/$other-a/s.state"; echo $?) \
+        "the state files differ"
+done
 
 # --- 2. SIGINT: the state of the interrupted step, continued ---
 cat >"$tmp/long.deck" <<'EOF'
