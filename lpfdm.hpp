@@ -4091,7 +4091,7 @@ inline Diagnostics read_deck(const std::string& path, Scene& sc) {
 // without '#', so that numpy.genfromtxt(names=True), pandas.read_csv(sep=r"\s+",
 // comment="#") and gnuplot's columnheader take their names from it (every other line
 // of a header is a '#' comment; the names are repeated there).
-inline const char* kPointColumns = "x y sxx syy sxy szz ep yielded mat id";
+inline constexpr const char* kPointColumns = "x y sxx syy sxy szz ep yielded mat id";
 inline std::string history_columns(const Simulation& sim) {
     std::string h = "step time ke mass_in mass_out";
     for (const auto& w : sim.scene().walls) h += fmt::format(" w{0}_fx w{0}_fy w{0}_dx w{0}_dy", w.id);
