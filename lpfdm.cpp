@@ -31,7 +31,7 @@ struct OptionSpec {
     const char* arg;  // the value's name, or nullptr for a flag
     const char* help; // lines after the first are indented under it
 };
-constexpr int kSeed = 256, kStrict = 257, kNoAvx2 = 258;  // getopt values of the options without a short form
+constexpr int kSeed = 256, kStrict = 257, kNoAvx2 = 258, kRestart = 259;  // getopt values of the options without a short form
 const OptionSpec kOptions[] = {
     {"output", 'o', "DIR", "write the output files into DIR (created; default: the current directory)"},
     {"steps", 'n', "N", "run N steps instead of the deck's"},
@@ -44,6 +44,8 @@ const OptionSpec kOptions[] = {
                          "fast       the default: threads, four values per AVX2 register where the processor has it\n"
                          "scalar     fast, one value at a time (no AVX2)\n"
                          "reference  the plain cycle, every cell, point and node, one thread: the definition"},
+    {"restart", 0, "F", "continue the run saved in the state file F (OUTPUT STATE) from its step; the deck and the\n"
+                        "options --refine, --seed and --set must be the run's own (--steps may run it further)"},
     {"strict", 0, nullptr, "warnings are errors: a deck that draws one stops with exit status 2"},
     {"profile", 'p', nullptr, "print the time of each phase of the cycle, peak memory and bytes per point"},
     {"no-avx2", 0, nullptr, "the same as --kernel scalar"},
@@ -54,12 +56,13 @@ const OptionSpec kOptions[] = {
 int option_value(const OptionSpec& o) {
     if (o.brief) return o.brief;
     const std::string n = o.name;
-    return n == "seed" ? kSeed : n == "strict" ? kStrict : kNoAvx2;
+    return n == "seed" ? kSeed : n == "strict" ? kStrict : n == "restart" ? kRestart : kNoAvx2;
 }
 
 // The usage text: the synopsis, each option from kOptions, the exit status.
 std::string usage_text() {
     std::string out = "usage: lpfdm [options] DECK\n"
+                      "       lpfdm [options] --restart F DECK\n"
                       "Runs the Lagrangian Particle Finite Difference Method on the scene of DECK.\n"
                       "\n"
                       "options (a value may follow as the next word or after '=': --steps 100, --steps=100, -n 100):\n";
@@ -77,12 +80,13 @@ std::string usage_text() {
         }
         out += head + help + "\n";
     }
-    out += "\nexit status: 0 done, 2 bad deck or options, 3 numerical trouble, 130 interrupted\n";
+    out += "\nexit status: 0 done, 2 bad deck, options or state file, 3 numerical trouble, 130 interrupted\n"
+           "(SIGINT: the step under way is finished, its frame, history row and state written)\n";
     return out;
 }
 
 struct Options {
-    std::string deck, outdir = ".";
+    std::string deck, outdir = ".", restart;
     long refine = 1, steps = 0;
     long long seed = -1;
     bool quiet = false, profile = false, strict = false;
@@ -107,6 +111,7 @@ struct OutFile {
     std::FILE* f = nullptr;
     const lpfdm::Output* spec = nullptr;
     bool first_frame = true;
+    std::vector<std::pair<std::string, double>> frames, node_frames;  // VTU: the frames written (file, time)
 };
 
 bool make_dir(const std::string& d) {
@@ -189,6 +194,10 @@ int main(int argc, char** argv) {
             else cli_errors.push_back("--kernel needs fast, scalar or reference, not '" + d + "'" + lpfdm::did_you_mean(d, {"fast", "scalar", "reference"}));
             break;
         }
+        case kRestart:
+            if (!*arg) cli_errors.push_back("--restart needs a state file");
+            else opt.restart = arg;
+            break;
         case 'D': {
             const std::string kv = arg;
             const std::size_t eq = kv.find('=');
@@ -258,6 +267,11 @@ int main(int argc, char** argv) {
         diags.insert(diags.end(), w.begin(), w.end());
         lpfdm::sort_diagnostics(diags);
     }
+    // What a state file must have been written by: the deck and the options that change
+    // the scene (not --steps: a restart may run further).
+    std::string scene_options = fmt::format("refine {} seed {}", opt.refine, opt.seed);
+    for (const auto& kv : opt.settings) scene_options += fmt::format(" set {}={:.17g}", kv.first, kv.second);
+    const std::uint64_t digest = lpfdm::state_digest(text, scene_options);
     bool stop = !cli_errors.empty();
     for (const auto& e : cli_errors) std::fprintf(stderr, "lpfdm: error: %s\n", e.c_str());
     for (const auto& d : diags) {
@@ -267,11 +281,6 @@ int main(int argc, char** argv) {
     if (!cli_errors.empty()) std::fputs("lpfdm --help lists the options and the deck's cards\n", stderr);
     if (stop) return kExitBadInput;
 
-    // --- outputs: NAME.part until complete ---
-    if (!make_dir(opt.outdir)) {
-        std::fprintf(stderr, "lpfdm: error: cannot create the output directory '%s': %s\n", opt.outdir.c_str(), std::strerror(errno));
-        return kExitBadInput;
-    }
 #if defined(_OPENMP)
     // One thread unless asked: the output is the same for any number, and threads that
     // share busy cores with other programs wait at every barrier (57 times slower seen).
@@ -292,32 +301,95 @@ int main(int argc, char** argv) {
     run.seed = opt.seed;
     run.threads = sim.kernel() == lpfdm::Kernel::Reference ? 1 : nthreads;
     run.kernel = sim.kernel() == lpfdm::Kernel::Reference ? "reference" : sim.wide() ? "fast (AVX2)" : opt.kernel == lpfdm::Kernel::Fast ? "fast (no AVX2 here)" : "scalar";
+    // The positions at step 0, by point id (the VTU series' displacement), taken before a
+    // restart replaces the points.
+    std::vector<double> x0, y0;
+    for (const auto& o : scene.outputs)
+        if (o.kind == lpfdm::Output::Vtu) { x0 = sim.points().x; y0 = sim.points().y; }
+    if (!opt.restart.empty()) {
+        diags = lpfdm::read_state(opt.restart, sim, digest);
+        if (diags.empty() && sim.step_count() >= scene.steps)
+            diags = lpfdm::one_error(opt.restart, 0, 0, fmt::format("the state is at step {}, where the run ends (--steps N runs it further)", sim.step_count()));
+        if (!diags.empty()) {
+            for (const auto& d : diags) std::fprintf(stderr, "%s\n", d.str().c_str());
+            return kExitBadInput;
+        }
+    }
+
+    // --- outputs: NAME.part until complete ---
+    if (!make_dir(opt.outdir)) {
+        std::fprintf(stderr, "lpfdm: error: cannot create the output directory '%s': %s\n", opt.outdir.c_str(), std::strerror(errno));
+        return kExitBadInput;
+    }
+    // A file written whole as NAME.part, then renamed (VTU frames and collections, states).
+    auto write_whole = [&](const std::string& path, const auto& write) {
+        const std::string part = path + ".part";
+        std::FILE* f = std::fopen(part.c_str(), "wb");
+        bool ok = f && write(f);
+        if (f) ok &= std::fclose(f) == 0;
+        ok = ok && std::rename(part.c_str(), path.c_str()) == 0;
+        if (!ok) std::fprintf(stderr, "lpfdm: error: cannot write '%s': %s\n", path.c_str(), std::strerror(errno));
+        return ok;
+    };
+    bool write_failed = false;
     std::vector<OutFile> outs;
     for (const auto& o : sim.scene().outputs) {
         OutFile of;
         of.final_path = opt.outdir + "/" + o.file;
         of.part_path = of.final_path + ".part";
         of.spec = &o;
+        if (o.kind == lpfdm::Output::Vtu || o.kind == lpfdm::Output::State) {  // files written whole
+            outs.push_back(of);
+            continue;
+        }
         of.f = std::fopen(of.part_path.c_str(), "wb");
         if (!of.f) {
             std::fprintf(stderr, "%s:%d:%d: error: cannot write '%s': %s\n", o.pos.file.c_str(), o.pos.line, o.pos.col, of.part_path.c_str(), std::strerror(errno));
-            for (auto& p : outs) { std::fclose(p.f); std::remove(p.part_path.c_str()); }
+            for (auto& p : outs) if (p.f) { std::fclose(p.f); std::remove(p.part_path.c_str()); }
             return kExitBadInput;
         }
         if (o.kind == lpfdm::Output::Points) {
-            lpfdm::write_provenance(of.f, sim, run);
-            lpfdm::write_points_header(of.f, sim, opt.deck);
+            lpfdm::write_points_header(of.f, sim, opt.deck, &run);
             lpfdm::write_points_frame(of.f, sim, true);
             of.first_frame = false;
         } else {
-            lpfdm::write_provenance(of.f, sim, run);
-            lpfdm::write_history_header(of.f, sim, opt.deck);
+            lpfdm::write_history_header(of.f, sim, opt.deck, &run);
         }
         outs.push_back(of);
     }
+    // A frame of a VTU series, and its collection written anew.
+    auto vtu_frame = [&](OutFile& o) {
+        const std::string file = lpfdm::vtu_frame_file(o.spec->file, sim.step_count());
+        write_failed |= !write_whole(opt.outdir + "/" + file, [&](std::FILE* f) {
+            lpfdm::write_vtu(f, sim, x0, y0, o.spec->binary);
+            return !std::ferror(f);
+        });
+        o.frames.push_back({file, sim.time()});
+        write_failed |= !write_whole(opt.outdir + "/" + o.spec->file + ".pvd", [&](std::FILE* f) {
+            lpfdm::write_pvd(f, o.frames);
+            return !std::ferror(f);
+        });
+        if (!o.spec->nodes) return;
+        const std::string nodes = lpfdm::vtu_frame_file(o.spec->file, sim.step_count(), true);
+        write_failed |= !write_whole(opt.outdir + "/" + nodes, [&](std::FILE* f) {
+            lpfdm::write_vti(f, sim, o.spec->binary);
+            return !std::ferror(f);
+        });
+        o.node_frames.push_back({nodes, sim.time()});
+        write_failed |= !write_whole(opt.outdir + "/" + o.spec->file + "_nodes.pvd", [&](std::FILE* f) {
+            lpfdm::write_pvd(f, o.node_frames);
+            return !std::ferror(f);
+        });
+    };
+    auto save_state = [&](OutFile& o) {
+        write_failed |= !write_whole(o.final_path, [&](std::FILE* f) { return lpfdm::write_state(f, sim, digest); });
+    };
+    for (auto& o : outs)
+        if (o.spec->kind == lpfdm::Output::Vtu) vtu_frame(o);
     auto finish_outputs = [&](const std::string& note) {
-        bool ok = true;
+        bool ok = !write_failed;
         for (auto& o : outs) {
+            if (!o.f) continue;
             if (!note.empty()) std::fprintf(o.f, "# %s\n", note.c_str());
             ok &= std::fclose(o.f) == 0;
             ok &= std::rename(o.part_path.c_str(), o.final_path.c_str()) == 0;
@@ -327,16 +399,22 @@ int main(int argc, char** argv) {
     };
 
     std::signal(SIGINT, on_sigint);
-    const long steps = scene.steps;
-    // A history row every EVERY steps; with EVERY above the steps (warned), the last only.
-    auto history_due = [steps](long every, long n) { return n % (every > 0 ? every : 1) == 0 || (every > steps && n == steps); };
+    const long steps = scene.steps, first = sim.step_count() + 1;
     const bool progress = !opt.quiet && isatty(2);
     const auto t0 = std::chrono::steady_clock::now();
     auto last_print = t0;
     double particle_steps = 0;
     int status = 0;
     std::string note;
-    for (long n = 1; n <= steps; ++n) {
+    // Whether output o is due at step n: a history row every n steps (every step without
+    // EVERY; the last only when EVERY is above the steps, a warning); a frame or a state every n steps and at the last step (without EVERY only
+    // there; frames also at the first).
+    auto due = [&](const OutFile& o, long n) {
+        const long every = o.spec->every;
+        if (o.spec->kind == lpfdm::Output::History) return n % (every > 0 ? every : 1) == 0 || (every > steps && n == steps);  // (warned)
+        return (every > 0 && n % every == 0) || n == steps;
+    };
+    for (long n = first; n <= steps; ++n) {
         particle_steps += double(sim.points().size());
         sim.step();
         if (!sim.healthy()) {
@@ -357,35 +435,35 @@ int main(int argc, char** argv) {
                 : "a non-finite value appeared";
             std::fprintf(stderr, "lpfdm: error: numerical trouble at step %ld (t = %.6g s): %s%s\n", n, sim.time(), why.c_str(), where.c_str());
             // The points are still finite when the trouble is in the nodal increments: their
-            // state at this step is the last good one, so it is written as the last frame.
+            // state at this step is the last good one, so it is written as the last frame
+            // (not to a VTU series, whose velocities come from the nodes, nor a state).
             if (k < 0)
                 for (auto& o : outs) {
-                    if (o.spec->kind != lpfdm::Output::History) lpfdm::write_points_frame(o.f, sim, false);
-                    else if (std::isfinite(sim.kinetic_energy())) lpfdm::write_history_row(o.f, sim);
+                    if (o.spec->kind == lpfdm::Output::Points) lpfdm::write_points_frame(o.f, sim, false);
+                    else if (o.spec->kind == lpfdm::Output::History && std::isfinite(sim.kinetic_energy())) lpfdm::write_history_row(o.f, sim);
                 }
             note = fmt::format("run stopped at step {}: numerical trouble; the frames above are the last good ones", n);
             status = kExitNumerical;
             break;
         }
+        // Each output due at this step, and on SIGINT every output not due (the
+        // interrupted step once).
+        const bool stop = g_interrupted;
         for (auto& o : outs) {
-            const long every = o.spec->every;
-            if (o.spec->kind == lpfdm::Output::History) {
-                if (history_due(every, n)) lpfdm::write_history_row(o.f, sim);
-            } else if ((every > 0 && n % every == 0) || n == steps) {
-                lpfdm::write_points_frame(o.f, sim, o.first_frame);
+            if (!due(o, n) && !stop) continue;
+            switch (o.spec->kind) {
+            case lpfdm::Output::History: lpfdm::write_history_row(o.f, sim); break;
+            case lpfdm::Output::Points: lpfdm::write_points_frame(o.f, sim, o.first_frame); o.first_frame = false; break;
+            case lpfdm::Output::Vtu: vtu_frame(o); break;
+            case lpfdm::Output::State: save_state(o); break;
             }
         }
-        if (g_interrupted) {
-            for (auto& o : outs) {  // unless this step's row or frame was just written
-                const long every = o.spec->every;
-                if (o.spec->kind == lpfdm::Output::History) {
-                    if (!history_due(every, n)) lpfdm::write_history_row(o.f, sim);
-                } else if (!((every > 0 && n % every == 0) || n == steps)) {
-                    lpfdm::write_points_frame(o.f, sim, false);
-                }
-            }
+        if (stop) {
             note = fmt::format("run interrupted at step {} of {}", n, steps);
-            std::fprintf(stderr, "\nlpfdm: interrupted at step %ld of %ld; the last frame and a history row were written\n", n, steps);
+            bool saved = false;
+            for (const auto& o : outs) saved |= o.spec->kind == lpfdm::Output::State;
+            std::fprintf(stderr, "\nlpfdm: interrupted at step %ld of %ld; the last frame and a history row were written%s\n", n, steps,
+                         saved ? ", and the state (--restart continues it)" : "");
             status = kExitInterrupted;
             break;
         }
@@ -395,7 +473,7 @@ int main(int argc, char** argv) {
                 last_print = now;
                 const double el = std::chrono::duration<double>(now - t0).count();
                 std::fprintf(stderr, "\rstep %ld/%ld (%3.0f%%)  ke %.4g J/m  %.0f s left   ", n, steps, 100.0 * n / steps, sim.kinetic_energy(),
-                             el / n * (steps - n));
+                             el / double(n - first + 1) * double(steps - n));
             }
         }
     }

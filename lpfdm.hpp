@@ -340,9 +340,11 @@ struct Wall {
 };
 
 struct Output {
-    enum Kind { Points, History } kind = Points;
-    std::string file;
-    long every = 0;  // 0: points: first and last frame only; history: every step
+    enum Kind { Points, History, Vtu, State } kind = Points;
+    std::string file;  // VTU: the series' name (NAME.pvd, NAME_<step>.vtu)
+    long every = 0;  // 0: points, VTU: first and last frame only; history: every step; state: the last step only
+    bool binary = false;  // VTU: the arrays as appended raw binary (else ASCII)
+    bool nodes = false;   // VTU: the lattice's nodes too, as a second series (NAME_nodes.pvd)
     Pos pos;
 };
 
@@ -496,7 +498,7 @@ inline const DeckCard kDeckCards[] = {
     {"ADVECT", "EQ12|POINTS", "", "how increments follow the material: eq. 12, or carried by the points"},
     {"SEED", "", "", "seed of the strength scatter"},
     {"STEP", "", "", "n steps of dt seconds"},
-    {"OUTPUT", "POINTS|HISTORY file", "", "a point table or a history, a frame or row every n steps"},
+    {"OUTPUT", "POINTS|HISTORY|VTU|STATE file", "[BINARY] [NODES]", "a point table, a history, a VTK series (VTU) or a restart file (STATE), every n steps"},
     {"END", "", "", "the end of the deck (optional)"},
 };
 
@@ -1905,6 +1907,43 @@ public:
     }
     double max_du() const { return max_du_; }                         // largest nodal increment of the last step [m]
 
+    // Restart files (write_state, read_state). What a step reads from the steps before it,
+    // besides the scene and the points: f(name, member) for the step count and the running
+    // sums, the nodal increments (eq. 12 compensates them, eq. 13 advances them), the node
+    // masses (eq. 12 compares the next step's with them), the cell masses (eq. 5 skips the
+    // empty cells), each wall's travel (now and before the last increment), line and
+    // velocity, and the energy account's running sums. Every other lattice array
+    // is made by a step before that step reads it (resumed() clears them). The random
+    // numbers are drawn when the points are made (their c0 and n_phi keep them): no
+    // generator state lives on. None of it depends on the kernel or the threads.
+    template <class F> void each_state(F&& f) { visit_state(*this, f); }
+    template <class F> void each_state(F&& f) const { visit_state(*this, f); }
+    // After each_state and the points' arrays were set from a file: the lattice arrays a
+    // step makes before it reads them cleared (outside the fast kernel's boxes they must be
+    // zero), the fast kernel's record of the active lattice made anew from the points
+    // (every node taken as live, which only costs the first step a visit of the whole
+    // lattice), the threads' point chunks and scratch sized to the points. Either kernel
+    // may continue either's state.
+    void resumed() {
+        for (auto* v : {&fx_, &fy_, &nmass_prev_, &cvol_, &svxx_, &svyy_, &svxy_, &hgx_, &hgy_}) std::fill(v->begin(), v->end(), 0.0);
+        std::fill(strain_.begin(), strain_.end(), CellStrain{});
+        std::fill(carried_.begin(), carried_.end(), Carried{});
+        Landing t;
+        for (std::size_t k = 0; k < p_.size(); ++k) {
+            const int c = p_.cell[k];
+            t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
+            const int i = p_.x[k] >= 0 ? std::min(mx_ - 1, int(p_.x[k] * invL_)) : c % mx_;
+            t.imin = std::min(t.imin, i); t.imax = std::max(t.imax, i);
+        }
+        occupied_ = landed(t);
+        strained_ = occupied_.grow(2, mx_, my_);
+        live_nodes_ = integrated_ = {0, mx_ + 1, 0, my_ + 1};
+        parts_known_ = false;
+        chunk_team_ = 0;
+        p_.each_array([&](const char*, auto& v, Points::Use, bool state) { if (!state && !v.empty()) v.resize(p_.size()); });
+        mark_wall_cells();  // the cells the walls' faces may be crossed from, at the travel read
+    }
+
     // The phases of step(), in order; public so that tests and lessons can step
     // through one cycle. Normal use calls step().
     void cell_strains();
@@ -1915,6 +1954,24 @@ public:
     void integrate();
 
 private:
+    template <class S, class F> static void visit_state(S& s, F& f) {
+        f("step", s.step_); f("mass_in", s.mass_in_); f("mass_out", s.mass_out_); f("mass_initial", s.mass0_);
+        f("ke", s.ke_); f("max_du", s.max_du_); f("rx", s.rx_); f("ry", s.ry_);
+        f("du_x", s.dux_); f("du_y", s.duy_); f("node_mass", s.nmass_); f("cell_mass", s.cmass_);
+        for (std::size_t w = 0; w < s.walls_.size(); ++w) {
+            f("wall_shift_i", s.walls_[w].shift_i); f("wall_shift_j", s.walls_[w].shift_j);
+            f("wall_fx", s.walls_[w].fx); f("wall_fy", s.walls_[w].fy); f("wall_dx", s.walls_[w].dx); f("wall_dy", s.walls_[w].dy);
+            f("wall_vx", s.sc_.walls[w].vx); f("wall_vy", s.sc_.walls[w].vy);
+            f("wall_dx0", s.walls_[w].dx0); f("wall_dy0", s.walls_[w].dy0);  // the faces' last travel (hold_by_walls)
+        }
+        // The energy account's running sums (energy()).
+        auto& e = s.es_;
+        f("energy_w_walls", e.w_walls); f("energy_w_fixes", e.w_fixes); f("energy_w_gravity", e.w_gravity); f("energy_d_damping", e.d_damping);
+        f("energy_h_walls", e.h_walls); f("energy_h_fixes", e.h_fixes); f("energy_h_gravity", e.h_gravity); f("energy_h_damping", e.h_damping);
+        f("energy_kinetic", e.kinetic); f("energy_peak_kinetic", e.peak_kinetic);
+        f("energy_left_strain", e.left_strain); f("energy_left_potential", e.left_potential); f("energy_left_plastic", e.left_plastic);
+        f("energy_strain0", e.strain0); f("energy_potential0", e.potential0);
+    }
     void setup();
     void create_points();
     void remove_departed();
@@ -4574,17 +4631,28 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
         } else if (kw == "OUTPUT") {
             Output o;
             o.pos = kp;
-            const Token* kind = r.field("kind (POINTS or HISTORY)");
+            const Token* kind = r.field("kind (POINTS, HISTORY, VTU or STATE)");
             if (kind) {
                 const std::string u = upper(kind->text);
                 if (u == "POINTS") o.kind = Output::Points;
                 else if (u == "HISTORY") o.kind = Output::History;
-                else r.fail(kind->pos, "unknown output '" + kind->text + "' (POINTS or HISTORY)");
+                else if (u == "VTU") o.kind = Output::Vtu;
+                else if (u == "STATE") o.kind = Output::State;
+                else r.fail(kind->pos, "unknown output '" + kind->text + "' (POINTS, HISTORY, VTU or STATE)" +
+                                           did_you_mean(kind->text, {"POINTS", "HISTORY", "VTU", "STATE"}));
             }
             const Token* f = r.field("file name");
             if (f) o.file = f->text;
             if (f && (o.file.find('/') != std::string::npos || o.file == "." || o.file == ".."))
                 r.fail(f->pos, "the file name must not contain a directory (use -o DIR)");
+            // OUTPUT VTU name [BINARY] [NODES], in either order
+            while (r.ok() && r.more_positional() && (upper(r.peek()->text) == "BINARY" || upper(r.peek()->text) == "NODES")) {
+                const Token* b = r.field("BINARY or NODES");
+                const bool binary = upper(b->text) == "BINARY";
+                if (o.kind != Output::Vtu) r.fail(b->pos, upper(b->text) + " is a word of OUTPUT VTU only" + (binary ? " (point tables and histories are text)" : ""));
+                else if (binary ? o.binary : o.nodes) r.fail(b->pos, upper(b->text) + " given twice");
+                else (binary ? o.binary : o.nodes) = true;
+            }
             for (const auto& prev : sc.outputs)
                 if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
             sc.outputs.push_back(o);
@@ -4729,7 +4797,7 @@ struct RunInfo {
     std::string kernel = "fast";
 };
 
-// The provenance lines that open each output file, each beginning "# run: ": the version, the deck
+// The provenance lines of each output file (after its names line), each beginning "# run: ": the version, the deck
 // and the digest of its text, what the command line changed, and the seed, steps, threads
 // and kernel the run used. Only the threads and kernel lines differ between runs that
 // write the same numbers: comparisons of outputs skip these lines (grep -v '^# run: ').
@@ -4747,11 +4815,27 @@ inline void write_provenance(std::FILE* f, const Simulation& sim, const RunInfo&
     fmt::print(f, "# run: threads {} kernel {}\n", r.threads, r.kernel);
 }
 
+// The column names of a point table and of a history, on the first line of each: a line
+// without '#', so that numpy.genfromtxt(names=True), pandas.read_csv(sep=r"\s+",
+// comment="#") and gnuplot's columnheader take their names from it (every other line
+// of a header is a '#' comment; the names are repeated there).
+inline constexpr const char* kPointColumns = "x y sxx syy sxy szz ep yielded mat id";
+inline std::string history_columns(const Simulation& sim) {
+    std::string h = "step time ke mass_in mass_out";
+    for (const auto& w : sim.scene().walls) h += fmt::format(" w{0}_fx w{0}_fy w{0}_dx w{0}_dy", w.id);
+    h += " unbal rx ry";
+    for (std::size_t a = 0; a < sim.scene().fixes.size(); ++a) h += fmt::format(" f{0}_rx f{0}_ry", a + 1);
+    return h + " e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error";
+}
+
 // Point table: one frame; frames are separated by two blank lines.
-inline void write_points_header(std::FILE* f, const Simulation& sim, const std::string& deck) {
+// run: the provenance lines, after the names line (nullptr: none).
+inline void write_points_header(std::FILE* f, const Simulation& sim, const std::string& deck, const RunInfo* run = nullptr) {
+    fmt::print(f, "{}\n", kPointColumns);
+    if (run) write_provenance(f, sim, *run);
     fmt::print(f, "# lpfdm {} point table\n# deck: {}\n# title: {}\n", kVersion, deck, sim.scene().title);
     fmt::print(f, "# units: m, Pa (tension positive); lattice {} x {} cells of {} m\n", sim.mx(), sim.my(), sim.cell_size());
-    fmt::print(f, "# columns: x y sxx syy sxy szz ep yielded mat id\n");
+    fmt::print(f, "# columns: {}\n", kPointColumns);
     fmt::print(f, "#   ep = accumulated plastic shear strain |d_eps1^p - d_eps3^p|; yielded = 1 once the point has yielded (softened)\n");
 }
 
@@ -4770,19 +4854,18 @@ inline void write_points_frame(std::FILE* f, const Simulation& sim, bool first) 
 }
 
 // History: step time ke mass_in mass_out, per wall fx fy dx dy, then more.
-inline void write_history_header(std::FILE* f, const Simulation& sim, const std::string& deck) {
+inline void write_history_header(std::FILE* f, const Simulation& sim, const std::string& deck, const RunInfo* run = nullptr) {
+    const std::string h = history_columns(sim);
+    fmt::print(f, "{}\n", h);
+    if (run) write_provenance(f, sim, *run);
     fmt::print(f, "# lpfdm {} history\n# deck: {}\n# title: {}\n", kVersion, deck, sim.scene().title);
     fmt::print(f, "# units: s, J/m, kg/m, N/m, m; wall force = force the wall exerts on the material\n");
     fmt::print(f, "# unbal = max unbalanced nodal force / mean gross nodal force (free directions); rx ry = reactions of the fixed nodes,\n");
     fmt::print(f, "#   f<n>_rx f<n>_ry = those of FIX card n (deck order; a node held by several cards counts for the first)\n");
-    std::string h = "# step time ke mass_in mass_out";
-    for (const auto& w : sim.scene().walls) h += fmt::format(" w{0}_fx w{0}_fy w{0}_dx w{0}_dy", w.id);
     fmt::print(f, "#   energy [J/m] since the start (Simulation::energy): e_kin kinetic (leapfrog), e_strain elastic, e_grav potential of the points;\n");
     fmt::print(f, "#   w_walls w_fixes w_gravity work done on the material; d_damping d_plastic dissipated;\n");
     fmt::print(f, "#   energy_error = (work in - stored - dissipated) / (energy in play), work in = w_walls + w_fixes\n");
-    h += " unbal rx ry";
-    for (std::size_t a = 0; a < sim.scene().fixes.size(); ++a) h += fmt::format(" f{0}_rx f{0}_ry", a + 1);
-    fmt::print(f, "{} e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error\n", h);
+    fmt::print(f, "# {}\n", h);
 }
 
 inline void write_history_row(std::FILE* f, const Simulation& sim) {
@@ -4796,6 +4879,365 @@ inline void write_history_row(std::FILE* f, const Simulation& sim) {
     fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.6g}\n", e.kinetic, e.strain, e.gravity, e.w_walls,
                    e.w_fixes, e.w_gravity, e.d_damping, e.d_plastic, e.error);
     std::fwrite(b.data(), 1, b.size(), f);
+}
+
+// VTK XML files (ParaView, VisIt), written without the VTK library.
+namespace detail {
+// A data array of a VTK XML file: its name, VTK type, components, and value(k, component)
+// of tuple k.
+struct VtkArray {
+    enum Type { F64, I32, U8, I64 } type;
+    const char* name;
+    int comps;
+    std::function<double(std::size_t, int)> value;
+};
+// Writes a VTK XML file: text() for the elements, array() for each DataArray (its values
+// inline as ASCII, or, binary, as raw bytes in the AppendedData block that finish()
+// writes, each behind its byte count, UInt64), finish() for the end.
+class VtkXml {
+public:
+    VtkXml(std::FILE* f, bool binary) : f_(f), binary_(binary) {}
+    void text(const std::string& s) { b_.append(s.data(), s.data() + s.size()); }
+    // <VTKFile type="..."> in this machine's byte order.
+    void open(const char* type) {
+        const std::uint16_t one = 1;
+        const bool little = *reinterpret_cast<const unsigned char*>(&one) == 1;
+        text(fmt::format("<?xml version=\"1.0\"?>\n<VTKFile type=\"{}\" version=\"1.0\" byte_order=\"{}\" header_type=\"UInt64\">\n", type,
+                         little ? "LittleEndian" : "BigEndian"));
+    }
+    // The frame's time and step, as FieldData (TimeValue: VTK's name for the time).
+    void time(double t, long step) {
+        text(fmt::format("    <FieldData>\n      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{:.15g}</DataArray>\n", t));
+        text(fmt::format("      <DataArray type=\"Int64\" Name=\"STEP\" NumberOfTuples=\"1\" format=\"ascii\">{}</DataArray>\n    </FieldData>\n", step));
+    }
+    void array(const VtkArray& a, std::size_t n, const char* indent) {
+        text(fmt::format("{}<DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"{}\"", indent, kTypeName[a.type], a.name, a.comps,
+                         binary_ ? "appended" : "ascii"));
+        if (binary_) {
+            text(fmt::format(" offset=\"{}\"/>\n", offset_));
+            offset_ += 8 + std::uint64_t(n) * std::uint64_t(a.comps) * kTypeSize[a.type];
+            appended_.push_back({&a, n});
+            return;
+        }
+        text(">\n");
+        auto out = std::back_inserter(b_);
+        for (std::size_t k = 0; k < n; ++k) {
+            for (int c = 0; c < a.comps; ++c) {
+                const double v = a.value(k, c);
+                if (a.type == VtkArray::F64) fmt::format_to(out, "{}{:.9g}", c ? " " : "", v);
+                else fmt::format_to(out, "{}{}", c ? " " : "", std::int64_t(v));
+            }
+            b_.push_back('\n');
+            if (b_.size() > (1 << 20)) flush();
+        }
+        text(fmt::format("{}</DataArray>\n", indent));
+    }
+    void finish() {
+        if (binary_) {
+            text("  <AppendedData encoding=\"raw\">\n   _");
+            for (const auto& ap : appended_) {
+                const VtkArray& a = *ap.first;
+                const std::size_t n = ap.second;
+                const std::uint64_t bytes = std::uint64_t(n) * std::uint64_t(a.comps) * kTypeSize[a.type];
+                raw(&bytes, sizeof bytes);
+                for (std::size_t k = 0; k < n; ++k) {
+                    for (int c = 0; c < a.comps; ++c) {
+                        const double v = a.value(k, c);
+                        if (a.type == VtkArray::F64) raw(&v, 8);
+                        else if (a.type == VtkArray::I64) { const std::int64_t i = std::int64_t(v); raw(&i, 8); }
+                        else if (a.type == VtkArray::I32) { const std::int32_t i = std::int32_t(v); raw(&i, 4); }
+                        else { const std::uint8_t i = std::uint8_t(v); raw(&i, 1); }
+                    }
+                    if (b_.size() > (1 << 20)) flush();
+                }
+            }
+            text("\n  </AppendedData>\n");
+        }
+        text("</VTKFile>\n");
+        flush();
+    }
+
+private:
+    static constexpr const char* kTypeName[] = {"Float64", "Int32", "UInt8", "Int64"};
+    static constexpr std::size_t kTypeSize[] = {8, 4, 1, 8};
+    void raw(const void* v, std::size_t bytes) {
+        const char* c = static_cast<const char*>(v);
+        b_.append(c, c + bytes);
+    }
+    void flush() { std::fwrite(b_.data(), 1, b_.size(), f_); b_.clear(); }
+    std::FILE* f_;
+    bool binary_;
+    fmt::memory_buffer b_;
+    std::uint64_t offset_ = 0;  // of the next array in the appended block
+    std::vector<std::pair<const VtkArray*, std::size_t>> appended_;
+};
+}  // namespace detail
+
+// One frame of the points as a VTK XML UnstructuredGrid of vertex cells, with every
+// point field as PointData:
+//   stress        sxx sxy 0 / sxy syy 0 / 0 0 szz, the full 3 x 3 tensor (9 components) [Pa]
+//   ep, yielded   accumulated plastic shear strain, 1 once yielded (0 without Mohr-Coulomb)
+//   material, id  material id, point number (stable across frames)
+//   velocity      what the point moves in the next step (its cell's motion rule applied to
+//                 the nodal increments) over dt: the velocity at t + dt/2 [m/s]
+//   displacement  position minus the position at step 0 (x0, y0: by point id) [m]
+// binary: the arrays as raw bytes in an AppendedData block, else ASCII with the point
+// table's digits. z is 0.
+inline void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<double>& x0, const std::vector<double>& y0, bool binary) {
+    using detail::VtkArray;
+    const Points& p = sim.points();
+    const std::size_t n = p.size();
+    const bool plastic = !p.plastic_shear.empty();
+    const int mx = sim.mx();
+    const double L = sim.cell_size(), dt = sim.scene().dt_s;
+    const std::vector<double>&ux = sim.du_x(), &uy = sim.du_y();
+    // The point's increment in the next step, as the point pass makes it (eq. 7a/7b or the
+    // scene's MOTION), without the stop at a fixed cell edge.
+    auto step_of = [&](std::size_t k, double& dx, double& dy) {
+        const int c = p.cell[std::size_t(k)], ci = c % mx, cj = c / mx;
+        const StrainIncrement e = sim.strain_of_cell(ci, cj);
+        const int n1 = sim.node(ci, cj), n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
+        const double ax[4] = {ux[std::size_t(n1)], ux[std::size_t(n2)], ux[std::size_t(n3)], ux[std::size_t(n4)]};
+        const double ay[4] = {uy[std::size_t(n1)], uy[std::size_t(n2)], uy[std::size_t(n3)], uy[std::size_t(n4)]};
+        const double xi = ci * L, yj = cj * L;
+        double x = 0, y = 0, ddx = 0, ddy = 0;
+        if (sim.scene().motion == Motion::Paper) {
+            move_point_paper(p.x[k], p.y[k], e, xi, yj, ax[0], ay[0], x, y);
+        } else if (sim.scene().motion == Motion::Centre) {
+            move_point_centre(p.x[k], p.y[k], e, xi, yj, L, 0.25 * (ax[0] + ax[1] + ax[2] + ax[3]), 0.25 * (ay[0] + ay[1] + ay[2] + ay[3]), x, y, ddx, ddy);
+        } else {
+            move_point_bilinear(p.x[k], p.y[k], xi, yj, 1 / L, ax, ay, x, y, ddx, ddy);
+        }
+        dx = x - p.x[k]; dy = y - p.y[k];
+    };
+    auto origin = [&](const std::vector<double>& v0, std::size_t k) {
+        const std::size_t id = std::size_t(p.id[k]);
+        return id < v0.size() ? v0[id] : 0.0;
+    };
+    const VtkArray point_data[] = {
+        {VtkArray::F64, "stress", 9, [&](std::size_t k, int c) {
+             const double t[9] = {p.sxx[k], p.sxy[k], 0, p.sxy[k], p.syy[k], 0, 0, 0, p.szz[k]};
+             return t[c];
+         }},
+        {VtkArray::F64, "ep", 1, [&](std::size_t k, int) { return plastic ? p.plastic_shear[k] : 0.0; }},
+        {VtkArray::U8, "yielded", 1, [&](std::size_t k, int) { return plastic ? double(p.yielded[k]) : 0.0; }},
+        {VtkArray::I32, "material", 1, [&](std::size_t k, int) { return double(sim.material_id(k)); }},
+        {VtkArray::F64, "velocity", 3, [&](std::size_t k, int c) {
+             if (c == 2) return 0.0;
+             double dx, dy;
+             step_of(k, dx, dy);
+             return (c == 0 ? dx : dy) / dt;
+         }},
+        {VtkArray::F64, "displacement", 3, [&](std::size_t k, int c) { return c == 0 ? p.x[k] - origin(x0, k) : c == 1 ? p.y[k] - origin(y0, k) : 0.0; }},
+        {VtkArray::I32, "id", 1, [&](std::size_t k, int) { return double(p.id[k]); }},
+    };
+    const VtkArray coords = {VtkArray::F64, "Points", 3, [&](std::size_t k, int c) { return c == 0 ? p.x[k] : c == 1 ? p.y[k] : 0.0; }};
+    const VtkArray cells[] = {{VtkArray::I64, "connectivity", 1, [](std::size_t k, int) { return double(k); }},
+                              {VtkArray::I64, "offsets", 1, [](std::size_t k, int) { return double(k + 1); }},
+                              {VtkArray::U8, "types", 1, [](std::size_t, int) { return 1.0; }}};  // VTK_VERTEX
+    detail::VtkXml x(f, binary);
+    x.open("UnstructuredGrid");
+    x.text("  <UnstructuredGrid>\n");
+    x.time(sim.time(), sim.step_count());
+    x.text(fmt::format("    <Piece NumberOfPoints=\"{0}\" NumberOfCells=\"{0}\">\n      <PointData Scalars=\"ep\" Vectors=\"velocity\" Tensors=\"stress\">\n", n));
+    for (const VtkArray& a : point_data) x.array(a, n, "        ");
+    x.text("      </PointData>\n      <Points>\n");
+    x.array(coords, n, "        ");
+    x.text("      </Points>\n      <Cells>\n");
+    for (const VtkArray& a : cells) x.array(a, n, "        ");
+    x.text("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n");
+    x.finish();
+}
+
+// One frame of the lattice as a VTK XML ImageData (its nodes the image's points, node
+// (i, j) at (i L, j L)), with PointData mass (eq. 10, kg/m), velocity (the nodal
+// increment over dt: at t + dt/2, m/s) and force (the net nodal force of the last step,
+// gravity included, N/m). binary as for write_vtu.
+inline void write_vti(std::FILE* f, const Simulation& sim, bool binary) {
+    using detail::VtkArray;
+    const std::size_t n = sim.node_mass().size();
+    const double dt = sim.scene().dt_s;
+    const VtkArray node_data[] = {
+        {VtkArray::F64, "mass", 1, [&](std::size_t k, int) { return sim.node_mass()[k]; }},
+        {VtkArray::F64, "velocity", 3, [&](std::size_t k, int c) { return c == 0 ? sim.du_x()[k] / dt : c == 1 ? sim.du_y()[k] / dt : 0.0; }},
+        {VtkArray::F64, "force", 3, [&](std::size_t k, int c) { return c == 0 ? sim.force_x()[k] : c == 1 ? sim.force_y()[k] : 0.0; }},
+    };
+    detail::VtkXml x(f, binary);
+    x.open("ImageData");
+    x.text(fmt::format("  <ImageData WholeExtent=\"0 {0} 0 {1} 0 0\" Origin=\"0 0 0\" Spacing=\"{2:.17g} {2:.17g} {2:.17g}\">\n", sim.mx(), sim.my(), sim.cell_size()));
+    x.time(sim.time(), sim.step_count());
+    x.text(fmt::format("    <Piece Extent=\"0 {} 0 {} 0 0\">\n      <PointData Scalars=\"mass\" Vectors=\"velocity\">\n", sim.mx(), sim.my()));
+    for (const VtkArray& a : node_data) x.array(a, n, "        ");
+    x.text("      </PointData>\n      <CellData>\n      </CellData>\n    </Piece>\n  </ImageData>\n");
+    x.finish();
+}
+
+// The file of frame `step` of VTU series `name`: name_<step>.vtu, the step in at least
+// six digits, so that the files sort in step order; with nodes, the lattice's frame
+// name_nodes_<step>.vti.
+inline std::string vtu_frame_file(const std::string& name, long step, bool nodes = false) {
+    if (nodes) return fmt::format("{}_nodes_{:06d}.vti", name, step);
+    return fmt::format("{}_{:06d}.vtu", name, step);
+}
+
+// A ParaView collection of the frames (file, time) written: it opens the series at once.
+inline void write_pvd(std::FILE* f, const std::vector<std::pair<std::string, double>>& frames) {
+    fmt::print(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n");
+    for (const auto& fr : frames) fmt::print(f, "    <DataSet timestep=\"{:.15g}\" part=\"0\" file=\"{}\"/>\n", fr.second, fr.first);
+    fmt::print(f, "  </Collection>\n</VTKFile>\n");
+}
+
+// Restart files (OUTPUT STATE, lpfdm --restart): everything the next step reads from the
+// steps before it, in a versioned binary with a checksum, the same bytes whichever kernel
+// and threads wrote it. Layout, in the machine's byte order:
+//   "lpfdm state\n"  u32 version  u32 0x01020304 (byte order)  u64 file size  u64 digest,
+//   items: u8 name length, name, u8 bytes per value, u64 values, the values' bytes
+//          (Simulation::each_state in order, then "point_count" and every array of
+//          Points::each_array that is a point's state, as "point_<name>"),
+//   u64 checksum: FNV-1a of every byte before it.
+// The digest is state_digest's of the deck text and of the options that change the
+// scene: a state continues only the run it came from.
+inline constexpr char kStateMagic[] = "lpfdm state\n";
+inline constexpr std::uint32_t kStateVersion = 1;
+namespace detail {
+inline std::uint64_t fnv1a(const void* data, std::size_t n, std::uint64_t h = 14695981039346656037ull) {
+    const unsigned char* c = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) { h ^= c[i]; h *= 1099511628211ull; }
+    return h;
+}
+template <class T> struct IsVector : std::false_type {};
+template <class T, class A> struct IsVector<std::vector<T, A>> : std::true_type {};
+// The bytes, bytes per value and values of a state item (a number or a vector of them).
+template <class M> void item_span(M& m, void*& data, std::size_t& size, std::size_t& count) {
+    if constexpr (IsVector<std::remove_const_t<M>>::value) {
+        static_assert(std::is_trivially_copyable_v<typename std::remove_const_t<M>::value_type>, "state items are plain values");
+        data = const_cast<void*>(static_cast<const void*>(m.data())); size = sizeof(m[0]); count = m.size();
+    } else {
+        static_assert(std::is_trivially_copyable_v<std::remove_const_t<M>>, "state items are plain values");
+        data = const_cast<void*>(static_cast<const void*>(&m)); size = sizeof(M); count = 1;
+    }
+}
+}  // namespace detail
+inline std::uint64_t state_digest(const std::string& deck_text, const std::string& options) {
+    return detail::fnv1a(options.data(), options.size(), detail::fnv1a(deck_text.data(), deck_text.size()));
+}
+
+// sim's state as a restart file. Returns whether every byte was written.
+inline bool write_state(std::FILE* f, const Simulation& sim, std::uint64_t digest) {
+    std::string b(kStateMagic, sizeof kStateMagic - 1);
+    auto raw = [&](const void* v, std::size_t bytes) { b.append(static_cast<const char*>(v), bytes); };
+    const std::uint32_t version = kStateVersion, order = 0x01020304;
+    const std::uint64_t size_slot = 0;
+    raw(&version, 4); raw(&order, 4);
+    const std::size_t size_at = b.size();
+    raw(&size_slot, 8); raw(&digest, 8);
+    auto item = [&](const char* name, const auto& m) {
+        void* data; std::size_t size, count;
+        detail::item_span(m, data, size, count);
+        const std::uint8_t len = std::uint8_t(std::strlen(name)), sz = std::uint8_t(size);
+        const std::uint64_t cnt = count;
+        raw(&len, 1); raw(name, len); raw(&sz, 1); raw(&cnt, 8); raw(data, size * count);
+    };
+    sim.each_state(item);
+    const Points& p = sim.points();
+    const std::uint64_t n = p.size();
+    item("point_count", n);
+    p.each_array([&](const char* name, const auto& v, Points::Use, bool state) { if (state) item(("point_" + std::string(name)).c_str(), v); });
+    const std::uint64_t total = b.size() + 8;
+    std::memcpy(&b[size_at], &total, 8);
+    const std::uint64_t sum = detail::fnv1a(b.data(), b.size());
+    raw(&sum, 8);
+    return std::fwrite(b.data(), 1, b.size(), f) == b.size();
+}
+
+// Continues sim (made from the same deck and options, not yet stepped) from the restart
+// file at path. A file that is not a state, of another version or byte order, truncated,
+// corrupt (checksum), of another deck (digest) or that does not fit the scene is refused
+// with one diagnostic, and sim is left as it was.
+inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uint64_t digest) {
+    auto error = [&](const std::string& m) { return one_error(path, 0, 0, m); };
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) return error("cannot read the state file: it is a directory");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return error(std::string("cannot open the state file: ") + std::strerror(errno));
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    const std::string b = ss.str();
+    const std::size_t magic = sizeof kStateMagic - 1, head = magic + 4 + 4 + 8 + 8;
+    if (b.size() < magic || b.compare(0, magic, kStateMagic) != 0) return error("not an lpfdm state file (it does not begin with 'lpfdm state')");
+    if (b.size() < head + 8) return error(fmt::format("the state file is truncated: {} bytes, not even its header", b.size()));
+    auto get = [&](std::size_t at, auto& v) { std::memcpy(&v, b.data() + at, sizeof v); };
+    std::uint32_t version = 0, order = 0;
+    std::uint64_t total = 0, dig = 0, sum = 0;
+    get(magic, version); get(magic + 4, order); get(magic + 8, total); get(magic + 16, dig);
+    if (order != 0x01020304) return error("the state file was written on a machine of the other byte order");
+    if (version != kStateVersion) return error(fmt::format("the state file has format version {}; this lpfdm {} reads version {}", version, kVersion, kStateVersion));
+    if (b.size() < total) return error(fmt::format("the state file is truncated: {} of its {} bytes", b.size(), total));
+    if (b.size() > total || total < head + 8) return error(fmt::format("the state file is corrupt: {} bytes, its header says {}", b.size(), total));
+    get(total - 8, sum);
+    if (detail::fnv1a(b.data(), total - 8) != sum) return error("the state file is corrupt: its checksum does not match its contents");
+    if (dig != digest)
+        return error(fmt::format("the state file was written by a run of another deck, or with other --refine, --seed or --set options (digest {:016x}, this run {:016x})", dig, digest));
+    // Twice through the items: first every check, then (apply) the copy.
+    Points& p = sim.points();
+    const std::size_t made = p.size();  // the points at step 0: no more can be left
+    std::size_t at = head, n = 0, cell_at = 0, group_at = 0;
+    std::string problem;
+    auto next = [&](const char* name, auto& m, std::size_t want, bool apply) {
+        if (!problem.empty()) return;
+        void* data; std::size_t size, count;
+        detail::item_span(m, data, size, count);
+        std::uint8_t len = 0, sz = 0;
+        std::uint64_t cnt = 0;
+        if (at + 1 > total - 8) { problem = fmt::format("it ends before '{}'", name); return; }
+        get(at, len);
+        if (at + 1 + len + 9 > total - 8) { problem = fmt::format("it ends before '{}'", name); return; }
+        const std::string got = b.substr(at + 1, len);
+        get(at + 1 + len, sz); get(at + 2 + len, cnt);
+        at += 10 + len;
+        if (got != name) { problem = fmt::format("it holds '{}' where '{}' belongs", got, name); return; }
+        if (sz != size || cnt != want) { problem = fmt::format("'{}' holds {} values of {} bytes, this scene needs {} of {}", name, cnt, sz, want, size); return; }
+        if (cnt * sz > total - 8 - at) { problem = fmt::format("it ends inside '{}'", name); return; }
+        if (apply) {
+            if constexpr (detail::IsVector<std::remove_reference_t<decltype(m)>>::value) m.resize(std::size_t(cnt));
+            detail::item_span(m, data, size, count);
+            if (cnt) std::memcpy(data, b.data() + at, std::size_t(cnt) * sz);
+        }
+        at += std::size_t(cnt) * sz;
+    };
+    for (const bool apply : {false, true}) {
+        at = head;
+        sim.each_state([&](const char* name, auto& m) {
+            std::size_t size = 0, count = 0;
+            void* data;
+            detail::item_span(m, data, size, count);
+            next(name, m, count, apply);
+        });
+        std::uint64_t count = 0;
+        next("point_count", count, 1, false);
+        if (problem.empty()) {
+            get(at - 8, count);
+            if (count > made) problem = fmt::format("it holds {} points, this scene makes {}", count, made);
+            n = std::size_t(count);
+        }
+        p.each_array([&](const char* name, auto& v, Points::Use, bool state) {
+            if (!state) return;
+            const std::string item = "point_" + std::string(name);
+            if (item == "point_cell") cell_at = at + 10 + item.size();
+            if (item == "point_group") group_at = at + 10 + item.size();
+            next(item.c_str(), v, v.empty() ? 0 : n, apply);
+        });
+        if (problem.empty() && at != total - 8) problem = "it holds more than this scene's state";
+        for (std::size_t k = 0; k < n && problem.empty() && !apply; ++k) {
+            std::int32_t c;
+            std::uint16_t g;
+            get(cell_at + 4 * k, c); get(group_at + 2 * k, g);
+            if (c < 0 || c >= sim.mx() * sim.my() || g >= sim.groups().size()) problem = "a point lies outside the lattice";
+        }
+        if (!problem.empty()) return error("the state file does not fit this scene: " + problem);
+    }
+    sim.resumed();
+    return {};
 }
 #endif  // LPFDM_NO_IO
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The command line: GNU option forms, every mistake of the options and the deck in one
-# run, warnings and --strict, and the provenance lines that open each output file.
+# run, warnings and --strict, and the provenance lines of each output file (after its names line).
 #
 # usage: tests/check_cli.sh EXE
 #
@@ -88,7 +88,7 @@ expect "--set of a card the deck lacks, with a deck error" 2 -q --set WALL9.VX=1
 
 # --- warnings: to stderr, exit status 0, the run made; --strict: errors, exit 2, nothing written ---
 expect "cliff --steps 100" 0 -q --steps 100 decks/cliff.deck && says "cliff --steps 100" "decks/cliff.deck:23:1: warning: EVERY 500 is more than the 100 steps"
-rows=$(grep -v '^#' "$out/cliff_history.txt" | grep -c .)
+rows=$(sed 1d "$out/cliff_history.txt" | grep -v '^#' | grep -c .)  # (line 1: the column names)
 if [ "$rows" -eq 1 ] && grep -v '^#' "$out/cliff_history.txt" | grep -q '^100 '; then ok; else fail "cliff --steps 100" "$rows history rows, expected the one of step 100"; fi
 expect "cliff --steps 100 --strict" 2 -q --strict --steps 100 decks/cliff.deck && says "cliff --steps 100 --strict" "decks/cliff.deck:23:1: error: EVERY 500"
 if [ -z "$(ls "$out")" ]; then ok; else fail "--strict" "files written: $(ls "$out")"; fi
@@ -99,7 +99,7 @@ if [ "$n" -eq 3 ]; then ok; else fail "wrong units" "$n warnings, expected 3 (PH
 expect "a deck without a warning is silent" 0 -q "$deck"
 if [ ! -s "$err" ]; then ok; else fail "silent" "stderr: $(head -n 1 "$err")"; fi
 
-# --- provenance: each output file opens with the '# run:' lines; the digest is FNV-1a 64 ---
+# --- provenance: each output file's '# run:' lines follow its names line; the digest is FNV-1a 64 ---
 fnv() {  # FNV-1a 64 of a file, in bash's 64-bit arithmetic
     local h=-3750763034362895579 b  # 0xcbf29ce484222325
     for b in $(od -An -v -tu1 "$1"); do h=$(( (h ^ b) * 1099511628211 )); done
@@ -111,7 +111,7 @@ version=$("$exe" --version | sed 's/^lpfdm //')
 files=$(ls "$out")
 [ -n "$files" ] || fail "provenance" "no output"
 for f in $files; do
-    head -n 5 "$out/$f" >"$tmp/head"
+    sed -n 2,6p "$out/$f" >"$tmp/head"
     want=$(printf '%s\n' "# run: lpfdm $version" "# run: deck tests/decks/good_every_card.deck (fnv1a64 $digest)" \
         "# run: options --steps 6 --refine 2 --seed 9 --set DAMPING.ALPHA=0.7" "# run: seed 9 steps 6" "# run: threads 2 kernel ")
     ok_all=1

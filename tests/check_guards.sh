@@ -146,7 +146,7 @@ if run normal "$tmp/short.deck" "" 60; then
     done
     s=$(last_frame_step "$out/p.txt")
     check "normal run: last frame at the last step" $([ "$s" = 200 ]; echo $?) "last frame is step $s"
-    s=$(last_row_step "$out/every.txt") c=$(grep -v '^#' "$out/every.txt" | grep -c .)
+    s=$(last_row_step "$out/every.txt") c=$(grep -v -e '^#' -e '^step ' "$out/every.txt" | grep -c .)
     check "normal run: one history row per step" $([ "$s" = 200 ] && [ "$c" = 200 ]; echo $?) "$c rows, the last at step $s"
 fi
 

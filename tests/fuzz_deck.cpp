@@ -37,6 +37,9 @@ void run_small(lpfdm::Scene& s) {
         lpfdm::write_points_frame(f, sim, false);
         lpfdm::write_history_header(f, sim, "fuzz.deck");
         lpfdm::write_history_row(f, sim);
+        lpfdm::write_vtu(f, sim, {}, {}, false);
+        lpfdm::write_vtu(f, sim, {}, {}, true);
+        lpfdm::write_state(f, sim, 0);
     }
 }
 

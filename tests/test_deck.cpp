@@ -618,7 +618,36 @@ TEST_CASE("deck error: unknown direction, material model or output kind") {
     CHECK_ONE_ERROR(plus("FIX XZ 0 0 4 0"), 5, 5, "unknown direction 'XZ'");
     CHECK_ONE_ERROR(plus("FIX 0 0 4 0"), 5, 5, "unknown direction '0'");
     CHECK_ONE_ERROR(plus("MATERIAL 2 PLASTIC E=5E7 NU=0.3 RHO=2000"), 5, 12, "unknown material model 'PLASTIC' (ELASTIC or MOHR)");
-    CHECK_ONE_ERROR(plus("OUTPUT FRAMES f.txt"), 5, 8, "unknown output 'FRAMES' (POINTS or HISTORY)");
+    CHECK_ONE_ERROR(plus("OUTPUT FRAMES f.txt"), 5, 8, "unknown output 'FRAMES' (POINTS, HISTORY, VTU or STATE)");
+    CHECK_ONE_ERROR(plus("OUTPUT VTK f"), 5, 8, "unknown output 'VTK' (POINTS, HISTORY, VTU or STATE) (did you mean VTU?)");
+}
+
+TEST_CASE("deck: OUTPUT VTU (ASCII or BINARY) and OUTPUT STATE") {
+    const Scene s = read_ok(kBase +
+                            "OUTPUT VTU heap\n"
+                            "OUTPUT VTU heapb BINARY EVERY 5\n"
+                            "output vtu heapc binary nodes every=7\n"
+                            "OUTPUT STATE heap.state EVERY 100\n");
+    REQUIRE(s.outputs.size() == 4);
+    CHECK(s.outputs[0].kind == lpfdm::Output::Vtu);
+    CHECK(s.outputs[0].file == "heap");
+    CHECK(!s.outputs[0].binary);
+    CHECK(s.outputs[0].every == 0);
+    CHECK(s.outputs[1].kind == lpfdm::Output::Vtu);
+    CHECK(s.outputs[1].binary);
+    CHECK(s.outputs[1].every == 5);
+    CHECK(s.outputs[2].binary);
+    CHECK(s.outputs[2].nodes);
+    CHECK(!s.outputs[1].nodes);
+    CHECK(s.outputs[2].every == 7);
+    CHECK(s.outputs[3].kind == lpfdm::Output::State);
+    CHECK(s.outputs[3].file == "heap.state");
+    CHECK(s.outputs[3].every == 100);
+    CHECK_ONE_ERROR(plus("OUTPUT POINTS p.txt BINARY"), 5, 21, "BINARY is a word of OUTPUT VTU only");
+    CHECK_ONE_ERROR(plus("OUTPUT STATE s BINARY EVERY 5"), 5, 16, "BINARY is a word of OUTPUT VTU only");
+    CHECK_ONE_ERROR(plus("OUTPUT VTU v EVERY 5 BINARY"), 5, 22, "extra field 'BINARY'");
+    CHECK_ONE_ERROR(plus("OUTPUT VTU v NODES BINARY NODES"), 5, 27, "NODES given twice");
+    CHECK_ONE_ERROR(plus("OUTPUT HISTORY h.txt NODES"), 5, 22, "NODES is a word of OUTPUT VTU only");
 }
 
 TEST_CASE("deck error: a FIX box that holds no node") {

@@ -43,11 +43,11 @@ if (system(sprintf("test -r '%s' && echo ok", in)) ne "ok") {
     exit error sprintf("history.gp: cannot read history file '%s'", in)
 }
 
-# The names come from the last comment line whose first name is "step"
-# (read before the first data row; "# step N time T" lines of a point
-# table do not count); columnhead cannot be used because that line
-# starts with '#'.
-header = system(sprintf("awk '!/^#/ {exit} {sub(/^#[ \t]*/, \"\")} $1 == \"step\" && $2 !~ /^[0-9]/ {h = $0} END {print h}' '%s'", in))
+# The names come from the first line of the history ("step time ke ..."),
+# or from the last comment line whose first name is "step" (read before
+# the first data row; "# step N time T" lines of a point table do not
+# count), as older histories have only that one.
+header = system(sprintf("awk 'NR == 1 && !/^#/ {h = $0; next} !/^#/ {exit} {sub(/^#[ \t]*/, \"\")} $1 == \"step\" && $2 !~ /^[0-9]/ {h = $0} END {print h}' '%s'", in))
 colidx(name) = sum [k = 1:words(header)] ((word(header, k) eq name) ? k : 0)
 if (words(header) == 0) {
     exit error sprintf("history.gp: no '# step time ...' header line in '%s'", in)

@@ -36,7 +36,7 @@ if (system(sprintf("test -r '%s' && echo ok", in)) ne "ok") {
 
 # Wall columns move with the number of walls: look them up by name in
 # the last "# step time ..." comment line before the data.
-header = system(sprintf("awk '!/^#/ {exit} {sub(/^#[ \t]*/, \"\")} $1 == \"step\" && $2 !~ /^[0-9]/ {h = $0} END {print h}' '%s'", in))
+header = system(sprintf("awk 'NR == 1 && !/^#/ {h = $0; next} !/^#/ {exit} {sub(/^#[ \t]*/, \"\")} $1 == \"step\" && $2 !~ /^[0-9]/ {h = $0} END {print h}' '%s'", in))
 colidx(name) = sum [k = 1:words(header)] ((word(header, k) eq name) ? k : 0)
 ify = colidx(sprintf("w%d_fy", wall))
 idy = colidx(sprintf("w%d_dy", wall))

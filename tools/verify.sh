@@ -207,7 +207,7 @@ collapse_case() {
                 dir=$work/collapse-a$a-r$r-p$p
                 run "$dir" "$decks/verify_collapse.deck" --refine $r --set CLUSTER1.PPC=$p --set CLUSTER1.Y1=$a || continue
                 m=$(awk -f "$here/verify_front.awk" "$dir/verify_collapse_points.txt")
-                mo=$(awk '/^# step/ { for (i = 2; i <= NF; i++) c[$i] = i - 1; next } /^#/ || NF == 0 { next }
+                mo=$(awk '/^# step/ { for (i = 2; i <= NF; i++) c[$i] = i - 1; next } /^#/ || NF == 0 || $1 == "step" { next }
                           { f = $c["mass_out"] / ($c["mass_in"] + $c["mass_out"]) } END { printf "%.4g", f }' "$dir/verify_collapse_history.txt")
                 set -- $m
                 row "collapse_a$a" $((8 * r)) $p "$STEPS" "$WALL" "$PSTEPS" "$(awk -v f="$1" 'BEGIN { print f - 1 }')" "$ref"

@@ -9,7 +9,7 @@
 # Input: -v H= -v rho= -v g= -v E= -v nu=   Output, one line:
 #   syy_rms syy_ref_rms syy_L2err  u_top u_top_ref u_top_err  u_top_small_ref
 /^# step/ { frame++; next }
-/^#/ || NF < 10 { next }
+/^#/ || NF < 10 || $1 == "x" { next }  # "x y ...": the column names
 frame == 1 { y0[$10] = $2; next }
 { last[$10] = $0 }
 END {

@@ -4,7 +4,7 @@
 # Stands when the last row's unbal is below 1e-7, or below a tenth of its value at two
 # thirds of the run. Output: 1 (stands) or 0 (collapses), the two unbal values.
 /^# step/ { for (i = 2; i <= NF; i++) col[$i] = i - 1; next }
-/^#/ || NF == 0 { next }
+/^#/ || NF == 0 || $1 == "step" { next }  # "step time ...": the column names
 { t[++n] = $col["time"]; u[n] = $col["unbal"] }
 END {
     tend = t[n]; k = n

@@ -4,7 +4,7 @@
 # deposit do not count as the deposit. Output: front, farthest point, points.
 BEGIN { if (keep == "") keep = 0.99 }
 /^# step/ { n = 0; next }
-/^#/ || NF < 10 { next }
+/^#/ || NF < 10 || $1 == "x" { next }  # "x y ...": the column names
 { x[++n] = $1 }
 END {
     # heap sort (portable awk has no sort function)

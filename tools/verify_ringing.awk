@@ -9,7 +9,7 @@
 # verify_column.awk). Input: -v H= -v rho= -v g= -v E= -v nu=
 # Output: period peak_over_static u_static crossings
 /^# step/ { if (frame) close_frame(); frame++; t = $5; next }
-/^#/ || NF < 10 { next }
+/^#/ || NF < 10 || $1 == "x" { next }  # "x y ...": the column names
 frame == 1 { y0[$10] = $2; if ($2 > ytop) ytop = $2; next }
 { if (y0[$10] > ytop - 1e-9) { su += y0[$10] - $2; nu_ += 1 } }
 function close_frame() {

@@ -11,7 +11,7 @@ BEGIN { if (scale == "") scale = 1 }
     fy = col["w" wall "_fy"]; dy = col["w" wall "_dy"]
     next
 }
-/^#/ || NF == 0 { next }
+/^#/ || NF == 0 || $1 == "step" { next }  # "step time ...": the column names
 {
     d = -$dy; q = -$fy / width / scale
     if (at != "" && !done && d >= at) {

@@ -1,0 +1,178 @@
+#!/usr/bin/env bash
+# Program-level checks of restart files (OUTPUT STATE, lpfdm --restart; decks/README.md):
+#   - a run stopped at step k (--steps k) and continued with --restart writes the same
+#     bytes as the run that was never stopped: the frames of its point table after k,
+#     its history rows after k, its last VTU frame and its last state; with the fast
+#     kernel and the reference kernel, one and two threads, and across kernels (a state
+#     of one continued by the other); the state files of every kernel and thread count
+#     are the same bytes;
+#   - SIGINT: exit status 130, the state of the interrupted step written, and --restart
+#     from it gives the uninterrupted run's frames and rows;
+#   - a state file that is truncated, corrupt, of another format version, of another
+#     deck or other options, not a state file at all, a directory, or already at the
+#     last step is refused: exit status 2, "FILE: error: ..." naming the problem, no
+#     output file.
+#
+# usage: tests/check_restart.sh EXE
+# Last line "restart: N passed, M failed".
+set -u
+
+. "$(dirname "$0")/lib.sh"
+need_program restart "$@"
+
+tmp=$(mktemp -d) || exit 2
+trap 'rm -rf "$tmp"' EXIT
+passed=0 failed=0
+pass() { passed=$((passed + 1)); }
+fail() { echo "FAIL $1: $2"; failed=$((failed + 1)); }
+check() { if [ "$2" -eq 0 ]; then pass; else fail "$1" "$3"; fi; }
+
+# A Mohr-Coulomb block with strength scatter and softening, pressed by a wall under a
+# strong gravity: points yield, soften and leave the lattice on the right (outflow);
+# 5184 points, so that two threads take the threaded point pass (above 4096).
+cat >"$tmp/r.deck" <<'EOF'
+TITLE restart
+GRID 64 32 0.125
+MATERIAL 1 MOHR E=5E7 NU=0.3 RHO=2000 PHI=30 C=2000 SOFTEN=0.5 SCATTER=0.2
+CLUSTER 1 5 0 8 3 PPC=3
+FIX XY 0 0 8 0
+WALL 1 5.5 3 6.5 3 0 -2
+GRAVITY 0 -98.1
+SEED 7
+STEP 4E-4 120
+OUTPUT POINTS p.txt EVERY 20
+OUTPUT HISTORY h.txt EVERY 1
+OUTPUT STATE s.state EVERY 50
+OUTPUT VTU v EVERY 40
+END
+EOF
+
+# frames FILE K: the frames of a point table after step K; rows FILE K: the history rows after step K.
+frames() { awk -v k="$2" '/^# step [0-9]/ { keep = ($3 > k) } /^# run / { keep = 0 } keep' "$1"; }
+rows() { awk -v k="$2" '!/^#/ && $1 ~ /^[0-9]+$/ && $1 > k' "$1"; }
+report() { grep -m 1 -E 'runtime error:|AddressSanitizer|LeakSanitizer|terminate called|Assertion .* failed' "$1"; }
+
+# run DIR ARGS...: EXE -q -o DIR ARGS, stderr in DIR.err; sets rc.
+run() {
+    local d=$1
+    shift
+    rm -rf "$d"
+    { timeout -k 5 300 "$exe" -q -o "$d" "$@" >/dev/null 2>"$d.err" </dev/null; rc=$?; } 2>/dev/null
+    local r
+    r=$(report "$d.err")
+    if [ -n "$r" ]; then fail "$d" "sanitizer report or abort: $r"; return 1; fi
+    return 0
+}
+
+# --- 1. stopped at step 60, continued: the same bytes as the whole run ---
+run "$tmp/whole" "$tmp/r.deck" || exit 1
+check "whole run" $rc "exit status $rc: $(head -n 1 "$tmp/whole.err")"
+n_frames=$(frames "$tmp/whole/p.txt" 60 | grep -c '^# step')
+check "whole run: frames after step 60" $([ "$n_frames" = 3 ]; echo $?) "$n_frames frames, expected 3 (80, 100, 120)"
+out_mass=$(rows "$tmp/whole/h.txt" 119 | awk '{print $5}')
+check "whole run: points leave the lattice" $(awk -v m="$out_mass" 'BEGIN { exit !(m > 0) }'; echo $?) "mass_out $out_mass at step 120"
+
+# continued NAME KERNEL_STOP THREADS_STOP KERNEL_GO THREADS_GO
+continued() {
+    local a="$tmp/$1-a" b="$tmp/$1-b"
+    run "$a" --kernel "$2" --threads "$3" --steps 60 "$tmp/r.deck" || return
+    check "$1: stopped run" $rc "exit status $rc: $(head -n 1 "$a.err")"
+    check "$1: state written" $([ -s "$a/s.state" ]; echo $?) "no $a/s.state"
+    run "$b" --kernel "$4" --threads "$5" --restart "$a/s.state" "$tmp/r.deck" || return
+    check "$1: continued run" $rc "exit status $rc: $(head -n 1 "$b.err")"
+    check "$1: first frame at the saved step" $([ "$(grep -m 1 '^# step' "$b/p.txt")" = "# step 60 time 0.024" ]; echo $?) \
+        "first frame '$(grep -m 1 '^# step' "$b/p.txt")'"
+    check "$1: point table frames after step 60" $(cmp -s <(frames "$tmp/whole/p.txt" 60) <(frames "$b/p.txt" 60); echo $?) \
+        "differ from the whole run's"
+    check "$1: history rows after step 60" $(cmp -s <(rows "$tmp/whole/h.txt" 60) <(rows "$b/h.txt" 60) && [ "$(rows "$b/h.txt" 60 | wc -l)" = 60 ]; echo $?) \
+        "differ from the whole run's ($(rows "$b/h.txt" 60 | wc -l) rows)"
+    check "$1: last VTU frame" $(cmp -s "$tmp/whole/v_000120.vtu" "$b/v_000120.vtu"; echo $?) "differs from the whole run's"
+    check "$1: last state" $(cmp -s "$tmp/whole/s.state" "$b/s.state"; echo $?) "differs from the whole run's"
+}
+continued "fast, 1 thread" fast 1 fast 1
+continued "fast, 2 threads" fast 2 fast 2
+continued "reference" reference 1 reference 1
+continued "fast to reference" fast 2 reference 1
+continued "reference to fast, 2 threads" reference 1 fast 2
+for other in "fast, 2 threads" "reference"; do
+    check "the state at step 60 of '$other' is the fast kernel's" $(cmp -s "$tmp/fast, 1 thread-a/s.state" "$tmp/$other-a/s.state"; echo $?) \
+        "the state files differ"
+done
+
+# --- 2. SIGINT: the state of the interrupted step, continued ---
+cat >"$tmp/long.deck" <<'EOF'
+TITLE run to be stopped
+GRID 8 8 0.5
+MATERIAL 1 MOHR E=2E7 NU=0.25 RHO=2000 PHI=30 C=1000 SOFTEN=0.3 SCATTER=0.2
+CLUSTER 1 0 0 4 2
+FIX XY 0 0 4 0
+WALL 1 1 2 3 2 0 -0.01
+GRAVITY 0 -9.81
+DAMPING 0.8
+STEP 1E-4 100000000
+OUTPUT POINTS p.txt EVERY 1000
+OUTPUT HISTORY h.txt EVERY 100
+OUTPUT STATE s.state EVERY 10000000
+END
+EOF
+rm -rf "$tmp/int"
+{ timeout -k 30 -s INT --preserve-status 2 "$exe" -q -o "$tmp/int" "$tmp/long.deck" >/dev/null 2>"$tmp/int.err" </dev/null; rc=$?; } 2>/dev/null
+check "SIGINT: exit status" $([ $rc -eq 130 ]; echo $?) "exit status $rc, expected 130 ($(head -n 2 "$tmp/int.err" | tr '\n' ' '))"
+k=$(sed -n -E 's/.*interrupted at step ([0-9]+).*/\1/p' "$tmp/int.err" | head -n 1)
+check "SIGINT: the message names the state" $(grep -q 'and the state' "$tmp/int.err"; echo $?) "stderr: $(tail -n 1 "$tmp/int.err")"
+if [ -n "$k" ] && [ -s "$tmp/int/s.state" ]; then
+    n=$((k / 1000 * 1000 + 2037))  # frames at two multiples of 1000 after k, and at the end
+    run "$tmp/int-whole" --steps "$n" "$tmp/long.deck" &&
+        run "$tmp/int-go" --steps "$n" --restart "$tmp/int/s.state" "$tmp/long.deck" && {
+        check "SIGINT: continued run" $rc "exit status $rc: $(head -n 1 "$tmp/int-go.err")"
+        check "SIGINT: point table frames after step $k" \
+            $(cmp -s <(frames "$tmp/int-whole/p.txt" "$k") <(frames "$tmp/int-go/p.txt" "$k") && [ "$(frames "$tmp/int-go/p.txt" "$k" | grep -c '^# step')" = 3 ]; echo $?) \
+            "differ from the uninterrupted run's"
+        check "SIGINT: history rows after step $k" $(cmp -s <(rows "$tmp/int-whole/h.txt" "$k") <(rows "$tmp/int-go/h.txt" "$k"); echo $?) \
+            "differ from the uninterrupted run's"
+    }
+else
+    fail "SIGINT: state" "no interrupted step in stderr ('$(tail -n 1 "$tmp/int.err")') or no state file"
+fi
+
+# --- 3. state files that are refused ---
+good="$tmp/fast, 1 thread-a/s.state"
+size=$(stat -c %s "$good")
+head -c $((size / 2)) "$good" >"$tmp/truncated.state"
+head -c 20 "$good" >"$tmp/short.state"
+cp "$good" "$tmp/corrupt.state"
+printf '\x55' | dd of="$tmp/corrupt.state" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
+cmp -s "$good" "$tmp/corrupt.state" && printf '\xaa' | dd of="$tmp/corrupt.state" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
+cp "$good" "$tmp/version.state"
+printf '\x02' | dd of="$tmp/version.state" bs=1 seek=12 conv=notrunc 2>/dev/null
+echo "x y sxx" >"$tmp/text.state"
+sed 's/^SEED 7/SEED 8/' "$tmp/r.deck" >"$tmp/other.deck"
+mkdir -p "$tmp/dir.state"
+# refused NAME PHRASE STATE ARGS...
+refused() {
+    local name=$1 phrase=$2 state=$3
+    shift 3
+    run "$tmp/refused" --restart "$state" "$@" || return
+    check "$name: exit status" $([ $rc -eq 2 ]; echo $?) "exit status $rc, expected 2"
+    local first
+    first=$(head -n 1 "$tmp/refused.err")
+    check "$name: message" $([[ $first == "$state: error: "*"$phrase"* ]]; echo $?) "'$first' is not '$state: error: ...$phrase...'"
+    check "$name: no output" $([ ! -e "$tmp/refused" ]; echo $?) "the output directory was made: $(ls "$tmp/refused" 2>/dev/null | tr '\n' ' ')"
+}
+refused "truncated" "truncated" "$tmp/truncated.state" "$tmp/r.deck"
+refused "shorter than a header" "truncated" "$tmp/short.state" "$tmp/r.deck"
+refused "corrupt" "checksum" "$tmp/corrupt.state" "$tmp/r.deck"
+refused "other format version" "version 2" "$tmp/version.state" "$tmp/r.deck"
+refused "not a state file" "not an lpfdm state file" "$tmp/text.state" "$tmp/r.deck"
+refused "a directory" "directory" "$tmp/dir.state" "$tmp/r.deck"
+refused "missing" "cannot open" "$tmp/none.state" "$tmp/r.deck"
+refused "other deck" "another deck" "$good" "$tmp/other.deck"
+refused "other --seed" "another deck" "$good" --seed 3 "$tmp/r.deck"
+refused "other --set" "another deck" "$good" --set MATERIAL1.C=2500 "$tmp/r.deck"
+refused "at the last step" "where the run ends" "$tmp/whole/s.state" "$tmp/r.deck"
+run "$tmp/further" --steps 130 --restart "$tmp/whole/s.state" "$tmp/r.deck" &&
+    check "--steps runs a finished state further" $([ $rc -eq 0 ] && [ "$(rows "$tmp/further/h.txt" 0 | wc -l)" = 10 ]; echo $?) \
+        "exit status $rc, $(rows "$tmp/further/h.txt" 0 | wc -l) history rows (expected 10)"
+
+echo "restart: $passed passed, $failed failed"
+[ "$failed" -eq 0 ]
