@@ -140,8 +140,9 @@
 //     gravity the wall of a plane-strain compression then reads the base reaction within
 //     1.3 % at every sample (the paper's mapping: spikes of 72 % each time the cap's points
 //     cross the wall's line of nodes); it reads the limit load low on coarse lattices
-//     (0.89 q at 8 cells across the specimen, 0.95 q at 16; the paper's: 0.93 and 0.95 at
-//     3.75 % strain). Every kernel runs the reference cycle for it (no fast version yet).
+//     (verify_psc.deck, 5 cells across: 0.87 q, the paper's mapping 1.00 q; 8 cells:
+//     0.89 q against 0.93 q at 3.75 % strain; 16 cells: 0.95 q). Every kernel runs the
+//     reference cycle for it (no fast version yet), which is why it is not the default.
 //   * The energy account (Simulation::energy) uses the leapfrog's own kinetic energy
 //     (m du_old . du_new / 2 dt^2) and trapezoidal nodal works, so an undamped linear step
 //     conserves it exactly; strain energy and plastic work are the points' (V from eq. 8).
