@@ -2157,6 +2157,8 @@ private:
     void reference_cell_strains();
     void reference_points();
     void reference_points_smooth();
+    void move_with_cell(int ci, int cj, const StrainIncrement& e, double x0, double y0, double& x, double& y, double& dx, double& dy) const;
+    void stop_at_edges(int c, double x0, double y0, double& x, double& y) const;
     void smear_point(std::size_t k, double x, double y, double m, double v, double sxx, double syy, double sxy);
     void reference_nodal_forces();
     void reference_compensate();
@@ -2523,6 +2525,35 @@ inline void Simulation::consult_model(std::size_t k, const MaterialConstants& mc
     p_.c0.empty() ? mohr_consult<false>(mc, k, s) : mohr_consult<true>(mc, k, s);
 }
 
+// eq. 7a/7b (or MOTION CENTRE, BILINEAR): where a point of cell (ci, cj) with the cell's
+// strain increments e goes from (x0, y0); (dx, dy): its own increment (CENTRE, BILINEAR).
+inline void Simulation::move_with_cell(int ci, int cj, const StrainIncrement& e, double x0, double y0, double& x, double& y, double& dx, double& dy) const {
+    const double xi = ci * L_, yj = cj * L_;
+    const int n1 = node(ci, cj), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
+    const double ux[4] = {dux_[n1], dux_[n2], dux_[n3], dux_[n4]}, uy[4] = {duy_[n1], duy_[n2], duy_[n3], duy_[n4]};
+    if (sc_.motion == Motion::Paper) {
+        move_point_paper(x0, y0, e, xi, yj, ux[0], uy[0], x, y);
+    } else if (sc_.motion == Motion::Centre) {
+        const double umx = 0.25 * (ux[0] + ux[1] + ux[2] + ux[3]), umy = 0.25 * (uy[0] + uy[1] + uy[2] + uy[3]);
+        move_point_centre(x0, y0, e, xi, yj, L_, umx, umy, x, y, dx, dy);
+    } else {
+        move_point_bilinear(x0, y0, xi, yj, invL_, ux, uy, x, y, dx, dy);
+    }
+}
+
+// A cell edge fixed across is impermeable: a point of cell c that moved from (x0, y0) to
+// (x, y) stops on it, inside its cell; nor does any point cross a wall's face.
+inline void Simulation::stop_at_edges(int c, double x0, double y0, double& x, double& y) const {
+    const int ci = c % mx_, cj = c / mx_;
+    const double xi = ci * L_, yj = cj * L_;
+    const std::uint8_t fe = fixed_edges_[std::size_t(c)];
+    if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
+    if ((fe & kEdgeTop) && y >= (cj + 1) * L_) y = edge_below(cj + 1);
+    if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
+    if ((fe & kEdgeRight) && x >= (ci + 1) * L_) x = edge_below(ci + 1);
+    if (fe & kEdgeWall) hold_by_walls(x0, y0, x, y);
+}
+
 // 2. The points, in storage order: eq. 6 and the volume change with the strain of the cell
 // each lies in; eq. 7a/7b moves it with that cell; then, the lattice back at its original
 // position, eq. 7 and 8 add its mass and V sigma to the cell it lies in now. A point that
@@ -2544,25 +2575,10 @@ inline void Simulation::reference_points() {
         p_.sxx[k] = s.xx; p_.syy[k] = s.yy; p_.sxy[k] = s.xy; p_.szz[k] = s.zz;
 
         // eq. 7a/7b (or MOTION CENTRE, BILINEAR); (dx, dy): the point's own increment.
-        const double xi = ci * L_, yj = cj * L_, x0 = p_.x[k], y0 = p_.y[k];
-        const int n1 = node(ci, cj), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
-        const double ux[4] = {dux_[n1], dux_[n2], dux_[n3], dux_[n4]}, uy[4] = {duy_[n1], duy_[n2], duy_[n3], duy_[n4]};
+        const double x0 = p_.x[k], y0 = p_.y[k];
         double x = 0, y = 0, dx = 0, dy = 0;
-        if (sc_.motion == Motion::Paper) {
-            move_point_paper(x0, y0, e, xi, yj, ux[0], uy[0], x, y);
-        } else if (sc_.motion == Motion::Centre) {
-            const double umx = 0.25 * (ux[0] + ux[1] + ux[2] + ux[3]), umy = 0.25 * (uy[0] + uy[1] + uy[2] + uy[3]);
-            move_point_centre(x0, y0, e, xi, yj, L_, umx, umy, x, y, dx, dy);
-        } else {
-            move_point_bilinear(x0, y0, xi, yj, invL_, ux, uy, x, y, dx, dy);
-        }
-        // A cell edge fixed across is impermeable: a point stops on it, inside its cell.
-        const std::uint8_t fe = fixed_edges_[std::size_t(c)];
-        if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
-        if ((fe & kEdgeTop) && y >= (cj + 1) * L_) y = edge_below(cj + 1);
-        if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
-        if ((fe & kEdgeRight) && x >= (ci + 1) * L_) x = edge_below(ci + 1);
-        if (fe & kEdgeWall) hold_by_walls(x0, y0, x, y);  // nor does any point cross a wall's face
+        move_with_cell(ci, cj, e, x0, y0, x, y, dx, dy);
+        stop_at_edges(c, x0, y0, x, y);
         p_.x[k] = x; p_.y[k] = y;
 
         if (!(x >= 0 && x < X && y >= 0 && y < Y)) { p_.cell[k] = -1; continue; }  // left the lattice
@@ -2603,18 +2619,9 @@ inline void Simulation::reference_points_smooth() {
                 const StrainIncrement ec{ce.xx, ce.yy, ce.xy, ce.yx};
                 e.xx += w * ec.xx; e.yy += w * ec.yy; e.xy += w * ec.xy; e.yx += w * ec.yx;
                 // This cell's motion (eq. 7a/7b or the MOTION rule) at the centre of its part.
-                const double xi = ci * L_, yj = cj * L_, px = cx[r], py = cy[q];
-                const int n1 = node(ci, cj), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
-                const double ux[4] = {dux_[n1], dux_[n2], dux_[n3], dux_[n4]}, uy[4] = {duy_[n1], duy_[n2], duy_[n3], duy_[n4]};
+                const double px = cx[r], py = cy[q];
                 double x = 0, y = 0, ddx = 0, ddy = 0;
-                if (sc_.motion == Motion::Paper) {
-                    move_point_paper(px, py, ec, xi, yj, ux[0], uy[0], x, y);
-                } else if (sc_.motion == Motion::Centre) {
-                    const double umx = 0.25 * (ux[0] + ux[1] + ux[2] + ux[3]), umy = 0.25 * (uy[0] + uy[1] + uy[2] + uy[3]);
-                    move_point_centre(px, py, ec, xi, yj, L_, umx, umy, x, y, ddx, ddy);
-                } else {
-                    move_point_bilinear(px, py, xi, yj, invL_, ux, uy, x, y, ddx, ddy);
-                }
+                move_with_cell(ci, cj, ec, px, py, x, y, ddx, ddy);
                 dx += w * (x - px); dy += w * (y - py);
             }
         double rc, rs;
@@ -2624,15 +2631,8 @@ inline void Simulation::reference_points_smooth() {
         consult_model(k, *group_consts_[p_.group[k]], e, rc, rs, s);  // eq. 6
         p_.sxx[k] = s.xx; p_.syy[k] = s.yy; p_.sxy[k] = s.xy; p_.szz[k] = s.zz;
 
-        const int c = p_.cell[k], ci = c % mx_, cj = c / mx_;
-        const double xi = ci * L_, yj = cj * L_;
         double x = x0 + dx, y = y0 + dy;
-        const std::uint8_t fe = fixed_edges_[std::size_t(c)];  // as in reference_points
-        if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
-        if ((fe & kEdgeTop) && y >= (cj + 1) * L_) y = edge_below(cj + 1);
-        if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
-        if ((fe & kEdgeRight) && x >= (ci + 1) * L_) x = edge_below(ci + 1);
-        if (fe & kEdgeWall) hold_by_walls(x0, y0, x, y);
+        stop_at_edges(p_.cell[k], x0, y0, x, y);  // as in reference_points
         p_.x[k] = x; p_.y[k] = y;
         if (!(x >= 0 && x < X && y >= 0 && y < Y)) { p_.cell[k] = -1; continue; }  // left the lattice
         p_.cell[k] = cell(std::min(mx_ - 1, int(x * invL_)), std::min(my_ - 1, int(y * invL_)));
