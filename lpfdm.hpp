@@ -4408,6 +4408,25 @@ public:
         }
         return &t_[next_++];
     }
+    // A field that is one of `words` (in the order of the enum it picks; `alias` is read as
+    // words[1]): its index, or -1 after the error "unknown KIND 'x' (A, B or C)".
+    int word_of(const char* kind, std::initializer_list<const char*> words, const char* alias = nullptr) {
+        std::string list;
+        std::vector<std::string> all;
+        for (const char* w : words) {
+            if (!all.empty()) list += all.size() + 1 == words.size() ? " or " : ", ";
+            list += w;
+            all.emplace_back(w);
+        }
+        const Token* t = field(list.c_str());
+        if (!t) return -1;
+        const std::string u = upper(t->text);
+        for (std::size_t k = 0; k < all.size(); ++k)
+            if (u == all[k]) return int(k);
+        if (alias && u == alias) return 1;
+        fail(t->pos, "unknown " + std::string(kind) + " '" + t->text + "' (" + list + ")" + did_you_mean(t->text, all));
+        return -1;
+    }
     double real(const char* what) {
         const Token* t = field(what);
         double v = 0;
@@ -4677,33 +4696,17 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
         } else if (kw == "MAPPING") {
             once(have_mapping);
             sc.mapping_pos = kp;
-            const Token* t = r.field("PAPER or SMOOTH");
-            if (t) {
-                const std::string u = upper(t->text);
-                if (u == "PAPER") sc.mapping = Mapping::Paper;
-                else if (u == "SMOOTH") sc.mapping = Mapping::Smooth;
-                else r.fail(t->pos, "unknown mapping '" + t->text + "' (PAPER or SMOOTH)" + did_you_mean(t->text, {"PAPER", "SMOOTH"}));
-            }
+            const int k = r.word_of("mapping", {"PAPER", "SMOOTH"});
+            if (k >= 0) sc.mapping = Mapping(k);
         } else if (kw == "MOTION") {
             once(have_motion);
-            const Token* t = r.field("PAPER, CENTRE or BILINEAR");
-            if (t) {
-                const std::string u = upper(t->text);
-                if (u == "PAPER") sc.motion = Motion::Paper;
-                else if (u == "CENTRE" || u == "CENTER") sc.motion = Motion::Centre;
-                else if (u == "BILINEAR") sc.motion = Motion::Bilinear;
-                else r.fail(t->pos, "unknown motion '" + t->text + "' (PAPER, CENTRE or BILINEAR)");
-            }
+            const int k = r.word_of("motion", {"PAPER", "CENTRE", "BILINEAR"}, "CENTER");
+            if (k >= 0) sc.motion = Motion(k);
         } else if (kw == "ADVECT") {
             once(have_advect);
             sc.advect_pos = kp;
-            const Token* t = r.field("EQ12 or POINTS");
-            if (t) {
-                const std::string u = upper(t->text);
-                if (u == "EQ12") sc.advect = Advect::Eq12;
-                else if (u == "POINTS") sc.advect = Advect::Points;
-                else r.fail(t->pos, "unknown advection '" + t->text + "' (EQ12 or POINTS)");
-            }
+            const int k = r.word_of("advection", {"EQ12", "POINTS"});
+            if (k >= 0) sc.advect = Advect(k);
         } else if (kw == "END") {
             have_end = true;
             sc.end_pos = kp;
