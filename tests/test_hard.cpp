@@ -16,12 +16,11 @@
 #include <vector>
 
 #include "../lpfdm.hpp"
+#include "common.hpp"
 
 using namespace lpfdm;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 Scene elastic_scene(int mx, int my, double L, Box block, int ppc = 2, double nu = 0.25) {
     Scene s;

@@ -9,12 +9,11 @@
 #include <vector>
 
 #include "../lpfdm.hpp"
+#include "common.hpp"
 
 using namespace lpfdm;
 
 namespace {
-
-constexpr double kDeg = 3.14159265358979323846 / 180;
 
 // Principal stresses sig1 <= sig2 <= sig3 from an independent eigen-solver.
 Eigen::Vector3d principal(const Stress& s) {

@@ -11,13 +11,11 @@
 #include <vector>
 
 #include "../lpfdm.hpp"
+#include "common.hpp"
 
 using namespace lpfdm;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180;
 
 Scene load(const char* deck) {
     Scene s;
@@ -94,14 +92,14 @@ ColumnResult column_at_rest(const char* deck) {
     return c;
 }
 
-struct Ringing {
+struct Ring {
     double period = 0, peak = 0, reference_period = 0, strain = 0;
 };
 
 // The ringing column: top settlement every step; period from the crossings of the middle
 // level (inflection points, where linear interpolation is best), peak over the static
 // settlement of the same points.
-Ringing ringing(const char* deck) {
+Ring ringing(const char* deck) {
     const Scene s = load(deck);
     const double H = 12, rho = s.materials[0].rho, g = -s.gravity_y, M = constrained(s.materials[0]);
     Simulation sim(s);
@@ -119,7 +117,7 @@ Ringing ringing(const char* deck) {
         if ((u[k - 1] - mid) * (u[k] - mid) < 0) cross.push_back(t[k - 1] + (mid - u[k - 1]) * (t[k] - t[k - 1]) / (u[k] - u[k - 1]));
     REQUIRE(cross.size() >= 3);
     if (cross.size() % 2 == 0) cross.pop_back();  // first and last in the same direction
-    Ringing r;
+    Ring r;
     r.period = 2 * (cross.back() - cross.front()) / double(cross.size() - 1);
     std::size_t k = 1;
     while (k + 1 < u.size() && !(u[k] >= u[k - 1] && u[k] >= u[k + 1] && u[k] > us)) ++k;
@@ -194,7 +192,7 @@ TEST_CASE("verify: confined column at 1 % strain: stress and settlement high by 
 }
 
 TEST_CASE("verify: stiff ringing column: period 4H/c_p and peak twice the static settlement") {
-    const Ringing r = ringing("decks/verify_ringing_stiff.deck");
+    const Ring r = ringing("decks/verify_ringing_stiff.deck");
     MESSAGE("period " << r.period << " s (4H/c_p " << r.reference_period << "), peak " << r.peak << " x static");
     // 24 cells over H: the lattice's dispersion of the fundamental mode is below 1e-3
     // (first order in L, 6e-4 measured), the strain (2e-4) does not matter.
@@ -203,7 +201,7 @@ TEST_CASE("verify: stiff ringing column: period 4H/c_p and peak twice the static
 }
 
 TEST_CASE("verify: ringing column at 1 % strain: period and peak off by about the strain [slow]") {
-    const Ringing r = ringing("decks/verify_ringing.deck");
+    const Ring r = ringing("decks/verify_ringing.deck");
     MESSAGE("period " << r.period << " s (4H/c_p " << r.reference_period << "), peak " << r.peak << " x static, strain " << r.strain);
     // As at rest, the column is softer by up to its strain (dynamic peak strain 2 rho g H / M).
     CHECK(r.period == doctest::Approx(r.reference_period).epsilon(r.strain));

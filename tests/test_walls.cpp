@@ -7,12 +7,11 @@
 #include <vector>
 
 #include "../lpfdm.hpp"
+#include "common.hpp"
 
 using namespace lpfdm;
 
 namespace {
-
-constexpr double kDeg = 3.14159265358979323846 / 180;
 
 // An elastic block W x H on a rough base, smooth sides, a wall on its top line of nodes.
 Scene confined_block(double vy) {
