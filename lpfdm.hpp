@@ -35,7 +35,8 @@
 //   LPFDM_NO_WIDE  leave out the AVX2 version (so does any build with -mfma)
 //
 // THE PAPER'S EQUATIONS, AND THE FUNCTION THAT COMPUTES EACH
-//   eq. 5a-5d  cell strain increments from nodal increments     cell_strain
+//   eq. 5a-5d  cell strain increments from nodal increments     cell_strain (MAPPING SMOOTH:
+//                                                               bilinear_gradient, strain_of_part)
 //   eq. 5e-5f  shear strain, rotation; the Jaumann rotation     StrainIncrement::gamma, theta,
 //                                                               jaumann_rotation, rotate_stress
 //   eq. 6      a point's stress: the model, once a step          Simulation::consult_model
@@ -136,13 +137,21 @@
 //     on the material.
 //   * MAPPING SMOOTH (an option; the paper's mapping is the default): a point is the square
 //     it stood for when made, and takes part in every cell the square overlaps in
-//     proportion to the area inside it (square_overlap, GIMP's point domains). Without
-//     gravity the wall of a plane-strain compression then reads the base reaction within
-//     1.3 % at every sample (the paper's mapping: spikes of 72 % each time the cap's points
-//     cross the wall's line of nodes); it reads the limit load low on coarse lattices
-//     (verify_psc.deck, 5 cells across: 0.87 q, the paper's mapping 1.00 q; 8 cells:
-//     0.89 q against 0.93 q at 3.75 % strain; 16 cells: 0.95 q). Every kernel runs the
-//     reference cycle for it (no fast version yet), which is why it is not the default.
+//     proportion to the area inside it (square_overlap, GIMP's point domains). In each
+//     such cell it sees the gradient of the cell's bilinear increment field at the centre
+//     of its part (bilinear_gradient; at the cell centre that is eq. 5), and the nodal
+//     forces are the exact transpose. Eq. 5's one gradient per cell would do at edges
+//     inside the material but not at a free surface: a square reaching into a cell that
+//     holds nothing else gives the two nodes beyond only its little mass and no support,
+//     and their equilibrium then asks sigma = 0 of the point, so a loaded free surface
+//     sheds its stress (verify_psc.deck read q 13 % low); the gradient at the part's centre
+//     asks only for zero traction across the surface. The trace of each part's gradient is
+//     taken at the centroid of the cell's material (B-bar: with 2 x 2 points per cell the
+//     gradients at the points locked the near-incompressible plastic flow, q 10 % high).
+//     Without gravity the wall of a plane-strain compression then reads the base reaction
+//     within 2 % at every sample (the paper's mapping: spikes of 64 % each time the cap's
+//     points cross the wall's line of nodes). Every kernel runs the reference cycle for it
+//     (no fast version yet), which is why it is not the default.
 //   * The energy account (Simulation::energy) uses the leapfrog's own kinetic energy
 //     (m du_old . du_new / 2 dt^2) and trapezoidal nodal works, so an undamped linear step
 //     conserves it exactly; strain energy and plastic work are the points' (V from eq. 8).
@@ -366,10 +375,11 @@ enum class Advect : std::uint8_t { Eq12, Points };
 // cell, and each jumps when the point crosses a cell edge), or SMOOTH: the point is the
 // square it stood for when made (side L / PPC) and takes part in each cell in proportion
 // to the area of the square inside it, as GIMP's point domains do: strain, rotation and
-// motion are the weighted sums of the cells' (the motion of each cell's part taken at
-// that part's centre), mass and V sigma are shared out by the same weights. Everything a
+// motion are the weighted sums of the cells' (each cell's strain and motion taken at the
+// centre of the point's part in it), mass and V sigma are shared out by the same weights. Everything a
 // point contributes then varies continuously as it crosses an edge. A point inside one
-// cell is treated exactly as by the paper's mapping (and every point is, when made).
+// cell sees the gradient at its own centre, not at the cell's (with one point per cell
+// they are the same).
 enum class Mapping : std::uint8_t { Paper, Smooth };
 
 // Everything a run needs; built by the deck reader or in code. Zero means unset.
@@ -794,6 +804,20 @@ LPFDM_INLINE inline void cell_strain(const double* ux, const double* uy, int n1,
     xy = (ux3 + ux4 - ux1 - ux2) * h;  // eq. 5c
     yx = (uy2 + uy4 - uy1 - uy3) * h;  // eq. 5d
 }
+// MAPPING SMOOTH: the gradient of the cell's bilinear increment field (nodes [1]..[4]
+// with increments ux, uy) at (u, v), the place in the cell from node [1] in cells. It is
+// the field's gradient averaged over any rectangle centred there (the field is bilinear),
+// so a point's square sees GIMP's gradient, part by part. At the centre, u = v = 1/2,
+// it is eq. 5a-5d.
+inline StrainIncrement bilinear_gradient(const double ux[4], const double uy[4], double u, double v, double invL) {
+    StrainIncrement e;
+    e.xx = ((ux[1] - ux[0]) * (1 - v) + (ux[3] - ux[2]) * v) * invL;
+    e.yy = ((uy[2] - uy[0]) * (1 - u) + (uy[3] - uy[1]) * u) * invL;
+    e.xy = ((ux[2] - ux[0]) * (1 - u) + (ux[3] - ux[1]) * u) * invL;
+    e.yx = ((uy[1] - uy[0]) * (1 - v) + (uy[3] - uy[2]) * v) * invL;
+    return e;
+}
+
 inline StrainIncrement cell_strain(const double* ux, const double* uy, int n1, int row, double h) {
     StrainIncrement e;
     cell_strain(ux, uy, n1, row, h, e.xx, e.yy, e.xy, e.yx);
@@ -1879,6 +1903,14 @@ public:
 
     // Strain increments of cell (i, j) from the nodal increments, eq. 5a-5d.
     StrainIncrement strain_of_cell(int i, int j) const { return cell_strain(dux_.data(), duy_.data(), node(i, j), mx_ + 1, 0.5 * invL_); }
+    // MAPPING SMOOTH: the strain increments of the part of a point's square in cell (i, j)
+    // whose centre is (x, y) (bilinear_gradient there, its trace taken at the centroid of
+    // the cell's material, cell_centroid).
+    StrainIncrement strain_of_part(int i, int j, double x, double y) const;
+    void cell_centroid(std::size_t c, double& u, double& v) const {  // from the centre, in cells
+        u = cvol_[c] > 0 ? smu_[c] / cvol_[c] : 0.0;
+        v = cvol_[c] > 0 ? smv_[c] / cvol_[c] : 0.0;
+    }
 
     // The point a non-finite value was first seen at, or -1.
     long first_nonfinite_point() const {
@@ -1928,6 +1960,7 @@ public:
     void resumed() {
         for (auto* v : {&fx_, &fy_, &nmass_prev_, &cvol_, &svxx_, &svyy_, &svxy_, &hgx_, &hgy_}) std::fill(v->begin(), v->end(), 0.0);
         std::fill(strain_.begin(), strain_.end(), CellStrain{});
+        if (sc_.mapping == Mapping::Smooth) map_points();  // the centroids the next step reads (cell_centroid)
         std::fill(carried_.begin(), carried_.end(), Carried{});
         Landing t;
         for (std::size_t k = 0; k < p_.size(); ++k) {
@@ -2225,6 +2258,10 @@ private:
     struct CellStrain { double xx = 0, yy = 0, xy = 0, yx = 0, rc = 1, rs = 0; };
     std::vector<CellStrain> strain_;
     std::vector<double> hgx_, hgy_;                        // hourglass increment per cell (HOURGLASS only)
+    // MAPPING SMOOTH only, per cell: sum w V (sigma - p) . r and sum w V r, r the offset of a
+    // part's centre from the cell centre in cells, p = (sigma_xx + sigma_yy) / 2 (the forces'
+    // share of the gradient's variation across the cell, and the centroid of its material)
+    std::vector<double> shx_, shy_, smu_, smv_;
     // ADVECT POINTS only: per cell, sum m (d - E r) and sum m E of the points that landed in
     // it (r from the cell centre).
     // One record per cell, not six arrays: bench_elastic with ADVECT POINTS ran 400 steps
@@ -2327,6 +2364,7 @@ inline void Simulation::setup() {
     spans(mx_, cols_);
     spans(my_, rows_);
     if (sc_.hourglass > 0) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
+    if (sc_.mapping == Mapping::Smooth) for (auto* v : {&shx_, &shy_, &smu_, &smv_}) v->assign(cells, 0.0);
     if (sc_.advect == Advect::Points)
         carried_.assign(cells, Carried{});
     for (const auto& m : sc_.materials) consts_.push_back(constants_of(m));
@@ -2593,15 +2631,30 @@ inline void Simulation::reference_points() {
 }
 
 // 2, MAPPING SMOOTH: the same, with each point taking part in every cell its square
-// overlaps, in proportion to the area inside it (square_overlap): its strain increments and
-// rotation are the weighted sums of those cells' (eq. 5 seen by the point), its motion the
-// weighted sum of each cell's eq. 7a/7b (or MOTION rule) at the centre of its part of the
-// square, and eq. 7, 8 share its mass and V sigma out by the weights at its new place.
+// overlaps, in proportion to the area inside it (square_overlap, GIMP's point domains).
+// Its strain increments are the weighted sum over those cells of the gradient of the
+// cell's bilinear increment field at the centre of the point's part in it (eq. 5 is that
+// gradient at the cell centre), with the trace of each part's taken at the centroid of
+// the cell's material (B-bar, see the manual); its rotation follows from them (eq. 5f),
+// its motion is the weighted sum of each cell's eq. 7a/7b (or MOTION rule) at the centre
+// of its part, and eq. 7, 8 share its mass and V sigma out by the weights at its new place.
+inline StrainIncrement Simulation::strain_of_part(int i, int j, double x, double y) const {
+    const int n1 = node(i, j), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
+    const double ux[4] = {dux_[n1], dux_[n2], dux_[n3], dux_[n4]}, uy[4] = {duy_[n1], duy_[n2], duy_[n3], duy_[n4]};
+    StrainIncrement e = bilinear_gradient(ux, uy, (x - i * L_) * invL_, (y - j * L_) * invL_, invL_);
+    double cu, cv;
+    cell_centroid(std::size_t(cell(i, j)), cu, cv);
+    const StrainIncrement c = bilinear_gradient(ux, uy, 0.5 + cu, 0.5 + cv, invL_);
+    const double half_change = 0.5 * ((c.xx + c.yy) - (e.xx + e.yy));
+    e.xx += half_change; e.yy += half_change;
+    return e;
+}
+
 inline void Simulation::reference_points_smooth() {
-    for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) std::fill(v->begin(), v->end(), 0.0);
-    const double X = mx_ * L_, Y = my_ * L_;
-    double mass = 0;
-    for (std::size_t k = 0; k < p_.size(); ++k) {
+    // The centroids are those of the sums the last step left (or map_points made): the
+    // points where they are now. The first pass reads them; the second makes new sums.
+    const std::size_t n = p_.size();
+    for (std::size_t k = 0; k < n; ++k) {
         const Group& g = groups_[p_.group[k]];
         const double x0 = p_.x[k], y0 = p_.y[k];
         int a, b;
@@ -2615,13 +2668,13 @@ inline void Simulation::reference_points_smooth() {
                 const double w = wx[r] * wy[q];
                 if (w == 0) continue;
                 const int ci = a + r, cj = b + q;
-                const CellStrain& ce = strain_[std::size_t(cell(ci, cj))];
-                const StrainIncrement ec{ce.xx, ce.yy, ce.xy, ce.yx};
-                e.xx += w * ec.xx; e.yy += w * ec.yy; e.xy += w * ec.xy; e.yx += w * ec.yx;
-                // This cell's motion (eq. 7a/7b or the MOTION rule) at the centre of its part.
                 const double px = cx[r], py = cy[q];
+                const StrainIncrement ep = strain_of_part(ci, cj, px, py);
+                e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
+                // This cell's motion (eq. 7a/7b or the MOTION rule) at the centre of its part.
+                const CellStrain& ce = strain_[std::size_t(cell(ci, cj))];
                 double x = 0, y = 0, ddx = 0, ddy = 0;
-                move_with_cell(ci, cj, ec, px, py, x, y, ddx, ddy);
+                move_with_cell(ci, cj, {ce.xx, ce.yy, ce.xy, ce.yx}, px, py, x, y, ddx, ddy);
                 dx += w * (x - px); dy += w * (y - py);
             }
         double rc, rs;
@@ -2634,9 +2687,16 @@ inline void Simulation::reference_points_smooth() {
         double x = x0 + dx, y = y0 + dy;
         stop_at_edges(p_.cell[k], x0, y0, x, y);  // as in reference_points
         p_.x[k] = x; p_.y[k] = y;
+    }
+    for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
+    const double X = mx_ * L_, Y = my_ * L_;
+    double mass = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        const double x = p_.x[k], y = p_.y[k];
         if (!(x >= 0 && x < X && y >= 0 && y < Y)) { p_.cell[k] = -1; continue; }  // left the lattice
         p_.cell[k] = cell(std::min(mx_ - 1, int(x * invL_)), std::min(my_ - 1, int(y * invL_)));
-        smear_point(k, x, y, g.mass, std::min(p_.vol[k], g.vol0), s.xx, s.yy, s.xy);  // eq. 7, 8
+        const Group& g = groups_[p_.group[k]];
+        smear_point(k, x, y, g.mass, std::min(p_.vol[k], g.vol0), p_.sxx[k], p_.syy[k], p_.sxy[k]);  // eq. 7, 8
         mass += g.mass;
     }
     remove_departed();
@@ -2644,17 +2704,26 @@ inline void Simulation::reference_points_smooth() {
 }
 
 // eq. 7 and 8 for point k at (x, y), MAPPING SMOOTH: its mass m and V sigma shared out
-// among the cells its square overlaps.
+// among the cells its square overlaps, and the moments of both about each cell's centre.
 inline void Simulation::smear_point(std::size_t k, double x, double y, double m, double v, double sxx, double syy, double sxy) {
     int a, b;
     double wx[2], wy[2], cx[2], cy[2];
     const double l = groups_[p_.group[k]].half;
     square_overlap(x, l, L_, mx_, a, wx, cx);
     square_overlap(y, l, L_, my_, b, wy, cy);
+    const double p = 0.5 * (sxx + syy);
     for (int q = 0; q < 2; ++q)
         for (int r = 0; r < 2; ++r) {
             const double w = wx[r] * wy[q];
-            if (w > 0) add_to_cell(std::size_t(cell(a + r, b + q)), w * m, w * v, sxx, syy, sxy);
+            if (!(w > 0)) continue;
+            const std::size_t c = std::size_t(cell(a + r, b + q));
+            add_to_cell(c, w * m, w * v, sxx, syy, sxy);
+            const double ru = (cx[r] - (a + r) * L_) * invL_ - 0.5, rv = (cy[q] - (b + q) * L_) * invL_ - 0.5;
+            const double wv = w * v;
+            shx_[c] += wv * ((sxx - p) * rv + sxy * ru);
+            shy_[c] += wv * (sxy * rv + (syy - p) * ru);
+            smu_[c] += wv * ru;
+            smv_[c] += wv * rv;
         }
 }
 
@@ -2667,6 +2736,13 @@ inline void Simulation::reference_nodal_forces() {
         double w;
         smear_weight(cvol_[c], L2, inv2L, w);  // eq. 8
         svxx_[c] *= w; svyy_[c] *= w; svxy_[c] *= w;
+        if (!shx_.empty()) {  // MAPPING SMOOTH: the transpose of strain_of_part's variation across the cell
+            double cu, cv;
+            cell_centroid(c, cu, cv);
+            const double p = 0.5 * (svxx_[c] + svyy_[c]);  // the sum of V p, times w
+            shx_[c] = 2 * (w * shx_[c] + cv * p);
+            shy_[c] = 2 * (w * shy_[c] + cu * p);
+        }
     }
     const double khg = sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s);
     for (int j = 0; j <= my_; ++j)
@@ -2682,6 +2758,13 @@ inline void Simulation::reference_nodal_forces() {
             if (left && above) cell_force(c - 1, std::integral_constant<int, 2>{});
             if (right && below) cell_force(c - mx_, std::integral_constant<int, 3>{});
             if (left && below) cell_force(c - mx_ - 1, std::integral_constant<int, 4>{});
+            if (!shx_.empty()) {  // MAPPING SMOOTH: F[a] -= s_x s_y (shx, shy) / L, s = the corner's signs of b
+                auto moment = [&](int a, double h) { fx -= h * shx_[std::size_t(a)]; fy -= h * shy_[std::size_t(a)]; };
+                if (right && above) moment(c, 1);
+                if (left && above) moment(c - 1, -1);
+                if (right && below) moment(c - mx_, -1);
+                if (left && below) moment(c - mx_ - 1, 1);
+            }
             if (!hgx_.empty()) {  // HOURGLASS: F[a] = -kappa (M_J / 4) q_J h[a] / dt^2
                 auto hg = [&](int a, double h) {
                     fx -= khg * cmass_[std::size_t(a)] * hgx_[std::size_t(a)] * h;
@@ -3563,7 +3646,7 @@ inline void Simulation::map_point(std::size_t k) {
 // (after set-up, after a program moved points, or when advance_parted's chunks clashed).
 inline void Simulation::map_points() {
     if (sc_.mapping == Mapping::Smooth) {  // every cell each point's square overlaps (the reference's mapping)
-        for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) std::fill(v->begin(), v->end(), 0.0);
+        for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
         double mass = 0;
         for (std::size_t k = 0; k < p_.size(); ++k) {
             const Group& g = groups_[p_.group[k]];

@@ -64,40 +64,47 @@ run() {
     return 0
 }
 
-# --- 1. stopped at step 60, continued: the same bytes as the whole run ---
-run "$tmp/whole" "$tmp/r.deck" || exit 1
-check "whole run" $rc "exit status $rc: $(head -n 1 "$tmp/whole.err")"
-n_frames=$(frames "$tmp/whole/p.txt" 60 | grep -c '^# step')
-check "whole run: frames after step 60" $([ "$n_frames" = 3 ]; echo $?) "$n_frames frames, expected 3 (80, 100, 120)"
-out_mass=$(rows "$tmp/whole/h.txt" 119 | awk '{print $5}')
-check "whole run: points leave the lattice" $(awk -v m="$out_mass" 'BEGIN { exit !(m > 0) }'; echo $?) "mass_out $out_mass at step 120"
+# --- 1. stopped at step 60, continued: the same bytes as the whole run (the paper's
+# mapping, then MAPPING SMOOTH, whose next step also reads the cells' centroids) ---
+stopped_and_continued() {  # DECK TAG
+    local deck=$1 tag=$2 whole="$tmp/$2whole"
+    run "$whole" "$deck" || exit 1
+    check "${tag}whole run" $rc "exit status $rc: $(head -n 1 "$whole.err")"
+    n_frames=$(frames "$whole/p.txt" 60 | grep -c '^# step')
+    check "${tag}whole run: frames after step 60" $([ "$n_frames" = 3 ]; echo $?) "$n_frames frames, expected 3 (80, 100, 120)"
+    out_mass=$(rows "$whole/h.txt" 119 | awk '{print $5}')
+    check "${tag}whole run: points leave the lattice" $(awk -v m="$out_mass" 'BEGIN { exit !(m > 0) }'; echo $?) "mass_out $out_mass at step 120"
 
-# continued NAME KERNEL_STOP THREADS_STOP KERNEL_GO THREADS_GO
-continued() {
-    local a="$tmp/$1-a" b="$tmp/$1-b"
-    run "$a" --kernel "$2" --threads "$3" --steps 60 "$tmp/r.deck" || return
-    check "$1: stopped run" $rc "exit status $rc: $(head -n 1 "$a.err")"
-    check "$1: state written" $([ -s "$a/s.state" ]; echo $?) "no $a/s.state"
-    run "$b" --kernel "$4" --threads "$5" --restart "$a/s.state" "$tmp/r.deck" || return
-    check "$1: continued run" $rc "exit status $rc: $(head -n 1 "$b.err")"
-    check "$1: first frame at the saved step" $([ "$(grep -m 1 '^# step' "$b/p.txt")" = "# step 60 time 0.024" ]; echo $?) \
-        "first frame '$(grep -m 1 '^# step' "$b/p.txt")'"
-    check "$1: point table frames after step 60" $(cmp -s <(frames "$tmp/whole/p.txt" 60) <(frames "$b/p.txt" 60); echo $?) \
-        "differ from the whole run's"
-    check "$1: history rows after step 60" $(cmp -s <(rows "$tmp/whole/h.txt" 60) <(rows "$b/h.txt" 60) && [ "$(rows "$b/h.txt" 60 | wc -l)" = 60 ]; echo $?) \
-        "differ from the whole run's ($(rows "$b/h.txt" 60 | wc -l) rows)"
-    check "$1: last VTU frame" $(cmp -s "$tmp/whole/v_000120.vtu" "$b/v_000120.vtu"; echo $?) "differs from the whole run's"
-    check "$1: last state" $(cmp -s "$tmp/whole/s.state" "$b/s.state"; echo $?) "differs from the whole run's"
+    # continued NAME KERNEL_STOP THREADS_STOP KERNEL_GO THREADS_GO
+    continued() {
+        local a="$tmp/$tag$1-a" b="$tmp/$tag$1-b"
+        run "$a" --kernel "$2" --threads "$3" --steps 60 "$deck" || return
+        check "$tag$1: stopped run" $rc "exit status $rc: $(head -n 1 "$a.err")"
+        check "$tag$1: state written" $([ -s "$a/s.state" ]; echo $?) "no $a/s.state"
+        run "$b" --kernel "$4" --threads "$5" --restart "$a/s.state" "$deck" || return
+        check "$tag$1: continued run" $rc "exit status $rc: $(head -n 1 "$b.err")"
+        check "$tag$1: first frame at the saved step" $([ "$(grep -m 1 '^# step' "$b/p.txt")" = "# step 60 time 0.024" ]; echo $?) \
+            "first frame '$(grep -m 1 '^# step' "$b/p.txt")'"
+        check "$tag$1: point table frames after step 60" $(cmp -s <(frames "$whole/p.txt" 60) <(frames "$b/p.txt" 60); echo $?) \
+            "differ from the whole run's"
+        check "$tag$1: history rows after step 60" $(cmp -s <(rows "$whole/h.txt" 60) <(rows "$b/h.txt" 60) && [ "$(rows "$b/h.txt" 60 | wc -l)" = 60 ]; echo $?) \
+            "differ from the whole run's ($(rows "$b/h.txt" 60 | wc -l) rows)"
+        check "$tag$1: last VTU frame" $(cmp -s "$whole/v_000120.vtu" "$b/v_000120.vtu"; echo $?) "differs from the whole run's"
+        check "$tag$1: last state" $(cmp -s "$whole/s.state" "$b/s.state"; echo $?) "differs from the whole run's"
+    }
+    continued "fast, 1 thread" fast 1 fast 1
+    continued "fast, 2 threads" fast 2 fast 2
+    continued "reference" reference 1 reference 1
+    continued "fast to reference" fast 2 reference 1
+    continued "reference to fast, 2 threads" reference 1 fast 2
+    for other in "fast, 2 threads" "reference"; do
+        check "the state at step 60 of '$other' is the fast kernel's" $(cmp -s "$tmp/${tag}fast, 1 thread-a/s.state" "$tmp/$tag$other-a/s.state"; echo $?) \
+            "the state files differ"
+    done
 }
-continued "fast, 1 thread" fast 1 fast 1
-continued "fast, 2 threads" fast 2 fast 2
-continued "reference" reference 1 reference 1
-continued "fast to reference" fast 2 reference 1
-continued "reference to fast, 2 threads" reference 1 fast 2
-for other in "fast, 2 threads" "reference"; do
-    check "the state at step 60 of '$other' is the fast kernel's" $(cmp -s "$tmp/fast, 1 thread-a/s.state" "$tmp/$other-a/s.state"; echo $?) \
-        "the state files differ"
-done
+stopped_and_continued "$tmp/r.deck" ""
+sed 's/^END/MAPPING SMOOTH\nEND/' "$tmp/r.deck" >"$tmp/rs.deck"
+stopped_and_continued "$tmp/rs.deck" "smooth: "
 
 # --- 2. SIGINT: the state of the interrupted step, continued ---
 cat >"$tmp/long.deck" <<'EOF'
