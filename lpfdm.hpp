@@ -79,8 +79,13 @@
 //     cell's volume into a cell, its smeared stress is their volume average instead of
 //     an overcount (that overcount made cells stiffer in proportion to their number of
 //     points, and errors grew under refinement: see tests/test_cycle.cpp).
-//   * Points move by eq. 7a/7b about node [1] by default; MOTION CENTRE (the same map
-//     about the cell centre, mirror-symmetric) and MOTION BILINEAR are options.
+//   * Points move by eq. 7a/7b's affine map taken about the cell centre with the mean of the
+//     four nodal increments (MOTION CENTRE, the default), not about node [1]: the paper's
+//     map takes the cell's non-affine part from node [1] alone, so a mirror-symmetric scene
+//     drifted to one side (a symmetric collapse ran out 9-16 % further to the right), and
+//     a checkerboard of nodal increments, which eq. 5 does not see, carried points away.
+//     MOTION PAPER (the paper's, about node [1]) and BILINEAR are options; MAPPING SMOOTH
+//     takes BILINEAR by default (its strain is that field's gradient).
 //   * A cell edge whose two nodes are both fixed across it is impermeable: a point that
 //     eq. 7a/7b would carry across it stops on it, inside its cell. The affine map moves a
 //     point on a fixed floor by d_eps_yx dx when the nodes above move unequally; without
@@ -361,8 +366,12 @@ struct Output {
 // How points move with the lattice: the paper's eq. 7a/7b (affine about node [1] of the
 // cell), the same affine map about the cell centre with the mean of the four nodal
 // increments (mirror-symmetric), or the bilinear interpolation of the four increments
-// (as in MPM). All three agree for any affine increment field.
-enum class Motion : std::uint8_t { Paper, Centre, Bilinear };
+// (as in MPM). All three agree for any affine increment field; they differ by the part
+// of the cell's increments that is not affine, which eq. 7a/7b takes from node [1] alone,
+// so that a mirror-symmetric scene drifts to one side. Default (no MOTION card): CENTRE
+// with the paper's mapping, BILINEAR with MAPPING SMOOTH (whose strain is the gradient of
+// the bilinear field: the motion and the strain then agree). Both are mirror-symmetric.
+enum class Motion : std::uint8_t { Paper, Centre, Bilinear, Default };
 
 // How the nodal increments follow the material from one step to the next: eq. 12's
 // correction of each node's own increment (the paper), or carried by the points: each
@@ -384,7 +393,7 @@ enum class Mapping : std::uint8_t { Paper, Smooth };
 
 // Everything a run needs; built by the deck reader or in code. Zero means unset.
 struct Scene {
-    Motion motion = Motion::Paper;
+    Motion motion = Motion::Default;
     Mapping mapping = Mapping::Paper;
     Pos mapping_pos;
     Advect advect = Advect::Eq12;
@@ -1274,6 +1283,11 @@ struct WallState {
                                       // (and the wall's face) from there to (dx, dy)
     bool normal_x = false, normal_y = false;  // a smooth wall: drives only x (a column of nodes) or y (a row)
     Box face;                                 // the box of its nodes at the start [m] (hold_by_walls)
+    // A line of nodes with material on one side only: the direction from the wall to it
+    // along the normal (+1 or -1 in x for a column, in y for a row). Such a wall only
+    // pushes: a node it would have to pull is left free. 0: material on both sides, or a
+    // box of nodes (bonded, as the paper's cap).
+    int side_x = 0, side_y = 0;
 };
 
 struct Range {  // half-open index box
@@ -1738,6 +1752,7 @@ inline const char* kernel_name(Kernel k) { return k == Kernel::Reference ? "refe
 class Simulation {
 public:
     explicit Simulation(const Scene& scene, Kernel kernel = Kernel::Fast) : kernel_(kernel), sc_(scene) {
+        if (sc_.motion == Motion::Default) sc_.motion = sc_.mapping == Mapping::Smooth ? Motion::Bilinear : Motion::Centre;
         wide_ = kernel == Kernel::Fast && have_wide();
 #if defined(_OPENMP)
         if (kernel != Kernel::Reference) team_ = std::max(1, std::min(omp_get_max_threads(), omp_get_thread_limit()));
@@ -1769,9 +1784,8 @@ public:
         ++step_;
     }
     Kernel kernel() const { return kernel_; }
-    // Whether every step runs the reference cycle: the reference kernel, or MAPPING SMOOTH
-    // (which has no fast version yet: each kernel runs the reference cycle, one thread).
-    bool reference_only() const { return kernel_ == Kernel::Reference || sc_.mapping == Mapping::Smooth; }
+    // Whether every step runs the reference cycle (the reference kernel).
+    bool reference_only() const { return kernel_ == Kernel::Reference; }
 
     // Wall-clock seconds spent in each phase of step() while profiling is on: the phases
     // of the kernel that runs.
@@ -1911,6 +1925,18 @@ public:
         u = cvol_[c] > 0 ? smu_[c] / cvol_[c] : 0.0;
         v = cvol_[c] > 0 ? smv_[c] / cvol_[c] : 0.0;
     }
+    // MAPPING SMOOTH: cell c's moments (shx, shy) made ready for the nodal forces, after
+    // eq. 8 scaled its sums V sigma: the transpose of strain_of_part's variation across the
+    // cell, times 2L (the forces divide by L, the sums were divided by 2L).
+    void smooth_moment(std::size_t c) {
+        const double L2 = L_ * L_;
+        double w, cu, cv;
+        smear_weight(cvol_[c], L2, 0.5 * invL_, w);  // eq. 8, as for the sums
+        cell_centroid(c, cu, cv);
+        const double p = 0.5 * (svxx_[c] + svyy_[c]);  // the sum of V p, times w
+        shx_[c] = 2 * (w * shx_[c] + cv * p);
+        shy_[c] = 2 * (w * shy_[c] + cu * p);
+    }
 
     // The point a non-finite value was first seen at, or -1.
     long first_nonfinite_point() const {
@@ -1960,7 +1986,6 @@ public:
     void resumed() {
         for (auto* v : {&fx_, &fy_, &nmass_prev_, &cvol_, &svxx_, &svyy_, &svxy_, &hgx_, &hgy_}) std::fill(v->begin(), v->end(), 0.0);
         std::fill(strain_.begin(), strain_.end(), CellStrain{});
-        if (sc_.mapping == Mapping::Smooth) map_points();  // the centroids the next step reads (cell_centroid)
         std::fill(carried_.begin(), carried_.end(), Carried{});
         Landing t;
         for (std::size_t k = 0; k < p_.size(); ++k) {
@@ -1970,6 +1995,9 @@ public:
             t.imin = std::min(t.imin, i); t.imax = std::max(t.imax, i);
         }
         occupied_ = landed(t);
+        // MAPPING SMOOTH: the sums made anew (the centroids the next step reads,
+        // cell_centroid), and the box of every cell the points' squares touch.
+        if (sc_.mapping == Mapping::Smooth) map_points();
         strained_ = occupied_.grow(2, mx_, my_);
         live_nodes_ = integrated_ = {0, mx_ + 1, 0, my_ + 1};
         parts_known_ = false;
@@ -2026,6 +2054,8 @@ private:
             imin = std::min(imin, a.imin); imax = std::max(imax, a.imax);
         }
     };
+    void smooth_map(Landing& t);
+    void smear_point(std::size_t k, double x, double y, double m, double v, double sxx, double syy, double sxy, Landing& t);
     // A thread's share of the threaded point pass (advance_parted): the cells own_lo ..
     // own_hi-1 take its chunk's sums directly; a point landing in any other cell is listed
     // in p_.listed[list_at ..] (listed of them). The defaults: every cell (one thread).
@@ -2184,7 +2214,8 @@ private:
     // The fast kernel's point phase: eq. 6, 7a/7b and eq. 7, 8 in one pass, by threads
     // (advance_parted) or by one.
     void point_pass() {
-        if (serial() || !advance_parted()) advance_points();
+        if (!shx_.empty()) smooth_point_pass();
+        else if (serial() || !advance_parted()) advance_points();
     }
     // The reference cycle's phases, in step order.
     void reference_cell_strains();
@@ -2192,7 +2223,8 @@ private:
     void reference_points_smooth();
     void move_with_cell(int ci, int cj, const StrainIncrement& e, double x0, double y0, double& x, double& y, double& dx, double& dy) const;
     void stop_at_edges(int c, double x0, double y0, double& x, double& y) const;
-    void smear_point(std::size_t k, double x, double y, double m, double v, double sxx, double syy, double sxy);
+    void smooth_move(std::size_t k);
+    void smooth_point_pass();
     void reference_nodal_forces();
     void reference_compensate();
     void reference_integrate();
@@ -2296,6 +2328,7 @@ private:
     // walls' faces (fixed_edges_ bit kEdgeWall), and each fixed node's FIX cards (x, y).
     std::vector<std::int32_t> wall_cells_;
     void mark_wall_cells();
+    void contact_side(WallState& ws) const;
     bool empty_beyond(int i, int j, int di, int dj) const;
     void hold_by_walls(double x0, double y0, double& x, double& y) const;
     struct FixOwner { std::int16_t x, y; };
@@ -2420,6 +2453,7 @@ inline void Simulation::setup() {
         fix_owner_.push_back({ox, oy});
     }
     create_points();
+    for (WallState& ws : walls_) contact_side(ws);
     for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
     find_mohr_groups();
 #if defined(_OPENMP)
@@ -2650,62 +2684,72 @@ inline StrainIncrement Simulation::strain_of_part(int i, int j, double x, double
     return e;
 }
 
-inline void Simulation::reference_points_smooth() {
-    // The centroids are those of the sums the last step left (or map_points made): the
-    // points where they are now. The first pass reads them; the second makes new sums.
-    const std::size_t n = p_.size();
-    for (std::size_t k = 0; k < n; ++k) {
-        const Group& g = groups_[p_.group[k]];
-        const double x0 = p_.x[k], y0 = p_.y[k];
-        int a, b;
-        double wx[2], wy[2], cx[2], cy[2];
-        square_overlap(x0, g.half, L_, mx_, a, wx, cx);
-        square_overlap(y0, g.half, L_, my_, b, wy, cy);
-        StrainIncrement e;  // eq. 5 as the point sees it
-        double dx = 0, dy = 0;
-        for (int q = 0; q < 2; ++q)
-            for (int r = 0; r < 2; ++r) {
-                const double w = wx[r] * wy[q];
-                if (w == 0) continue;
-                const int ci = a + r, cj = b + q;
-                const double px = cx[r], py = cy[q];
-                const StrainIncrement ep = strain_of_part(ci, cj, px, py);
-                e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
-                // This cell's motion (eq. 7a/7b or the MOTION rule) at the centre of its part.
-                const CellStrain& ce = strain_[std::size_t(cell(ci, cj))];
-                double x = 0, y = 0, ddx = 0, ddy = 0;
-                move_with_cell(ci, cj, {ce.xx, ce.yy, ce.xy, ce.yx}, px, py, x, y, ddx, ddy);
-                dx += w * (x - px); dy += w * (y - py);
-            }
-        double rc, rs;
-        jaumann_rotation(e.theta(), rc, rs);  // eq. 5f
-        p_.vol[k] *= 1 + e.xx + e.yy;
-        Stress s{p_.sxx[k], p_.syy[k], p_.sxy[k], p_.szz[k]};
-        consult_model(k, *group_consts_[p_.group[k]], e, rc, rs, s);  // eq. 6
-        p_.sxx[k] = s.xx; p_.syy[k] = s.yy; p_.sxy[k] = s.xy; p_.szz[k] = s.zz;
+// One point of MAPPING SMOOTH's pass: its strain, stress and volume, and where it goes.
+// It reads the nodes' increments, the cells' strains (the motion rule) and the centroids
+// of the sums the last step left (the points where they are now), and writes point k
+// only: the fast kernel runs it on the points by threads.
+inline void Simulation::smooth_move(std::size_t k) {
+    const Group& g = groups_[p_.group[k]];
+    const double x0 = p_.x[k], y0 = p_.y[k];
+    int a, b;
+    double wx[2], wy[2], cx[2], cy[2];
+    square_overlap(x0, g.half, L_, mx_, a, wx, cx);
+    square_overlap(y0, g.half, L_, my_, b, wy, cy);
+    StrainIncrement e;  // eq. 5 as the point sees it
+    double dx = 0, dy = 0;
+    for (int q = 0; q < 2; ++q)
+        for (int r = 0; r < 2; ++r) {
+            const double w = wx[r] * wy[q];
+            if (w == 0) continue;
+            const int ci = a + r, cj = b + q;
+            const double px = cx[r], py = cy[q];
+            const StrainIncrement ep = strain_of_part(ci, cj, px, py);
+            e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
+            // This cell's motion (eq. 7a/7b or the MOTION rule) at the centre of its part.
+            const CellStrain& ce = strain_[std::size_t(cell(ci, cj))];
+            double x = 0, y = 0, ddx = 0, ddy = 0;
+            move_with_cell(ci, cj, {ce.xx, ce.yy, ce.xy, ce.yx}, px, py, x, y, ddx, ddy);
+            dx += w * (x - px); dy += w * (y - py);
+        }
+    double rc, rs;
+    jaumann_rotation(e.theta(), rc, rs);  // eq. 5f
+    p_.vol[k] *= 1 + e.xx + e.yy;
+    Stress s{p_.sxx[k], p_.syy[k], p_.sxy[k], p_.szz[k]};
+    consult_model(k, *group_consts_[p_.group[k]], e, rc, rs, s);  // eq. 6
+    p_.sxx[k] = s.xx; p_.syy[k] = s.yy; p_.sxy[k] = s.xy; p_.szz[k] = s.zz;
+    double x = x0 + dx, y = y0 + dy;
+    stop_at_edges(p_.cell[k], x0, y0, x, y);  // as in reference_points
+    p_.x[k] = x; p_.y[k] = y;
+}
 
-        double x = x0 + dx, y = y0 + dy;
-        stop_at_edges(p_.cell[k], x0, y0, x, y);  // as in reference_points
-        p_.x[k] = x; p_.y[k] = y;
-    }
-    for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
+// MAPPING SMOOTH's eq. 7 and 8 for every point where it now is, in point order, into
+// sums cleared before; a point that left the lattice leaves the cycle. t: the cells
+// touched, the mass inside.
+inline void Simulation::smooth_map(Landing& t) {
     const double X = mx_ * L_, Y = my_ * L_;
-    double mass = 0;
-    for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t k = 0; k < p_.size(); ++k) {
         const double x = p_.x[k], y = p_.y[k];
-        if (!(x >= 0 && x < X && y >= 0 && y < Y)) { p_.cell[k] = -1; continue; }  // left the lattice
-        p_.cell[k] = cell(std::min(mx_ - 1, int(x * invL_)), std::min(my_ - 1, int(y * invL_)));
+        if (!(x >= 0 && x < X && y >= 0 && y < Y)) { p_.cell[k] = -1; ++t.departed; continue; }  // left the lattice
+        const int i = std::min(mx_ - 1, int(x * invL_)), j = std::min(my_ - 1, int(y * invL_));
+        p_.cell[k] = cell(i, j);
         const Group& g = groups_[p_.group[k]];
-        smear_point(k, x, y, g.mass, std::min(p_.vol[k], g.vol0), p_.sxx[k], p_.syy[k], p_.sxy[k]);  // eq. 7, 8
-        mass += g.mass;
+        smear_point(k, x, y, g.mass, std::min(p_.vol[k], g.vol0), p_.sxx[k], p_.syy[k], p_.sxy[k], t);  // eq. 7, 8
+        t.mass += g.mass;
     }
-    remove_departed();
-    mass_in_ = mass;
+    if (t.departed) remove_departed();
+    mass_in_ = t.mass;
+}
+
+inline void Simulation::reference_points_smooth() {
+    for (std::size_t k = 0; k < p_.size(); ++k) smooth_move(k);
+    for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
+    Landing t;
+    smooth_map(t);
 }
 
 // eq. 7 and 8 for point k at (x, y), MAPPING SMOOTH: its mass m and V sigma shared out
 // among the cells its square overlaps, and the moments of both about each cell's centre.
-inline void Simulation::smear_point(std::size_t k, double x, double y, double m, double v, double sxx, double syy, double sxy) {
+inline void Simulation::smear_point(std::size_t k, double x, double y, double m, double v, double sxx, double syy, double sxy, Landing& t) {
     int a, b;
     double wx[2], wy[2], cx[2], cy[2];
     const double l = groups_[p_.group[k]].half;
@@ -2717,6 +2761,8 @@ inline void Simulation::smear_point(std::size_t k, double x, double y, double m,
             const double w = wx[r] * wy[q];
             if (!(w > 0)) continue;
             const std::size_t c = std::size_t(cell(a + r, b + q));
+            t.cmin = std::min(t.cmin, int(c)); t.cmax = std::max(t.cmax, int(c));
+            t.imin = std::min(t.imin, a + r); t.imax = std::max(t.imax, a + r);
             add_to_cell(c, w * m, w * v, sxx, syy, sxy);
             const double ru = (cx[r] - (a + r) * L_) * invL_ - 0.5, rv = (cy[q] - (b + q) * L_) * invL_ - 0.5;
             const double wv = w * v;
@@ -2736,13 +2782,7 @@ inline void Simulation::reference_nodal_forces() {
         double w;
         smear_weight(cvol_[c], L2, inv2L, w);  // eq. 8
         svxx_[c] *= w; svyy_[c] *= w; svxy_[c] *= w;
-        if (!shx_.empty()) {  // MAPPING SMOOTH: the transpose of strain_of_part's variation across the cell
-            double cu, cv;
-            cell_centroid(c, cu, cv);
-            const double p = 0.5 * (svxx_[c] + svyy_[c]);  // the sum of V p, times w
-            shx_[c] = 2 * (w * shx_[c] + cv * p);
-            shy_[c] = 2 * (w * shy_[c] + cu * p);
-        }
+        if (!shx_.empty()) smooth_moment(c);
     }
     const double khg = sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s);
     for (int j = 0; j <= my_; ++j)
@@ -3129,11 +3169,12 @@ inline void Simulation::choose_point_loop() {
     case Motion::Paper: run_ = &Simulation::advance_run<Motion::Paper, false>; break;  // ADVECT POINTS refuses PAPER
     case Motion::Centre: run_ = carry ? &Simulation::advance_run<Motion::Centre, true> : &Simulation::advance_run<Motion::Centre, false>; break;
     case Motion::Bilinear: run_ = carry ? &Simulation::advance_run<Motion::Bilinear, true> : &Simulation::advance_run<Motion::Bilinear, false>; break;
+    case Motion::Default: break;  // resolved when the Simulation was made
     }
 #if LPFDM_WIDE
-    // The AVX2 version for the paper's motion rule only (the default, and every shipped
-    // deck's): each version of this loop adds a fifth to the build time of the tests.
-    if (wide_ && sc_.motion == Motion::Paper) run_ = &Simulation::advance_run_wide;
+    // The AVX2 version for the default motion rule only (MOTION CENTRE, without ADVECT
+    // POINTS): each version of this loop adds a fifth to the build time of the tests.
+    if (wide_ && sc_.motion == Motion::Centre && !carry) run_ = &Simulation::advance_run_wide;
 #endif
 }
 
@@ -3148,7 +3189,7 @@ inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q,
 template <Motion M, bool Carry>
 inline void Simulation::advance_run(long k0, long k1, Part& part, Landing& landing) { run_points<M, Carry, false>(k0, k1, part, landing); }
 #if LPFDM_WIDE
-__attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Part& part, Landing& landing) { run_points<Motion::Paper, false, true>(k0, k1, part, landing); }
+__attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Part& part, Landing& landing) { run_points<Motion::Centre, false, true>(k0, k1, part, landing); }
 #endif
 
 template <Motion M, bool Carry, bool Wide>
@@ -3249,7 +3290,14 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             vol *= 1 + e.xx + e.yy;
             detail::load(px + k, x0); detail::load(py + k, y0);
             const int n1 = node(ci, cj);
-            move_point_paper(x0, y0, e, cols[ci].at, rows[cj].at, dux_[n1], duy_[n1], x, y);  // eq. 7a/7b
+            if constexpr (M == Motion::Paper) {
+                move_point_paper(x0, y0, e, cols[ci].at, rows[cj].at, dux_[n1], duy_[n1], x, y);  // eq. 7a/7b
+            } else {  // MOTION CENTRE: eq. 7a/7b about the centre, with the mean increment
+                const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
+                const double umx = 0.25 * (dux_[n1] + dux_[n2] + dux_[n3] + dux_[n4]), umy = 0.25 * (duy_[n1] + duy_[n2] + duy_[n3] + duy_[n4]);
+                v4d ddx, ddy;
+                move_point_centre(x0, y0, e, cols[ci].at, rows[cj].at, L, umx, umy, x, y, ddx, ddy);
+            }
             const double uc0 = cols[ci].lo, uc1 = cols[ci].hi, vc0 = rows[cj].lo, vc1 = rows[cj].hi;
             const v4d u = x * invL, v = y * invL;
             if (!detail::all_lanes((u >= v4d{uc0, uc0, uc0, uc0}) & (u < v4d{uc1, uc1, uc1, uc1}) & (v >= v4d{vc0, vc0, vc0, vc0}) & (v < v4d{vc1, vc1, vc1, vc1}))) break;
@@ -3277,7 +3325,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
         constexpr int S = decltype(stage)::value;
         while (k < stop) {
 #if LPFDM_WIDE
-            if constexpr (Wide && S == kWhole && M == Motion::Paper && !Carry) {
+            if constexpr (Wide && S == kWhole && M != Motion::Bilinear && !Carry) {
                 k = usual_runs(k, stop);
                 if (k == stop) break;
             }
@@ -3627,6 +3675,29 @@ inline void Simulation::clear_row(int j, int lo, int hi) {
     if (c0 >= c1) return;
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) std::fill(v->data() + c0, v->data() + c1, 0.0);
     if (!carried_.empty()) std::fill(carried_.data() + c0, carried_.data() + c1, Carried{});
+    if (!shx_.empty())
+        for (auto* v : {&shx_, &shy_, &smu_, &smv_}) std::fill(v->data() + c0, v->data() + c1, 0.0);
+}
+
+// MAPPING SMOOTH's point phase in the fast kernel: reference_points_smooth, with the
+// points' first pass (smooth_move, each point on its own) by threads, the cells cleared
+// in the box the last step's points touched, and the box they touch now kept for the
+// lattice phases.
+inline void Simulation::smooth_point_pass() {
+    const long n = long(p_.size());
+#if defined(_OPENMP)
+    if (!serial()) {
+        LPFDM_OMP(omp parallel for schedule(static) num_threads(team_))
+        for (long k = 0; k < n; ++k) smooth_move(std::size_t(k));
+    } else
+#endif
+        for (long k = 0; k < n; ++k) smooth_move(std::size_t(k));
+    clear_cells();
+    Landing t;
+    smooth_map(t);
+    departed_ = std::size_t(t.departed);
+    occupied_ = landed(t);
+    parts_known_ = false;
 }
 
 // eq. 7 and 8 for point k, into the cell it lies in; with ADVECT POINTS also the
@@ -3647,14 +3718,9 @@ inline void Simulation::map_point(std::size_t k) {
 inline void Simulation::map_points() {
     if (sc_.mapping == Mapping::Smooth) {  // every cell each point's square overlaps (the reference's mapping)
         for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
-        double mass = 0;
-        for (std::size_t k = 0; k < p_.size(); ++k) {
-            const Group& g = groups_[p_.group[k]];
-            smear_point(k, p_.x[k], p_.y[k], g.mass, std::min(p_.vol[k], g.vol0), p_.sxx[k], p_.syy[k], p_.sxy[k]);
-            mass += g.mass;
-        }
-        mass_in_ = mass;
-        occupied_ = {0, mx_, 0, my_};
+        Landing t;
+        smooth_map(t);
+        occupied_ = landed(t);
         parts_known_ = false;
         return;
     }
@@ -3712,6 +3778,10 @@ inline void Simulation::nodal_forces() {
     };
     auto smear_row = [&](int j, auto wide) LPFDM_INLINE { detail::sweep(j * mx + oc.i0, j * mx + oc.i1, wide, smear); };
     by_rows(kSmearRows, oc.j0, oc.j1, oc.size(), [&](int j) { each_row(smear_row, j); });
+    const bool smooth = !shx_.empty();
+    if (smooth)  // MAPPING SMOOTH: the moments as reference_nodal_forces makes them
+        for (int j = oc.j0; j < oc.j1; ++j)
+            for (int c = j * mx + oc.i0; c < j * mx + oc.i1; ++c) smooth_moment(std::size_t(c));
     const bool hourglass = !hgx_.empty();
     const double khg = hourglass ? sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s) : 0.0;
     // The node is corner [1] of cell (i, j), [2] of (i-1, j), [3] of (i, j-1) and [4] of
@@ -3748,6 +3818,13 @@ inline void Simulation::nodal_forces() {
             if (right && below) hg(c - mx, -1);
             if (left && below) hg(c - mx - 1, 1);
         }
+        if constexpr (!in) if (smooth) {  // MAPPING SMOOTH: F[a] -= s_x s_y (shx, shy) / L
+            auto moment = [&](int a, double h) { fx -= h * shx_[std::size_t(a)]; fy -= h * shy_[std::size_t(a)]; };
+            if (right && above) moment(c, 1);
+            if (left && above) moment(c - 1, -1);
+            if (right && below) moment(c - mx, -1);
+            if (left && below) moment(c - mx - 1, 1);
+        }
         const int n = j * (mx + 1) + i;
         const T mn = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
         if (keep_prev) {
@@ -3770,7 +3847,7 @@ inline void Simulation::nodal_forces() {
     };
     const detail::Tag<double> one;
     auto force_row = [&](int j, auto wide) LPFDM_INLINE {
-        const bool inner_row = j > 0 && j < my && !hourglass;
+        const bool inner_row = j > 0 && j < my && !hourglass && !smooth;
         const int ia = inner_row ? std::min(std::max(nr.i0, 1), nr.i1) : nr.i1, ib = inner_row ? std::max(ia, std::min(nr.i1, mx)) : nr.i1;
         bool gained = false;
         for (int i = nr.i0; i < ia; ++i) node_force(i, j, std::false_type{}, one, gained);
@@ -4079,6 +4156,13 @@ inline Range Simulation::impose_supports() {
                     const int n = node(i, j);
                     const std::size_t u = std::size_t(n);
                     const bool new_node = !driven_[u];
+                    // A wall with material on one side pushes and never pulls: a node whose own
+                    // increment (eq. 13) takes it away from the wall into the material, or that has
+                    // no material to move, is left free.
+                    if (new_node && (ws.side_x || ws.side_y)) {
+                        const double away = ws.side_x ? (dux_[u] - ddx) * ws.side_x : (duy_[u] - ddy) * ws.side_y;
+                        if (away > 0 || nmass_[u] == 0) continue;
+                    }
                     if (!(fixed_[u] & kFixX) && !(driven_[u] & kFixX) && !ws.normal_y) {  // a smooth row of nodes is driven in y only
                         dux_[u] = ddx; ws.fx -= fx_[u];
                         support_work(u, dux_old_[u], dux_[u], fx_[u], es_.w_walls, hw);
@@ -4158,6 +4242,24 @@ inline void Simulation::hold_by_walls(double x0, double y0, double& x, double& y
                 if (b.x1 == b.x0) break;
             }
     }
+}
+
+// The side of a wall's line of nodes its material lies on (WallState::side_x, side_y), from
+// the points as made: those within a cell of the line, along its length.
+inline void Simulation::contact_side(WallState& ws) const {
+    const Box& b = ws.face;
+    const bool column = b.x0 == b.x1 && b.y1 > b.y0, row = b.y0 == b.y1 && b.x1 > b.x0;
+    if (!column && !row) return;  // a box of nodes: bonded
+    long before = 0, after = 0;
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const double along = column ? p_.y[k] : p_.x[k], lo = column ? b.y0 : b.x0, hi = column ? b.y1 : b.x1;
+        const double across = (column ? p_.x[k] : p_.y[k]) - (column ? b.x0 : b.y0);
+        if (along < lo || along > hi || std::fabs(across) >= L_) continue;
+        before += across < 0;
+        after += across > 0;
+    }
+    const int side = before && !after ? -1 : after && !before ? 1 : 0;
+    (column ? ws.side_x : ws.side_y) = side;
 }
 
 // Whether the cells beyond node (i, j) in direction (di, dj) (one of them 0) hold no mass.

@@ -1006,8 +1006,8 @@ TEST_CASE("deck: a FIX box far past the lattice holds the same nodes as a box ju
 
 // ======================================================= later cards and --set ===
 
-TEST_CASE("deck: MOTION chooses how points move; HOURGLASS gives kappa; both default off") {
-    CHECK(read_ok(kBase).motion == lpfdm::Motion::Paper);
+TEST_CASE("deck: MOTION chooses how points move (CENTRE by default); HOURGLASS gives kappa (off by default)") {
+    CHECK(read_ok(kBase).motion == lpfdm::Motion::Default);  // CENTRE, or BILINEAR with MAPPING SMOOTH (Simulation)
     CHECK(read_ok(kBase).hourglass == 0.0);
     CHECK(read_ok(plus("MOTION centre")).motion == lpfdm::Motion::Centre);
     CHECK(read_ok(plus("motion CENTER")).motion == lpfdm::Motion::Centre);
@@ -1028,6 +1028,7 @@ TEST_CASE("deck: ADVECT chooses how the nodal increments follow the material; EQ
     CHECK(read_ok(plus("ADVECT eq12")).advect == lpfdm::Advect::Eq12);
     CHECK(read_ok(plus("MOTION CENTRE\nADVECT POINTS")).advect == lpfdm::Advect::Points);
     CHECK(read_ok(plus("advect points\nmotion bilinear")).advect == lpfdm::Advect::Points);
+    CHECK(read_ok(plus("ADVECT POINTS")).advect == lpfdm::Advect::Points);  // the default motion is CENTRE
 }
 
 TEST_CASE("deck error: a bad ADVECT card, and ADVECT POINTS with the paper's motion") {
@@ -1035,7 +1036,6 @@ TEST_CASE("deck error: a bad ADVECT card, and ADVECT POINTS with the paper's mot
     CHECK_ONE_ERROR(plus("ADVECT"), 5, 7, "missing field");
     CHECK_ONE_ERROR(plus("ADVECT POINTS 2"), 5, 15, "extra field '2'");
     CHECK_ONE_ERROR(plus("MOTION CENTRE\nADVECT POINTS\nADVECT EQ12"), 7, 1, "ADVECT is given twice");
-    CHECK_ONE_ERROR(plus("ADVECT POINTS"), 5, 1, "ADVECT POINTS needs MOTION CENTRE or BILINEAR");
     CHECK_ONE_ERROR(plus("ADVECT POINTS\nMOTION PAPER"), 5, 1, "ADVECT POINTS needs MOTION CENTRE or BILINEAR");
 }
 
