@@ -138,8 +138,14 @@
 //     it. No point crosses a wall's face (Simulation::hold_by_walls; faces reach one cell
 //     beyond the end nodes, so a wall ending a node above a fixed base still holds the row
 //     beside the base). SMOOTH walls (a row or a column of nodes) drive across their line
-//     only. The reported force is minus the net nodal force at the driven nodes: the force
-//     on the material.
+//     only. A row or column of nodes with material on one side only (as the points were
+//     made, WallState::side_x, side_y) is a contact: a node whose own increment (eq. 13)
+//     would take it away from the wall into the material, or that has no mass, is left
+//     free, so the wall pushes and never pulls (bonded both ways, a retaining wall moved
+//     away from sand dragged it: 0.14-0.67 of Rankine's thrust). A wall inside a cluster
+//     (material on both sides, the paper's cap) or a box of nodes stays bonded. The
+//     reported force is minus the net nodal force at the driven nodes: the force on the
+//     material.
 //   * MAPPING SMOOTH (an option; the paper's mapping is the default): a point is the square
 //     it stood for when made, and takes part in every cell the square overlaps in
 //     proportion to the area inside it (square_overlap, GIMP's point domains). In each
