@@ -1,8 +1,10 @@
 # paraview_picture.py -- one frame of a VTU series written by lpfdm (OUTPUT VTU), drawn by
 # ParaView: the points as Point Gaussian splats coloured by plastic shear strain `ep`, with
-# a colour bar and the model time. Run with ParaView's Python (no display needed):
+# a colour bar and the model time. Run with ParaView's Python; no window opens, but a
+# ParaView that renders through X (Debian's) needs a display, which xvfb-run gives:
 #
-#   pvpython --force-offscreen-rendering tools/paraview_picture.py SERIES.pvd OUT.png [TIME] [EPMAX]
+#   xvfb-run -a -s "-noreset -screen 0 1280x1024x24" pvpython tools/paraview_picture.py SERIES.pvd OUT.png [TIME] [EPMAX]
+#   pvpython --force-offscreen-rendering tools/paraview_picture.py ...   (an EGL or OSMesa build)
 #
 # TIME: the frame at or before this model time in seconds (default: the last frame);
 # EPMAX: the top of the colour scale (default: the frame's 98th percentile of ep, so that a
@@ -18,7 +20,7 @@ from paraview.simple import (AnnotateTimeFilter, GetActiveViewOrCreate, GetColor
 from vtk.numpy_interface import dataset_adapter
 
 if len(sys.argv) not in (3, 4, 5):
-    sys.exit("usage: pvpython --force-offscreen-rendering tools/paraview_picture.py SERIES.pvd OUT.png [TIME] [EPMAX]")
+    sys.exit("usage: pvpython tools/paraview_picture.py SERIES.pvd OUT.png [TIME] [EPMAX]")
 series, png = sys.argv[1], sys.argv[2]
 
 reader = PVDReader(FileName=series)
