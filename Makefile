@@ -26,9 +26,10 @@ help:
 
 # Missing Debian packages are installed when running as root; otherwise the exact
 # command is printed and the build stops. The tests also need clang and its libFuzzer
-# runtime (the fuzzing smoke of the deck reader), cmake and pkg-config (the CMake package),
-# python3-numpy and python3-pandas (the point tables and histories read by both).
-TEST_PACKAGES = clang libclang-rt-14-dev cmake pkg-config python3-numpy python3-pandas
+# runtime (the fuzzing smoke of the deck reader) and OpenMP runtime (Clang's warnings,
+# tests/check_warnings.sh), cmake and pkg-config (the CMake package), python3-numpy and
+# python3-pandas (the point tables and histories read by both).
+TEST_PACKAGES = clang libclang-rt-14-dev libomp-dev cmake pkg-config python3-numpy python3-pandas
 define install_missing
 missing=""; for p in $(1); do \
   dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "ok installed" || missing="$$missing $$p"; \

@@ -234,6 +234,15 @@
 #else
 #define LPFDM_WIDE 0
 #endif
+// Clang contracts a * b + c into a fused multiply-add by default (-ffp-contract=on), and
+// rewrites such expressions even for a processor without one: the AVX2 lanes then differ
+// from the one-point code (as in the sign of a NaN, tests/test_mohr.cpp). This header's
+// code is compiled without contraction, as GCC does in ISO C++ mode; the includer's own
+// code keeps its setting (pushed here, popped at the end of the header).
+#if defined(__clang__)
+#pragma float_control(push)
+#pragma clang fp contract(off)
+#endif
 
 namespace lpfdm {
 
@@ -5441,4 +5450,7 @@ inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uin
 
 }  // namespace lpfdm
 
+#if defined(__clang__)
+#pragma float_control(pop)
+#endif
 #endif  // LPFDM_HPP

@@ -1,20 +1,28 @@
 #!/usr/bin/env bash
-# The CMake package: another project takes the kernel three ways, and each builds and runs
-# tools/embed_example.cpp (a scene built in code, LPFDM_NO_IO: no fmt, no Eigen):
+# The CMake build and package, the four ways the README gives:
 #   1. add_subdirectory(lpfdm) and target lpfdm::lpfdm (the program and tests are not built);
 #   2. cmake --install of the header-only configuration, then find_package(lpfdm CONFIG);
-#   3. the installed pkg-config file: g++ $(pkg-config --cflags lpfdm).
-# The full build with tests (cmake -S . -B build && cmake --build build && ctest) is the
-# README's CMake way; it is not repeated here (make test builds and runs the same tests).
+#   3. the installed pkg-config file: g++ $(pkg-config --cflags lpfdm);
+#      (1-3 each build and run tools/embed_example.cpp, a scene built in code, LPFDM_NO_IO:
+#      no fmt, no Eigen);
+#   4. the full build, cmake -S . -B DIR && cmake --build DIR && ctest --test-dir DIR, in a
+#      temporary directory: it builds with no warning (GCC or the default compiler, -O3),
+#      the program runs two threads when asked (OpenMP found), `ctest -N` lists the unit
+#      tests (unit_quick, unit_slow) and one test for every tests/check_*.sh, and the tests
+#      labelled quick pass: the unit tests not tagged [slow] and the two quickest checks,
+#      cli and vtu (make test runs the rest with its own builds). Run by ctest as the test
+#      `cmake` (LPFDM_CMAKE_INSIDE_CTEST set), the check leaves way 4 out: that ctest run
+#      is way 4.
 #
-# usage: tests/check_cmake.sh EXE   (runs once, for ./lpfdm, like the fuzzing smoke)
+# usage: tests/check_cmake.sh EXE   (EXE only chooses whether to run: tests/run.sh runs every
+# check once per build of the program, and this one runs for the plain build, not for a
+# sanitizer build, whose name contains "san", like the fuzzing smoke)
 # Needs cmake and pkg-config (make test installs them). Last line "cmake: N passed, M failed".
 set -u
 cd "$(dirname "$0")/.." || exit 2
-case ${1:-} in
-    ./lpfdm | lpfdm | "$PWD/lpfdm") ;;
-    *)
-        echo "cmake: the check runs once, with ./lpfdm; nothing to do for ${1:-}"
+case $(basename "${1:-}") in
+    *san* | "")
+        echo "cmake: the check runs once, for the plain build of the program; nothing to do for ${1:-(no program)}"
         echo "cmake: 0 passed, 0 failed"
         exit 0
         ;;
@@ -89,6 +97,45 @@ if cmake -S "$src" -B "$tmp/lp" -DLPFDM_BUILD_PROGRAM=OFF -DLPFDM_BUILD_TESTS=OF
     fi
 else
     fail "cmake --install: $(grep -m 1 -i error "$tmp/log")"
+fi
+
+# 4. the full build and ctest
+if [ -n "${LPFDM_CMAKE_INSIDE_CTEST:-}" ]; then
+    echo "cmake: run by ctest; the full build (way 4) is the one running it, not built again"
+elif build_start=$SECONDS && ! { cmake -S "$src" -B "$tmp/full" >"$tmp/full.log" 2>&1 &&
+         cmake --build "$tmp/full" --parallel "$(nproc)" >>"$tmp/full.log" 2>&1; }; then
+    fail "cmake -S . -B DIR && cmake --build DIR: $(grep -m 3 -iE 'error|warning' "$tmp/full.log")"
+else
+    start=$SECONDS
+    echo "cmake: the full build took $((start - build_start)) s ($(grep -c 'Building CXX' "$tmp/full.log") compiles)"
+    if grep -q 'warning:' "$tmp/full.log"; then
+        fail "the full build gives $(grep -c 'warning:' "$tmp/full.log") warnings: $(grep -m 3 'warning:' "$tmp/full.log")"
+    else
+        passed=$((passed + 1))
+    fi
+    # OpenMP: with OpenMP the provenance line names the threads asked for, without it 1.
+    if "$tmp/full/lpfdm" -q --threads 2 --steps 10 -o "$tmp/omp" decks/column.deck >"$tmp/omp.log" 2>&1 &&
+       grep -q '^# run: threads 2 ' "$tmp/omp/column_history.txt"; then
+        passed=$((passed + 1))
+    else
+        fail "the program of the full build does not run two threads with --threads 2 (OpenMP not found?): $(grep -m 1 '^# run: threads' "$tmp/omp/column_history.txt" 2>/dev/null || head -n 2 "$tmp/omp.log")"
+    fi
+    # ctest -N: "  Test  #3: decks" lines; every check script and the two unit parts.
+    registered=$(ctest --test-dir "$tmp/full" -N 2>&1 | sed -nE 's/^ *Test +#[0-9]+: ([^ ]+).*/\1/p' | sort)
+    expected=$( (printf 'unit_quick\nunit_slow\n'; for f in tests/check_*.sh; do f=${f#tests/check_}; echo "${f%.sh}"; done) | sort)
+    if [ "$registered" = "$expected" ]; then
+        passed=$((passed + 1))
+    else
+        fail "ctest -N does not list every tests/check_*.sh and the unit tests: missing $(comm -13 <(echo "$registered") <(echo "$expected") | tr '\n' ' '), extra $(comm -23 <(echo "$registered") <(echo "$expected") | tr '\n' ' ')"
+    fi
+    if ctest --test-dir "$tmp/full" -L quick --output-on-failure >"$tmp/ctest.log" 2>&1; then
+        passed=$((passed + 1))
+        echo "cmake: ctest -L quick: $(grep -E 'tests passed' "$tmp/ctest.log")"
+    else
+        fail "ctest -L quick: $(grep -E 'tests passed|\(Failed\)|\*\*\*' "$tmp/ctest.log" | head -n 5)"
+        tail -n 30 "$tmp/ctest.log"
+    fi
+    echo "cmake: the full build's checks took $((SECONDS - start)) s"
 fi
 echo "cmake: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -1,51 +1,69 @@
 #!/usr/bin/env bash
 # Runs every test of `make test`: unit tests at -O2 and under ASan+UBSan, then the
 # deck-level checks with both builds of the program. Ends with "N passed, N failed".
+#
+# The runs are jobs on one queue, taken by as many workers as cores (at least two), each
+# worker the next job when its last is done, the longest first (check_cmake.sh with its own
+# CMake build, then the two unit runs). The checks differ in length a hundredfold and some
+# run for one build only: one fixed lane per build, as before, left a core idle for
+# minutes. The logs are printed afterwards, in a fixed order.
 set -u
 cd "$(dirname "$0")/.."
 passed=0 failed=0
-count() {  # $1: label, $2: log; adds doctest's "test cases" totals
-  local line p f
-  line=$(grep -E '^\[doctest\] test cases:' "$2" | tail -1)
-  p=$(sed -E 's/.*\| *([0-9]+) passed.*/\1/' <<<"$line"); f=$(sed -E 's/.*\| *([0-9]+) failed.*/\1/' <<<"$line")
-  [[ $p =~ ^[0-9]+$ ]] || p=0; [[ $f =~ ^[0-9]+$ ]] || f=1
-  echo "$1: $p passed, $f failed"
-  passed=$((passed + p)); failed=$((failed + f))
+dir=$(mktemp -d); trap 'rm -rf "$dir"' EXIT
+
+# job N KIND ARG: KIND unit-o2, unit-san, or check (ARG "SCRIPT EXE"); writes $dir/N.log
+# and $dir/N.rc.
+job() {
+    local n=$1 kind=$2 arg=${3:-}
+    case $kind in
+        unit-o2) OMP_NUM_THREADS=1 build/tests --no-version=1 ;;
+        # the sanitizer build leaves out the [slow] cases; the kernel's own threads stay at one
+        unit-san) OMP_NUM_THREADS=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+                      build/tests-san --no-version=1 --test-case-exclude='*[slow]*' ;;
+        check) bash ${arg% *} "${arg#* }" ;;
+    esac >"$dir/$n.log" 2>&1
+    echo $? >"$dir/$n.rc"
 }
-log=$(mktemp); log2=$(mktemp); trap 'rm -f "$log" "$log2"' EXIT
-# The two unit runs are independent: one core each (the kernel's own threads stay at one).
-OMP_NUM_THREADS=1 build/tests --no-version=1 >"$log" 2>&1 & pid1=$!
-OMP_NUM_THREADS=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-  build/tests-san --no-version=1 --test-case-exclude='*[slow]*' >"$log2" 2>&1 & pid2=$!
-wait $pid1; rc=$?
-cat "$log"; count "unit (-O2)" "$log"; [ $rc -eq 0 ] || failed=$((failed + (rc != 0 && failed == 0)))
-wait $pid2; rc=$?
-tail -n 30 "$log2"; count "unit (ASan+UBSan)" "$log2"; [ $rc -eq 0 ] || failed=$((failed + (rc != 0 && failed == 0)))
-# Program-level checks: every tests/check_*.sh, given the program, ends with "NAME: N passed, M failed".
-# One lane per build of the program, the two lanes side by side (one core each); each lane
-# writes its log and its totals, printed afterwards in a fixed order.
-lane() {  # $1: program, $2: log; last line of the log "P F"
-  local script out rc line p f lp=0 lf=0
-  for script in tests/check_*.sh; do
-    out=$(bash "$script" "$1" 2>&1); rc=$?
-    echo "$out" | tail -n 40
-    line=$(echo "$out" | grep -E '^[A-Za-z_-]+: [0-9]+ passed, [0-9]+ failed$' | tail -1)
+export -f job
+export dir
+
+# Jobs 1 and 2 are the unit runs, then every tests/check_*.sh with each build of the program
+# (./lpfdm, then build/lpfdm-san); the queue takes check_cmake.sh with ./lpfdm first (with its
+# own CMake build, the longest), then the unit runs, then the others in that order.
+n=0 list=()
+add() { n=$((n + 1)); list+=("$n $1${2:+ $2}"); }
+add unit-o2
+add unit-san
+for exe in ./lpfdm build/lpfdm-san; do
+    for script in tests/check_*.sh; do add check "$script $exe"; done
+done
+first=$(printf '%s\n' "${list[@]}" | grep -m 1 ' check tests/check_cmake.sh ./lpfdm$')
+workers=$(nproc 2>/dev/null || echo 2)
+[ "$workers" -ge 2 ] || workers=2
+{ [ -n "$first" ] && echo "$first"; printf '%s\n' "${list[@]}" | grep -vxF "${first:-none}"; } |
+    xargs -P "$workers" -L 1 bash -c 'job "$1" "$2" "${*:3}"' _
+
+count() {  # $1: label, $2: log; adds doctest's "test cases" totals
+    local line p f
+    line=$(grep -E '^\[doctest\] test cases:' "$2" | tail -1)
+    p=$(sed -E 's/.*\| *([0-9]+) passed.*/\1/' <<<"$line"); f=$(sed -E 's/.*\| *([0-9]+) failed.*/\1/' <<<"$line")
+    [[ $p =~ ^[0-9]+$ ]] || p=0; [[ $f =~ ^[0-9]+$ ]] || f=1
+    echo "$1: $p passed, $f failed"
+    passed=$((passed + p)); failed=$((failed + f))
+}
+rc_of() { local rc; rc=$(cat "$dir/$1.rc" 2>/dev/null); [[ $rc =~ ^[0-9]+$ ]] && echo "$rc" || echo 1; }
+cat "$dir/1.log"; count "unit (-O2)" "$dir/1.log"; [ "$(rc_of 1)" -eq 0 ] || failed=$((failed + (failed == 0)))
+tail -n 30 "$dir/2.log"; count "unit (ASan+UBSan)" "$dir/2.log"; [ "$(rc_of 2)" -eq 0 ] || failed=$((failed + (failed == 0)))
+# Program-level checks: each, given the program, ends with "NAME: N passed, M failed"; in the
+# order of the queue (the plain build's, then the sanitizer build's).
+for ((k = 3; k <= n; k++)); do
+    tail -n 40 "$dir/$k.log"
+    line=$(grep -E '^[A-Za-z_-]+: [0-9]+ passed, [0-9]+ failed$' "$dir/$k.log" | tail -1)
     p=$(sed -E 's/^[A-Za-z_-]+: ([0-9]+) passed.*/\1/' <<<"$line"); f=$(sed -E 's/.* ([0-9]+) failed$/\1/' <<<"$line")
     [[ $p =~ ^[0-9]+$ ]] || p=0; [[ $f =~ ^[0-9]+$ ]] || f=1
-    [ $rc -eq 0 ] || [ "$f" -gt 0 ] || f=1
-    lp=$((lp + p)); lf=$((lf + f))
-  done >"$2"
-  echo "$lp $lf" >>"$2"
-}
-lane1=$(mktemp); lane2=$(mktemp); trap 'rm -f "$log" "$log2" "$lane1" "$lane2"' EXIT
-lane ./lpfdm "$lane1" & pid1=$!
-lane build/lpfdm-san "$lane2" & pid2=$!
-wait $pid1 $pid2
-for l in "$lane1" "$lane2"; do
-  sed '$d' "$l"
-  read -r p f < <(tail -n 1 "$l")
-  [[ $p =~ ^[0-9]+$ && $f =~ ^[0-9]+$ ]] || { p=0; f=1; }
-  passed=$((passed + p)); failed=$((failed + f))
+    [ "$(rc_of $k)" -eq 0 ] || [ "$f" -gt 0 ] || f=1
+    passed=$((passed + p)); failed=$((failed + f))
 done
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -282,7 +282,11 @@ void runouts(Mapping mapping, Motion motion, double& left, double& right) {
 }  // namespace
 
 TEST_CASE("a symmetric column collapses symmetrically with MOTION CENTRE, and with MAPPING SMOOTH and MOTION BILINEAR") {
-    for (auto [mapping, motion] : {std::pair{Mapping::Paper, Motion::Centre}, std::pair{Mapping::Smooth, Motion::Bilinear}}) {
+    for (const auto& choice : {std::pair{Mapping::Paper, Motion::Centre}, std::pair{Mapping::Smooth, Motion::Bilinear}}) {
+        // Plain variables, not a structured binding: INFO captures them in a lambda, which
+        // C++17 does not allow for bindings (Clang refuses it).
+        const Mapping mapping = choice.first;
+        const Motion motion = choice.second;
         double left = 0, right = 0;
         runouts(mapping, motion, left, right);
         INFO("mapping " << int(mapping) << ", motion " << int(motion) << ": left " << left << " m, right " << right << " m");
