@@ -62,7 +62,7 @@ TEST_CASE("the counter sees an allocation (the test can fail)") {
 TEST_CASE("no allocation inside the time step, from the first step on") {
     // Each scene exercises one path of the step: elastic under gravity, Mohr-Coulomb with
     // scatter and softening (the cliff), walls (compression test), points leaving the
-    // lattice (trapdoor), the alternative motions and the hourglass control.
+    // lattice (trapdoor), the alternative motions, the hourglass control and MAPPING SMOOTH.
     struct Case { const char* deck; long steps; };
     for (const Case c : {Case{"decks/column.deck", 300}, Case{"decks/cliff.deck", 300}, Case{"decks/psc.deck", 300},
                          Case{"decks/trapdoor.deck", 300}, Case{"decks/cut_high.deck", 300}}) {
@@ -82,6 +82,10 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
     s.advect = Advect::Points;  // increments carried by the points
     CHECK(news_in_steps(s, 200) == 0);
     CHECK(news_in_steps(s, 20, true) == 0);
+    s.advect = Advect::Eq12;
+    s.mapping = Mapping::Smooth;  // points as squares, over every cell they overlap
+    CHECK(news_in_steps(s, 200) == 0);
+    CHECK(news_in_steps(s, 50, false, Kernel::Reference) == 0);
 }
 
 TEST_CASE("no allocation inside the time step when points leave the lattice") {
@@ -109,14 +113,17 @@ TEST_CASE("no allocation inside the time step with two threads, once the thread 
     const int before = omp_get_max_threads();
     omp_set_num_threads(2);
     Scene s = deck("decks/bench_mohr.deck", 20);
-    Simulation sim(s);
-    sim.step();
-    g_news = 0;
-    g_counting = true;
-    for (int k = 0; k < 20; ++k) sim.step();
-    g_counting = false;
+    for (const Mapping mapping : {Mapping::Paper, Mapping::Smooth}) {
+        s.mapping = mapping;
+        Simulation sim(s);
+        sim.step();
+        g_news = 0;
+        g_counting = true;
+        for (int k = 0; k < 20; ++k) sim.step();
+        g_counting = false;
+        CHECK(sim.points().size() > 4096);
+        CHECK(g_news.load() == 0);
+    }
     omp_set_num_threads(before);
-    CHECK(sim.points().size() > 4096);
-    CHECK(g_news.load() == 0);
 }
 #endif
