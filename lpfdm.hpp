@@ -429,6 +429,7 @@ struct Scene {
     double gravity_x = 0, gravity_y = 0;
     double damping = 0;                 // alpha of eq. 14
     std::uint64_t seed = 1;
+    long reorder = 0;                   // REORDER n: the points' storage sorted by cell every n steps (0: never)
     double dt_s = 0;
     long steps = 0;
     std::vector<Output> outputs;
@@ -509,6 +510,7 @@ inline const DeckKey kDeckKeys[] = {
     {"DAMPING",   "ALPHA",   "alpha",               "DAMPING alpha",     false, true,  true,  0,      1,          false, true,  false, "",         0,   0, LPFDM_OF(damping)},
     {"HOURGLASS", "KAPPA",   "kappa",               "HOURGLASS kappa",   false, true,  true,  0,      1,          false, false, false, "",         0,   0, LPFDM_OF(hourglass)},
     {"SEED",      "N",       "seed",                "seed",              false, true,  true,  0,      9007199254740992.0, false, false, true, "", 0,   0, LPFDM_OF(seed)},
+    {"REORDER",   "N",       "steps between sorts of the points", "REORDER n",        false, true,  true,  0,      1e9,        false, false, true,  "",         0,   0, LPFDM_OF(reorder)},
     {"STEP",      "DT",      "dt (s)",              "the time step dt",  false, true,  true,  0,      kHuge,      true,  true,  false, "",         0,   0, LPFDM_OF(dt_s)},
     {"STEP",      "N",       "number of steps",     "number of steps",   false, true,  true,  1,      1e9,        false, false, true,  "",         0,   0, LPFDM_OF(steps)},
     {"OUTPUT",    "EVERY",   "EVERY n",             "EVERY n",           true,  false, true,  1,      1e9,        false, false, true,  "",         0,   0, LPFDM_AT(outputs, every)},
@@ -538,6 +540,7 @@ inline const DeckCard kDeckCards[] = {
     {"MAPPING", "PAPER|SMOOTH", "", "a point in the cell holding its centre (the paper), or shared by the cells its square overlaps (no jump at cell edges)"},
     {"ADVECT", "EQ12|POINTS", "", "how increments follow the material: eq. 12, or carried by the points"},
     {"SEED", "", "", "seed of the strength scatter"},
+    {"REORDER", "", "", "sort the points' storage by cell every n steps (0: never), for speed as points flow"},
     {"STEP", "", "", "n steps of dt seconds"},
     {"OUTPUT", "POINTS|HISTORY|VTU|STATE file", "[BINARY] [NODES]", "a point table, a history, a VTK series (VTU) or a restart file (STATE), every n steps"},
     {"END", "", "", "the end of the deck (optional)"},
@@ -1581,6 +1584,7 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
     keys("GRAVITY", 0, s.grid_pos, 0);
     keys("DAMPING", 0, s.damping_pos, 0);
     keys("HOURGLASS", 0, s.grid_pos, 0);
+    keys("REORDER", 0, s.grid_pos, 0);
     if (!unread.step) keys("STEP", 0, s.step_pos, 0);
     for (std::size_t a = 0; a < s.outputs.size(); ++a) keys("OUTPUT", a, s.outputs[a].pos, 0);
     for (std::size_t a = 0; a < s.materials.size(); ++a) {
@@ -1794,6 +1798,7 @@ public:
         compensate();      // eq. 12
         integrate();       // eq. 13-14, fixed nodes, moving walls
         ++step_;
+        if (reorder_due()) reorder_points();  // storage only (REORDER)
     }
     // The same step by the reference cycle, whatever the kernel (see Kernel).
     void step_reference() {
@@ -1804,6 +1809,7 @@ public:
         reference_compensate();    // eq. 12
         reference_integrate();     // eq. 13-14, fixed nodes, moving walls
         ++step_;
+        if (reorder_due()) reorder_points();  // storage only (REORDER), as step() does
     }
     Kernel kernel() const { return kernel_; }
     // Whether every step runs the reference cycle (the reference kernel).
@@ -1848,6 +1854,16 @@ public:
     const Scene& scene() const { return sc_; }                        // the scene as run (after set_* calls)
     const Points& points() const { return p_; }                       // the points, structure of arrays
     Points& points() { return p_; }  // e.g. to set an initial stress field before the first step
+    // The storage positions of the points in the order of their ids (the order they were
+    // made in): the storage order itself unless REORDER sorted it. Writers list points so.
+    const std::vector<std::int32_t>& by_id() const {
+        slot_of_id_.assign(std::size_t(made_), -1);
+        for (std::size_t k = 0; k < p_.size(); ++k) slot_of_id_[std::size_t(p_.id[k])] = std::int32_t(k);
+        by_id_.clear();
+        for (const std::int32_t k : slot_of_id_)
+            if (k >= 0) by_id_.push_back(k);
+        return by_id_;
+    }
     const std::vector<Group>& groups() const { return groups_; }      // material and mass of each point group
     const std::vector<WallState>& walls() const { return walls_; }    // force and travel of each wall, deck order
     const std::vector<std::int32_t>& driven_nodes() const { return driven_nodes_; }  // the nodes the walls drove in the last step
@@ -2059,6 +2075,12 @@ private:
     void setup();
     void create_points();
     void remove_departed();
+    bool reorder_due() const { return sc_.reorder > 0 && step_ % sc_.reorder == 0; }
+    void reorder_points();
+    std::size_t made_ = 0;                           // points made at set-up (ids 0 .. made_-1)
+    std::vector<std::int32_t> sorted_, cell_count_;  // reorder_points: the new order, points per cell
+    std::vector<unsigned char> sort_buf_;            // reorder_points: one array in the new order
+    mutable std::vector<std::int32_t> by_id_, slot_of_id_;  // by_id(): storage positions in id order
     void clear_cells();
     void clear_row(int j, int lo, int hi);
     void advance_points();
@@ -2232,6 +2254,11 @@ private:
             phase_s_[k] += std::chrono::duration<double>(clock::now() - t0).count();
         }
         ++step_;
+        if (reorder_due()) {  // timed with the points' phase
+            const auto t0 = clock::now();
+            reorder_points();
+            phase_s_[1] += std::chrono::duration<double>(clock::now() - t0).count();
+        }
     }
     // The fast kernel's point phase: eq. 6, 7a/7b and eq. 7, 8 in one pass, by threads
     // (advance_parted) or by one.
@@ -2581,6 +2608,12 @@ inline void Simulation::create_points() {
         }
     mass0_ = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) mass0_ += groups_[p_.group[k]].mass;
+    made_ = p_.size();
+    if (sc_.reorder > 0) {  // reorder_points' room, so that the steps allocate nothing
+        sorted_.reserve(made_);
+        cell_count_.assign(std::size_t(mx_) * std::size_t(my_) + 1, 0);
+        sort_buf_.resize(made_ * sizeof(double));
+    }
 }
 
 // ---------------------------------------------------- the reference cycle ---
@@ -3684,6 +3717,49 @@ inline void Simulation::remove_departed() {
         if (cell[k] >= 0) cell[w++] = cell[k];
     p_.cell.resize(w);
     departed_ = 0;
+}
+
+// REORDER n: every n steps, at the end of the step, the points' storage is sorted by the
+// cell they lie in, and by id within a cell (a counting sort by cell, then an insertion
+// sort of each cell's few points by id). Points are made cell by cell; as they flow,
+// neighbours in storage stop being neighbours on the lattice, and the fast point loop,
+// which walks runs of points sharing a cell, loses its runs. Only the storage changes: the
+// cycle is the same, but its sums over points (eq. 7, 8 into cells; the energy account)
+// take their terms in storage order, so the results differ from an unsorted run in the
+// last bits (the reference kernel sorts at the same steps, and gives the fast kernels'
+// bits). Writers list the points by id (by_id), a state file keeps the storage order.
+inline void Simulation::reorder_points() {
+    const std::size_t n = p_.size();
+    const std::int32_t* cell = p_.cell.data();
+    const std::int32_t* id = p_.id.data();
+    std::fill(cell_count_.begin(), cell_count_.end(), 0);
+    for (std::size_t k = 0; k < n; ++k) ++cell_count_[std::size_t(cell[k]) + 1];
+    for (std::size_t c = 1; c < cell_count_.size(); ++c) cell_count_[c] += cell_count_[c - 1];
+    sorted_.resize(n);  // within the capacity reserved at set-up
+    for (std::size_t k = 0; k < n; ++k) sorted_[std::size_t(cell_count_[std::size_t(cell[k])]++)] = std::int32_t(k);
+    // Sorted by cell now; by id within each cell (the runs are short and mostly in order).
+    for (std::size_t a = 1; a < n; ++a) {
+        const std::int32_t k = sorted_[a];
+        std::size_t b = a;
+        while (b > 0 && cell[sorted_[b - 1]] == cell[k] && id[sorted_[b - 1]] > id[k]) {
+            sorted_[b] = sorted_[b - 1];
+            --b;
+        }
+        sorted_[b] = k;
+    }
+    // Every array of a point's state in the new order (the scratch arrays hold nothing
+    // between steps); cell last, since the loop above reads it.
+    unsigned char* buf = sort_buf_.data();
+    auto permute = [&](const char* name, auto& v, Points::Use, bool state) {
+        if (!state || v.empty() || std::strcmp(name, "cell") == 0) return;
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        for (std::size_t k = 0; k < n; ++k) std::memcpy(buf + k * sizeof(T), &v[std::size_t(sorted_[k])], sizeof(T));
+        std::memcpy(v.data(), buf, n * sizeof(T));
+    };
+    p_.each_array(permute);
+    for (std::size_t k = 0; k < n; ++k) std::memcpy(buf + k * sizeof(std::int32_t), &cell[sorted_[k]], sizeof(std::int32_t));
+    std::memcpy(p_.cell.data(), buf, n * sizeof(std::int32_t));
+    parts_known_ = false;  // advance_parted's chunks were ranges of the old order
 }
 
 // eq. 7 (cell mass) and eq. 8 (stress smeared over the cell, sum V sigma / L^2; kept
@@ -4837,7 +4913,7 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
         u.grid = u.step = u.materials = u.clusters = u.motion = true;
         return d;
     }
-    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_mapping = false, have_hourglass = false, have_advect = false;
+    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_mapping = false, have_hourglass = false, have_advect = false, have_reorder = false;
     Pos last{file, 1, 1};
     int cluster_cards = 0;
     for (std::size_t ci = 0; ci < lx.cards.size() && !have_end; ++ci) {
@@ -4971,6 +5047,9 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
         } else if (kw == "HOURGLASS") {
             once(have_hourglass);
             r.fields("HOURGLASS", sc, 0);
+        } else if (kw == "REORDER") {
+            once(have_reorder);
+            r.fields("REORDER", sc, 0);
         } else if (kw == "MAPPING") {
             once(have_mapping);
             sc.mapping_pos = kp;
@@ -5127,7 +5206,8 @@ inline void write_points_frame(std::FILE* f, const Simulation& sim, bool first) 
     if (!first) fmt::format_to(std::back_inserter(b), "\n\n");
     fmt::format_to(std::back_inserter(b), "# step {} time {:.9g}\n", sim.step_count(), sim.time());
     const bool plastic = !p.plastic_shear.empty();
-    for (std::size_t k = 0; k < p.size(); ++k) {
+    for (const std::int32_t slot : sim.by_id()) {  // by id, whatever the storage order (REORDER)
+        const std::size_t k = std::size_t(slot);
         fmt::format_to(std::back_inserter(b), "{:.9g} {:.9g} {:.7g} {:.7g} {:.7g} {:.7g} {:.6g} {} {} {}\n", p.x[k], p.y[k], p.sxx[k], p.syy[k],
                        p.sxy[k], p.szz[k], plastic ? p.plastic_shear[k] : 0.0, plastic ? int(p.yielded[k]) : 0, sim.material_id(k), p.id[k]);
         if (b.size() > (1 << 20)) { std::fwrite(b.data(), 1, b.size(), f); b.clear(); }
@@ -5269,6 +5349,7 @@ inline void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<dou
     using detail::VtkArray;
     const Points& p = sim.points();
     const std::size_t n = p.size();
+    const std::vector<std::int32_t>& order = sim.by_id();  // the points listed by id
     const bool plastic = !p.plastic_shear.empty();
     const int mx = sim.mx();
     const double L = sim.cell_size(), dt = sim.scene().dt_s;
@@ -5297,23 +5378,23 @@ inline void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<dou
         return id < v0.size() ? v0[id] : 0.0;
     };
     const VtkArray point_data[] = {
-        {VtkArray::F64, "stress", 9, [&](std::size_t k, int c) {
+        {VtkArray::F64, "stress", 9, [&](std::size_t r, int c) { const std::size_t k = std::size_t(order[r]);
              const double t[9] = {p.sxx[k], p.sxy[k], 0, p.sxy[k], p.syy[k], 0, 0, 0, p.szz[k]};
              return t[c];
          }},
-        {VtkArray::F64, "ep", 1, [&](std::size_t k, int) { return plastic ? p.plastic_shear[k] : 0.0; }},
-        {VtkArray::U8, "yielded", 1, [&](std::size_t k, int) { return plastic ? double(p.yielded[k]) : 0.0; }},
-        {VtkArray::I32, "material", 1, [&](std::size_t k, int) { return double(sim.material_id(k)); }},
-        {VtkArray::F64, "velocity", 3, [&](std::size_t k, int c) {
+        {VtkArray::F64, "ep", 1, [&](std::size_t r, int) { const std::size_t k = std::size_t(order[r]); return plastic ? p.plastic_shear[k] : 0.0; }},
+        {VtkArray::U8, "yielded", 1, [&](std::size_t r, int) { const std::size_t k = std::size_t(order[r]); return plastic ? double(p.yielded[k]) : 0.0; }},
+        {VtkArray::I32, "material", 1, [&](std::size_t r, int) { const std::size_t k = std::size_t(order[r]); return double(sim.material_id(k)); }},
+        {VtkArray::F64, "velocity", 3, [&](std::size_t r, int c) { const std::size_t k = std::size_t(order[r]);
              if (c == 2) return 0.0;
              double dx, dy;
              step_of(k, dx, dy);
              return (c == 0 ? dx : dy) / dt;
          }},
-        {VtkArray::F64, "displacement", 3, [&](std::size_t k, int c) { return c == 0 ? p.x[k] - origin(x0, k) : c == 1 ? p.y[k] - origin(y0, k) : 0.0; }},
-        {VtkArray::I32, "id", 1, [&](std::size_t k, int) { return double(p.id[k]); }},
+        {VtkArray::F64, "displacement", 3, [&](std::size_t r, int c) { const std::size_t k = std::size_t(order[r]); return c == 0 ? p.x[k] - origin(x0, k) : c == 1 ? p.y[k] - origin(y0, k) : 0.0; }},
+        {VtkArray::I32, "id", 1, [&](std::size_t r, int) { const std::size_t k = std::size_t(order[r]); return double(p.id[k]); }},
     };
-    const VtkArray coords = {VtkArray::F64, "Points", 3, [&](std::size_t k, int c) { return c == 0 ? p.x[k] : c == 1 ? p.y[k] : 0.0; }};
+    const VtkArray coords = {VtkArray::F64, "Points", 3, [&](std::size_t r, int c) { const std::size_t k = std::size_t(order[r]); return c == 0 ? p.x[k] : c == 1 ? p.y[k] : 0.0; }};
     const VtkArray cells[] = {{VtkArray::I64, "connectivity", 1, [](std::size_t k, int) { return double(k); }},
                               {VtkArray::I64, "offsets", 1, [](std::size_t k, int) { return double(k + 1); }},
                               {VtkArray::U8, "types", 1, [](std::size_t, int) { return 1.0; }}};  // VTK_VERTEX

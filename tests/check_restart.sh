@@ -105,6 +105,9 @@ stopped_and_continued() {  # DECK TAG
 stopped_and_continued "$tmp/r.deck" ""
 sed 's/^END/MAPPING SMOOTH\nEND/' "$tmp/r.deck" >"$tmp/rs.deck"
 stopped_and_continued "$tmp/rs.deck" "smooth: "
+# REORDER 7: the state keeps the points' storage order (sorted at step 56, not at 60)
+sed 's/^END/REORDER 7\nEND/' "$tmp/r.deck" >"$tmp/rr.deck"
+stopped_and_continued "$tmp/rr.deck" "reorder: "
 
 # --- 2. SIGINT: the state of the interrupted step, continued ---
 cat >"$tmp/long.deck" <<'EOF'

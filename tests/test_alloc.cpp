@@ -86,6 +86,11 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
     s.mapping = Mapping::Smooth;  // points as squares, over every cell they overlap
     CHECK(news_in_steps(s, 200) == 0);
     CHECK(news_in_steps(s, 50, false, Kernel::Reference) == 0);
+    s.mapping = Mapping::Paper;
+    s.reorder = 3;  // the points' storage sorted by cell every third step
+    CHECK(news_in_steps(s, 200) == 0);
+    CHECK(news_in_steps(s, 20, true) == 0);
+    CHECK(news_in_steps(s, 50, false, Kernel::Reference) == 0);
 }
 
 TEST_CASE("no allocation inside the time step when points leave the lattice") {
@@ -115,6 +120,7 @@ TEST_CASE("no allocation inside the time step with two threads, once the thread 
     Scene s = deck("decks/bench_mohr.deck", 20);
     for (const Mapping mapping : {Mapping::Paper, Mapping::Smooth}) {
         s.mapping = mapping;
+        s.reorder = mapping == Mapping::Paper ? 5 : 0;
         Simulation sim(s);
         sim.step();
         g_news = 0;

@@ -1023,6 +1023,22 @@ TEST_CASE("deck error: a bad MOTION or HOURGLASS card") {
     CHECK_ONE_ERROR(plus("HOURGLASS 0.1\nHOURGLASS 0.2"), 6, 1, "HOURGLASS is given twice");
 }
 
+TEST_CASE("deck: REORDER n sorts the points' storage every n steps; never by default") {
+    CHECK(read_ok(kBase).reorder == 0);
+    CHECK(read_ok(plus("REORDER 50")).reorder == 50);
+    CHECK(read_ok(plus("reorder 0")).reorder == 0);
+    Scene s = read_ok(kBase);
+    CHECK(lpfdm::apply_setting(s, "REORDER.N", 7).empty());
+    CHECK(s.reorder == 7);
+}
+
+TEST_CASE("deck error: a bad REORDER card") {
+    CHECK_ONE_ERROR(plus("REORDER -1"), 5, 9, "steps between sorts of the points must lie in [0, 1000000000], found '-1'");
+    CHECK_ONE_ERROR(plus("REORDER 2.5"), 5, 9, "steps between sorts of the points must be a whole number, found '2.5'");
+    CHECK_ONE_ERROR(plus("REORDER"), 5, 8, "missing field: steps between sorts of the points");
+    CHECK_ONE_ERROR(plus("REORDER 1\nREORDER 2"), 6, 1, "REORDER is given twice");
+}
+
 TEST_CASE("deck: ADVECT chooses how the nodal increments follow the material; EQ12 by default") {
     CHECK(read_ok(kBase).advect == lpfdm::Advect::Eq12);
     CHECK(read_ok(plus("ADVECT eq12")).advect == lpfdm::Advect::Eq12);

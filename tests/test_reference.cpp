@@ -183,9 +183,14 @@ TEST_CASE("the options no shipped deck uses, on a flowing column and a hopper: t
         Scene h = base;
         h.hourglass = 0.05;
         compare_kernels(std::string(deck) + " HOURGLASS", h, steps);
-        Scene m = base;  // (every kernel runs the reference cycle for it: this guards a fast version to come)
+        Scene m = base;
         m.mapping = Mapping::Smooth;
         compare_kernels(std::string(deck) + " MAPPING SMOOTH", m, steps);
+        m.reorder = 3;
+        compare_kernels(std::string(deck) + " MAPPING SMOOTH REORDER 3", m, steps);
+        Scene r = base;  // the storage sorted by cell every step
+        r.reorder = 1;
+        compare_kernels(std::string(deck) + " REORDER 1", r, steps);
     }
 }
 
