@@ -21,7 +21,7 @@ help:
 	@echo "make figures  run the paper's three scenes and draw them into $(OUT)/"
 	@echo "make verify   verification ladder (both mappings for column, PSC, footing): out/verify.tsv, work-precision and convergence plots"
 	@echo "make fuzz     fuzz the deck reader with libFuzzer (FUZZ_SECONDS, default 1800)"
-	@echo "make bench    particle-steps/s on the benchmark scenes, 1 and 2 threads, against the plain loop"
+	@echo "make bench    particle-steps/s on the benchmark scenes (two of them whole runs), 1 and 2 threads, against the reference kernel"
 	@echo "make clean    remove what the build made"
 
 # Missing Debian packages are installed when running as root; otherwise the exact
@@ -110,7 +110,7 @@ verify: lpfdm
 	bash tools/verify.sh ./lpfdm $(OUT)
 	VERIFY_MAPPING=SMOOTH VERIFY_APPEND=1 bash tools/verify.sh ./lpfdm $(OUT) column psc footing
 
-# Speed on the named benchmark scenes (decks/bench_*.deck), with the plain loop beside it.
+# Speed on the named benchmark scenes (decks/bench_*.deck), with the reference kernel beside it.
 bench: lpfdm
 	bash tools/bench.sh ./lpfdm 5
 

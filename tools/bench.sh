@@ -1,68 +1,199 @@
 #!/usr/bin/env bash
-# make bench: particle-steps per second on the named benchmark scenes, 1 and 2 threads
-# (their runs interleaved), median of 5 runs (with min and max), the ratio of the two
-# medians, peak memory, bytes per point and the time split by phase. With git history,
-# the same scenes also run on the plain serial loop the optimised cycle replaced
-# (BEFORE, default the commit that introduced the benchmark's predecessor), side by
-# side, and the ratio is printed; and the same program with the
-# points, cells and nodes one at a time instead of four per AVX2 register (--no-avx2),
-# with that ratio.
-#   bash tools/bench.sh [EXE] [RUNS]
+# make bench: particle-steps per second on the benchmark scenes (decks/bench_*.deck),
+# one table at the end.
+#   bash tools/bench.sh [EXE] [RUNS]          (default ./lpfdm, 5 runs per median)
+# Every figure is the median of RUNS runs (min and max go to stderr with the details).
+#
+# Two kinds of scene:
+#   - the 400-step scenes of 65 536 points, and the same at 1 048 576 points with
+#     --refine 4 --steps 60 (bench_elastic.deck, bench_mohr.deck): speed at one moment of
+#     a run; 1 and 2 threads (their runs interleaved), the reference kernel (the plain
+#     cycle, one thread, --kernel reference) on the same steps, the program with points,
+#     cells and nodes one at a time (--no-avx2) and, with git history, the plain serial
+#     loop of commit BEFORE, compiled by this script;
+#   - whole runs (bench_peer.deck: an elastic block brought to rest, 2000 steps;
+#     bench_flow.deck: a collapse in full flow, 4000 steps): the whole run, its first
+#     10 % of steps (a run of those steps) and its last 10 % (the state saved by one run
+#     of 90 % of the steps, OUTPUT STATE, continued with --restart), each with 1 and 2
+#     threads; the reference kernel on the same first and last 10 % (it is slow: not
+#     the whole run); and the result of the run (the peer scene's sigma_yy error against
+#     the column at rest, the flow's front travel in cells and fraction yielded).
+# The whole-run scenes are timed by --profile: particle-steps over the sum of the times
+# of the phases of the cycle (the steps alone: not the frames and the state written).
+# The ratio to the reference kernel, measured in the same run, is what compares across
+# machines; the absolute figures do not.
+#
+# Environment:
+#   BENCH_SCENES="elastic-65k mohr-65k elastic-1M mohr-1M peer flow"  the scenes to run
+#                (default all: about 6 minutes with RUNS=3 on an idle machine of 2 cores,
+#                10 with 5; much longer if another program holds a core, where two
+#                threads can run several times slower than one)
+#   BEFORE=4fdf066   the commit whose plain serial loop is built for the 400-step scenes;
+#                BEFORE= (empty) skips it
 set -u
 cd "$(dirname "$0")/.."
 exe=${1:-./lpfdm}; runs=${2:-5}
-before_rev=${BEFORE:-4fdf066}
+before_rev=${BEFORE-4fdf066}
+want=${BENCH_SCENES:-elastic-65k mohr-65k elastic-1M mohr-1M peer flow}
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-# name | deck | extra options (the million-point scenes run fewer steps)
+load_start=$(cut -d' ' -f1-3 /proc/loadavg)
+# name | deck | extra options | kind (short: the deck's steps as they are; whole: whole-run measures)
 scenes=(
-  "elastic-65k|decks/bench_elastic.deck|"
-  "mohr-65k|decks/bench_mohr.deck|"
-  "elastic-1M|decks/bench_elastic.deck|--refine 4 --steps 60"
-  "mohr-1M|decks/bench_mohr.deck|--refine 4 --steps 60"
+  "elastic-65k|decks/bench_elastic.deck||short"
+  "mohr-65k|decks/bench_mohr.deck||short"
+  "elastic-1M|decks/bench_elastic.deck|--refine 4 --steps 60|short"
+  "mohr-1M|decks/bench_mohr.deck|--refine 4 --steps 60|short"
+  "peer|decks/bench_peer.deck||whole"
+  "flow|decks/bench_flow.deck||whole"
 )
+log() { echo "$*" >&2; }
+command -v "$exe" >/dev/null 2>&1 || [ -x "$exe" ] || { log "bench: no program $exe"; exit 2; }
+
 before=""
-if git rev-parse -q --verify "$before_rev^{commit}" >/dev/null 2>&1; then
+if [ -n "$before_rev" ] && git rev-parse -q --verify "$before_rev^{commit}" >/dev/null 2>&1; then
   mkdir -p "$tmp/before"
   git show "$before_rev:lpfdm.hpp" >"$tmp/before/lpfdm.hpp" && git show "$before_rev:lpfdm.cpp" >"$tmp/before/lpfdm.cpp" &&
     g++ -std=c++17 -O2 -o "$tmp/before/lpfdm" "$tmp/before/lpfdm.cpp" -lfmt && before="$tmp/before/lpfdm"
 fi
-rate() {  # exe, threads, deck, options -> particle-steps/s of one run
+
+rate() {  # exe, threads, deck, options -> particle-steps/s of one run (the program's summary line)
   OMP_NUM_THREADS=$2 "$1" -o "$tmp/o" $4 "$3" 2>/dev/null | sed -nE 's/.* ([0-9.e+]+) particle-steps\/s.*/\1/p'
+}
+# timed STEPS THREADS DIR OPTIONS... : one run with --profile, STEPS steps run;
+# prints "rate peak_MiB bytes_per_point phases", rate = points x STEPS / (sum of the
+# phase times), or "-" when the run failed. Writes DIR/stdout.
+timed() {
+  local steps=$1 t=$2 dir=$3; shift 3
+  mkdir -p "$dir"
+  OMP_NUM_THREADS=$t "$exe" --profile -o "$dir" "$@" >"$dir/stdout" 2>"$dir/stderr"
+  awk -v steps="$steps" '
+    /^profile: threads/ { for (i = 1; i <= NF; i++) { if ($i == "memory") mib = $(i + 1); if ($(i + 1) == "bytes") bpp = $i } }
+    /^profile: [a-z_]+ +[0-9.]+ s / { sum += $3; ph = ph sprintf(" %s %s", $2, $3) }
+    /^lpfdm: [0-9]+ steps/ { pts = $4; wall = $6; r = $8; for (i = 1; i < NF; i++) if ($i == "outflow") out = $(i + 1) + 0 }
+    END {
+      if (sum <= 0 || pts == "") { print "- - -"; exit }
+      # points x steps (the bench scenes keep every point); the summary'"'"'s figure if some left
+      ps = (out == 0) ? pts * steps : r * wall
+      printf "%.4g %s %s%s\n", ps / sum, mib, bpp, ph
+    }' "$dir/stdout"
 }
 stats() {  # numbers on stdin -> "median min max"
   grep -E '^[0-9]' | sort -g | awk '{a[NR]=$1} END {if (NR == 0) {print "- - -"; exit} m = (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2; printf "%.3g %.3g %.3g\n", m, a[1], a[NR]}'
 }
-printf "%-12s %-7s %10s %10s %10s %9s %9s\n" scene threads median min max "peak_MiB" "B/point"
+ratio() { awk -v a="$1" -v b="$2" 'BEGIN { if (a + 0 > 0 && b + 0 > 0) printf "%.2f", a / b; else printf "-" }'; }
+med() { echo "${1%% *}"; }
+# col FILE K: column K of FILE's lines (the runs of one measure)
+col() { cut -d' ' -f"$2" "$1"; }
+
+rows=()
 for sc in "${scenes[@]}"; do
-  IFS='|' read -r name deck opts <<<"$sc"
-  # One and two threads interleaved, run by run, so that a slow spell of the machine
-  # falls on both and their ratio (the target is 1.7) holds.
-  pair=$(for r in $(seq "$runs"); do a=$(rate "$exe" 1 "$deck" "$opts"); b=$(rate "$exe" 2 "$deck" "$opts"); echo "${a:--} ${b:--}"; done)
-  for t in 1 2; do
-    med=$(cut -d' ' -f"$t" <<<"$pair" | stats)
-    prof=$(OMP_NUM_THREADS=$t "$exe" --profile -q -o "$tmp/o" $opts "$deck" 2>/dev/null)
-    mem=$(sed -nE 's/.*peak memory ([0-9.]+) MiB, ([0-9.]+) bytes per point.*/\1 \2/p' <<<"$prof")
-    gain=""
-    if [ "$t" = 1 ]; then one=${med%% *}
-    elif [ "$one" != - ] && [ "${med%% *}" != - ]; then
-      gain="   (two threads / one $(awk -v a="${med%% *}" -v b="$one" 'BEGIN {printf "%.2f", a / b}'))"
+  IFS='|' read -r name deck opts kind <<<"$sc"
+  case " $want " in *" $name "*) ;; *) continue ;; esac
+  log "== $name ($deck $opts)"
+  if [ "$kind" = short ]; then
+    # One and two threads interleaved, run by run, so that a slow spell of the machine
+    # falls on both and their ratio (the target is 1.7) holds; --profile gives the peak
+    # memory and the phases.
+    : >"$tmp/r1"; : >"$tmp/r2"; : >"$tmp/m1"; : >"$tmp/m2"
+    for r in $(seq "$runs"); do
+      for t in 1 2; do
+        OMP_NUM_THREADS=$t "$exe" --profile -o "$tmp/o" $opts "$deck" >"$tmp/p$t" 2>/dev/null
+        sed -nE 's/.* ([0-9.e+]+) particle-steps\/s.*/\1/p' "$tmp/p$t" >>"$tmp/r$t"
+        sed -nE 's/.*peak memory ([0-9.]+) MiB, ([0-9.]+) bytes per point.*/\1 \2/p' "$tmp/p$t" >>"$tmp/m$t"
+        [ "$r" = 1 ] && log "   $t thread(s), phases [s]:$(awk '/^profile: [a-z_]+ +[0-9.]+ s / { printf " %s %s", $2, $3 }' "$tmp/p$t")"
+      done
+    done
+    pts=$(sed -nE 's/^lpfdm: [0-9]+ steps, ([0-9]+) points.*/\1/p' "$tmp/p1"); steps=$(sed -nE 's/^lpfdm: ([0-9]+) steps.*/\1/p' "$tmp/p1")
+    one=$(stats <"$tmp/r1"); two=$(stats <"$tmp/r2")
+    log "   1 thread  $one (median min max)"; log "   2 threads $two"
+    mem1=$(col "$tmp/m1" 1 | stats); mem2=$(col "$tmp/m2" 1 | stats); bpp=$(col "$tmp/m1" 2 | stats)
+    # The reference kernel, the plain loop of BEFORE (if built) and one-thread runs of the
+    # program, interleaved run by run; then the program one value at a time against the default.
+    : >"$tmp/f"; : >"$tmp/ref"; : >"$tmp/bef"
+    for r in $(seq "$runs"); do
+      rate "$exe" 1 "$deck" "$opts" >>"$tmp/f"
+      rate "$exe" 1 "$deck" "$opts --kernel reference" >>"$tmp/ref"
+      [ -n "$before" ] && rate "$before" 1 "$deck" "$opts" >>"$tmp/bef"
+    done
+    fast=$(stats <"$tmp/f"); ref=$(stats <"$tmp/ref"); bef=$(stats <"$tmp/bef")
+    log "   1 thread  $fast (again, beside the reference kernel $ref and the plain loop of ${before_rev:-none} $bef)"
+    narrow="- - -"; wide="- - -"
+    if "$exe" --help 2>/dev/null | grep -q -- --no-avx2; then
+      pair=$(for r in $(seq "$runs"); do echo "$(rate "$exe" 1 "$deck" "$opts --no-avx2") $(rate "$exe" 1 "$deck" "$opts")"; done)
+      narrow=$(cut -d' ' -f1 <<<"$pair" | stats); wide=$(cut -d' ' -f2 <<<"$pair" | stats)
+      log "   one value at a time $narrow, beside the default $wide"
     fi
-    printf "%-12s %-7s %10s %10s %10s %9s %9s%s\n" "$name" "$t" $med $mem "$gain"
-    echo "$prof" | grep -E "^profile: [a-z_]+ " | sed 's/^profile:/      /'
+    befcell="-"; [ -n "$before" ] && befcell="$(med "$bef") ($(ratio "$(med "$fast")" "$(med "$bef")"))"
+    rows+=("| $name | $pts | $steps | $(med "$one") | $(med "$two") ($(ratio "$(med "$two")" "$(med "$one")")x) | - | - | $(med "$ref") | $(ratio "$(med "$fast")" "$(med "$ref")") | $befcell | $(med "$narrow") ($(ratio "$(med "$wide")" "$(med "$narrow")")) | $(med "$mem1") / $(med "$mem2") | $(med "$bpp") | |")
+    continue
+  fi
+
+  # Whole-run scene: a copy of the deck that also saves its state at the end.
+  steps=$(awk 'toupper($1) == "STEP" { print $3 }' "$deck")
+  tenth=$((steps / 10)); resume=$((steps - tenth))
+  base=$(basename "$deck" .deck)
+  awk -v s="OUTPUT STATE $base.state" '/^[ \t]*[Ee][Nn][Dd]([ \t!]|$)/ && !done { print s; done = 1 } { print } END { if (!done) print s }' "$deck" >"$tmp/$base.deck"
+  copy=$tmp/$base.deck
+  # The state at 90 % of the steps (two threads: the same bytes as one), continued by every last-10 % run.
+  OMP_NUM_THREADS=2 "$exe" -q -o "$tmp/$name-state" --steps "$resume" "$copy" 2>/dev/null
+  state=$tmp/$name-state/$base.state
+  [ -s "$state" ] || log "   no state written at step $resume: the last 10 % is not measured"
+  for m in whole1 whole2 first1 first2 last1 last2 reffirst reflast; do : >"$tmp/$m"; done
+  for r in $(seq "$runs"); do
+    # interleaved run by run, so that a slow spell of the machine falls on all of them
+    timed "$steps" 1 "$tmp/$name-w1-$r" "$copy" >>"$tmp/whole1"
+    timed "$steps" 2 "$tmp/$name-w2-$r" "$copy" >>"$tmp/whole2"
+    timed "$tenth" 1 "$tmp/$name-f1" --steps "$tenth" "$copy" >>"$tmp/first1"
+    timed "$tenth" 2 "$tmp/$name-f2" --steps "$tenth" "$copy" >>"$tmp/first2"
+    timed "$tenth" 1 "$tmp/$name-f0" --kernel reference --steps "$tenth" "$copy" >>"$tmp/reffirst"
+    if [ -s "$state" ]; then
+      timed "$tenth" 1 "$tmp/$name-l1" --restart "$state" "$copy" >>"$tmp/last1"
+      timed "$tenth" 2 "$tmp/$name-l2" --restart "$state" "$copy" >>"$tmp/last2"
+      timed "$tenth" 1 "$tmp/$name-l0" --kernel reference --restart "$state" "$copy" >>"$tmp/reflast"
+    fi
+    [ "$r" -lt "$runs" ] && rm -rf "$tmp/$name-w1-$r" "$tmp/$name-w2-$r"  # (the last run's table is measured below)
   done
-  if [ -n "$before" ]; then
-    old=$(for r in $(seq "$runs"); do rate "$before" 1 "$deck" "$opts"; done | stats)
-    new1=$(for r in $(seq "$runs"); do rate "$exe" 1 "$deck" "$opts"; done | stats)
-    printf "%-12s %-7s %10s %10s %10s   (plain serial loop of %s; ratio now/before %s)\n" "$name" before $old "$before_rev" \
-      "$(awk -v a="${new1%% *}" -v b="${old%% *}" 'BEGIN {printf "%.2f", a / b}')"
+  pts=$(sed -nE 's/^lpfdm: [0-9]+ steps, ([0-9]+) points.*/\1/p' "$tmp/$name-w1-$runs/stdout")
+  for m in whole1 whole2 first1 first2 last1 last2 reffirst reflast; do
+    eval "$m=\$(col \"\$tmp/$m\" 1 | stats)"
+    log "   $(printf '%-9s' "$m") $(eval echo "\$$m") (median min max)"
+  done
+  for m in whole1 first1 last1 reffirst reflast; do
+    [ -s "$tmp/$m" ] && log "   $(printf '%-9s' "$m") phases [s] of its first run:$(head -1 "$tmp/$m" | cut -d' ' -f4-)"
+  done
+  mem1=$(col "$tmp/whole1" 2 | stats); mem2=$(col "$tmp/whole2" 2 | stats); bpp=$(col "$tmp/whole1" 3 | stats)
+  # The result of the run, from the point table of the last one-thread whole run.
+  table=$tmp/$name-w1-$runs/${base}_points.txt
+  check="-"
+  if [ -s "$table" ]; then
+    case $name in
+    peer)
+      # sigma_yy against the column at rest, -rho g (H - Y), at each point's height at
+      # step 0, relative L2 error over all points (tools/verify_column.awk)
+      check=$(awk -v H=32 -v rho=2000 -v g=9.81 -v E=1e7 -v nu=0.3 -f tools/verify_column.awk "$table" |
+        awk '{ printf "syy L2 error %.2f %%", 100 * $3 }') ;;
+    flow)
+      # the front (99 % of the points behind it, tools/verify_front.awk) at step 0 and at
+      # the end, in cells; the fraction of the points that have yielded at the end
+      L=$(awk 'toupper($1) == "GRID" { print $4 }' "$deck")
+      f0=$(awk '/^# step/ { f++ } f == 1' "$table" | awk -f tools/verify_front.awk)
+      f1=$(awk -f tools/verify_front.awk "$table")
+      y=$(awk '/^# step/ { n = s = 0; next } /^[0-9-]/ { n++; s += $8 } END { if (n) printf "%.1f", 100 * s / n }' "$table")
+      check=$(awk -v a="$f0" -v b="$f1" -v L="$L" -v y="$y" 'BEGIN { split(a, p, " "); split(b, q, " ")
+        printf "front +%.0f cells (farthest point +%.0f), %s %% yielded", (q[1] - p[1]) / L, (q[2] - p[2]) / L, y }') ;;
+    esac
   fi
-  # The same program with points, cells and nodes one at a time instead of four per AVX2 register
-  # (the same output), interleaved with runs of the default, one thread.
-  if "$exe" --help 2>/dev/null | grep -q -- --no-avx2; then
-    pair=$(for r in $(seq "$runs"); do echo "$(rate "$exe" 1 "$deck" "$opts --no-avx2") $(rate "$exe" 1 "$deck" "$opts")"; done)
-    narrow=$(cut -d' ' -f1 <<<"$pair" | stats); wide=$(cut -d' ' -f2 <<<"$pair" | stats)
-    printf "%-12s %-7s %10s %10s %10s   (points one at a time; ratio AVX2/one at a time %s)\n" "$name" no-avx2 $narrow \
-      "$(awk -v a="${wide%% *}" -v b="${narrow%% *}" 'BEGIN {printf "%.2f", a / b}')"
-  fi
+  log "   $check"
+  rows+=("| $name | $pts | $steps | $(med "$whole1") | $(med "$whole2") ($(ratio "$(med "$whole2")" "$(med "$whole1")")x) | $(med "$first1") / $(med "$first2") | $(med "$last1") / $(med "$last2") | $(med "$reffirst") / $(med "$reflast") (10 %) | $(ratio "$(med "$first1")" "$(med "$reffirst")") / $(ratio "$(med "$last1")" "$(med "$reflast")") | - | - | $(med "$mem1") / $(med "$mem2") | $(med "$bpp") | $check |")
 done
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load now $(cut -d' ' -f1-3 /proc/loadavg)"
+
+echo
+echo "Particle-steps/s, median of $runs runs, $($exe --version 2>/dev/null | head -1)$(git rev-parse -q --short HEAD >/dev/null 2>&1 && echo " (commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- lpfdm.hpp lpfdm.cpp 2>/dev/null || echo ' with changes'))")."
+echo "Whole-run scenes: first / last 10 % of the steps; the reference kernel (one thread) on those same steps, and the ratio of one thread to it on each."
+echo "The ratio to the reference kernel compares across machines; the absolute figures do not."
+echo
+echo "| scene | points | steps | 1 thread | 2 threads | first 10 %, 1 / 2 threads | last 10 %, 1 / 2 threads | reference kernel | 1 thread / reference | plain loop of ${before_rev:--} (ratio) | one at a time (ratio) | peak MiB, 1 / 2 threads | bytes per point | result |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+printf '%s\n' "${rows[@]}" | sed -E 's/e\+0?([0-9])/e\1/g'  # 4.12e+07 -> 4.12e7
+echo
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load average before the runs $load_start, at the end $(cut -d' ' -f1-3 /proc/loadavg) (the benchmark's own runs count in it: 1 to 2)"
