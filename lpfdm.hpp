@@ -63,6 +63,8 @@
 //   3 reference_nodal_forces  eq. 8, the transpose of eq. 5, eq. 10
 //   4 reference_compensate    eq. 12 (or ADVECT POINTS)
 //   5 reference_integrate     eq. 13-14, fixed nodes, moving walls, kinetic energy
+//   then, every REORDER steps, reorder_points: the points' storage sorted by cell (not
+//   physics: the order in which the sums of eq. 7-8 take the points; every kernel sorts)
 //
 // SECTIONS OF THIS FILE, in order: types; numerics; materials and the equations;
 // lattice and points; checks; the cycle (Simulation; the reference cycle; the fast
@@ -429,7 +431,7 @@ struct Scene {
     double gravity_x = 0, gravity_y = 0;
     double damping = 0;                 // alpha of eq. 14
     std::uint64_t seed = 1;
-    long reorder = 0;                   // REORDER n: the points' storage sorted by cell every n steps (0: never)
+    long reorder = 50;                  // REORDER n: the points' storage sorted by cell every n steps (0: never)
     double dt_s = 0;
     long steps = 0;
     std::vector<Output> outputs;
@@ -540,7 +542,7 @@ inline const DeckCard kDeckCards[] = {
     {"MAPPING", "PAPER|SMOOTH", "", "a point in the cell holding its centre (the paper), or shared by the cells its square overlaps (no jump at cell edges)"},
     {"ADVECT", "EQ12|POINTS", "", "how increments follow the material: eq. 12, or carried by the points"},
     {"SEED", "", "", "seed of the strength scatter"},
-    {"REORDER", "", "", "sort the points' storage by cell every n steps (0: never), for speed as points flow"},
+    {"REORDER", "", "", "sort the points' storage by cell every n steps (default 50; 0: never), for speed as points move"},
     {"STEP", "", "", "n steps of dt seconds"},
     {"OUTPUT", "POINTS|HISTORY|VTU|STATE file", "[BINARY] [NODES]", "a point table, a history, a VTK series (VTU) or a restart file (STATE), every n steps"},
     {"END", "", "", "the end of the deck (optional)"},

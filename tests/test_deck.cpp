@@ -1023,9 +1023,9 @@ TEST_CASE("deck error: a bad MOTION or HOURGLASS card") {
     CHECK_ONE_ERROR(plus("HOURGLASS 0.1\nHOURGLASS 0.2"), 6, 1, "HOURGLASS is given twice");
 }
 
-TEST_CASE("deck: REORDER n sorts the points' storage every n steps; never by default") {
-    CHECK(read_ok(kBase).reorder == 0);
-    CHECK(read_ok(plus("REORDER 50")).reorder == 50);
+TEST_CASE("deck: REORDER n sorts the points' storage every n steps; every 50 by default") {
+    CHECK(read_ok(kBase).reorder == 50);
+    CHECK(read_ok(plus("REORDER 20")).reorder == 20);
     CHECK(read_ok(plus("reorder 0")).reorder == 0);
     Scene s = read_ok(kBase);
     CHECK(lpfdm::apply_setting(s, "REORDER.N", 7).empty());

@@ -183,7 +183,9 @@ MirrorDefect mirror_run(const Scene& s) {
 // the order of a cell, with the histories' forces and energies still mirrored; the others
 // keep it to round-off. MAPPING SMOOTH's slot discharge mixes the points it sends through
 // the slot (each point's share changes with every neighbour's position): there only the
-// history (the outflow) is compared.
+// history (the outflow) is compared, and at the end one point in a thousand may have left
+// through the slot in one image and not yet in the other (with REORDER's default sort
+// every 50 steps, which sums a cell's points in another order in each image, one did).
 TEST_CASE("every verification deck and its mirror image give mirror-image results with the default choices [slow]") {
     struct Case {
         const char* deck;
@@ -201,7 +203,8 @@ TEST_CASE("every verification deck and its mirror image give mirror-image result
             const std::string name = std::string(c.deck) + (smooth ? " (MAPPING SMOOTH)" : "");
             MESSAGE(name << ": points moved up to " << d.travel << " L; mirror defect: position " << d.position << " L, stress " << d.stress
                          << " of the largest, histories " << d.global << "; unmatched points " << d.unmatched);
-            CHECK(d.unmatched == 0);
+            if (mixing) CHECK(double(d.unmatched) <= 1e-3 * count_points(s));
+            else CHECK(d.unmatched == 0);
             if (c.yields_damped || (smooth && std::string(c.deck) == "decks/verify_collapse.deck")) {
                 CHECK(d.position < 1e-3);
                 CHECK(d.stress < 1e-2);
