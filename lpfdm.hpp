@@ -2381,7 +2381,6 @@ private:
     void mark_wall_cells();
     void contact_side(WallState& ws) const;
     void support_work(std::size_t n, double b, double c, double f, double& w, double& h) const;
-    bool embedded_line(const WallState& ws) const;
     void drive_embedded(WallState& ws, double ddx, double ddy, double& hw, Range& wall_nodes);
     bool empty_beyond(int i, int j, int di, int dj) const;
     void hold_by_walls(double x0, double y0, double& x, double& y) const;
@@ -3750,17 +3749,14 @@ inline void Simulation::reorder_points() {
         sorted_[b] = k;
     }
     // Every array of a point's state in the new order (the scratch arrays hold nothing
-    // between steps); cell last, since the loop above reads it.
+    // between steps).
     unsigned char* buf = sort_buf_.data();
-    auto permute = [&](const char* name, auto& v, Points::Use, bool state) {
-        if (!state || v.empty() || std::strcmp(name, "cell") == 0) return;
+    p_.each_array([&](const char*, auto& v, Points::Use, bool state) {
+        if (!state || v.empty()) return;
         using T = typename std::decay_t<decltype(v)>::value_type;
         for (std::size_t k = 0; k < n; ++k) std::memcpy(buf + k * sizeof(T), &v[std::size_t(sorted_[k])], sizeof(T));
         std::memcpy(v.data(), buf, n * sizeof(T));
-    };
-    p_.each_array(permute);
-    for (std::size_t k = 0; k < n; ++k) std::memcpy(buf + k * sizeof(std::int32_t), &cell[sorted_[k]], sizeof(std::int32_t));
-    std::memcpy(p_.cell.data(), buf, n * sizeof(std::int32_t));
+    });
     parts_known_ = false;  // advance_parted's chunks were ranges of the old order
 }
 
@@ -4251,9 +4247,8 @@ inline Range Simulation::impose_supports() {
             return d > 0 && past > 1e-9 ? 1 : d < 0 && past < -1e-9 ? -1 : 0;
         };
         const int li = lead(ws.dx, ddx, ws.shift_i), lj = lead(ws.dy, ddy, ws.shift_j);
-        const bool embedded = embedded_line(ws);
-        if (embedded) drive_embedded(ws, ddx, ddy, hw, wall_nodes);
-        for (std::size_t q = 0; q < ws.base_i.size() && !embedded; ++q)
+        if (ws.embedded) drive_embedded(ws, ddx, ddy, hw, wall_nodes);
+        for (std::size_t q = 0; q < ws.base_i.size() && !ws.embedded; ++q)
             for (int b = 0; b <= std::abs(lj); ++b)
                 for (int a = 0; a <= std::abs(li); ++a) {
                     const int i = ws.base_i[q] + ws.shift_i + a * li, j = ws.base_j[q] + ws.shift_j + b * lj;
@@ -4368,10 +4363,6 @@ inline void Simulation::contact_side(WallState& ws) const {
     (column ? ws.side_x : ws.side_y) = side;
     ws.embedded = before && after;
 }
-
-// A row or column of nodes with material on both sides (a wall inside a cluster, as the
-// paper's cap): held by drive_embedded.
-inline bool Simulation::embedded_line(const WallState& ws) const { return ws.embedded; }
 
 // A wall inside the material drives the material line it started on, wherever that line
 // now lies between two lines of nodes: the increment interpolated there (linearly, as the

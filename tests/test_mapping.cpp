@@ -179,13 +179,11 @@ TEST_CASE("MAPPING SMOOTH: a free surface of a compressed specimen keeps its loa
 
 namespace {
 
-// Sand (c = 0, phi = 30 deg) 6 m x 4 m against a vertical wall at x = 2 m on a rough base,
-// settled under gravity with the wall held, then the wall moved away (to -x) by `cells`
-// cells. Returns the most points found behind the wall's face at any sample.
-long retaining(bool smooth, double cells, double& mass_error) {
-    const double L = 0.5;
+// Sand (c = 0, phi = 30 deg, rho = 2000) 6 m x 4 m against a vertical wall at x = 2 m on
+// a rough base, a smooth side at x = 8 m, cells of L on a 8 m x 6 m lattice, damping 0.8.
+Scene retaining_scene(double L, bool smooth) {
     Scene s;
-    s.mx = 16; s.my = 12; s.cell_m = L;
+    s.mx = int(8 / L); s.my = int(6 / L); s.cell_m = L;
     s.materials.push_back(Material::mohr(1, 2e7, 0.3, 2000, 30, 0));
     s.clusters.push_back({1, {2, 0, 8, 4}, 2, {}});
     s.fixes.push_back({kFixX | kFixY, {0, 0, 8, 0}, {}});
@@ -193,7 +191,26 @@ long retaining(bool smooth, double cells, double& mass_error) {
     Wall w;
     w.id = 1; w.box = {2, L, 2, 5}; w.smooth = smooth;
     s.walls.push_back(w);
-    s.gravity_y = -9.81; s.damping = 0.8; s.dt_s = 1.4e-3; s.steps = 1;
+    s.gravity_y = -9.81; s.damping = 0.8; s.steps = 1;
+    return s;
+}
+
+// The points behind the wall's face (x < 2 m moved with the wall) now.
+long points_behind(const Simulation& sim) {
+    const Points& p = sim.points();
+    const double face = 2 + sim.walls()[0].dx;
+    long behind = 0;
+    for (std::size_t k = 0; k < p.size(); ++k) behind += p.x[k] < face;
+    return behind;
+}
+
+// retaining_scene at L = 0.5 m, settled under gravity with the wall held, then the wall
+// moved away (to -x) by `cells` cells. Returns the most points found behind the wall's
+// face at any sample.
+long retaining(bool smooth, double cells, double& mass_error) {
+    const double L = 0.5;
+    Scene s = retaining_scene(L, smooth);
+    s.dt_s = 1.4e-3;
     REQUIRE(validate(s).empty());
     Simulation sim(s);
     for (int n = 0; n < 1000; ++n) sim.step();  // settle
@@ -203,11 +220,7 @@ long retaining(bool smooth, double cells, double& mass_error) {
     long worst = 0;
     for (long n = 1; n <= steps; ++n) {
         sim.step();
-        const Points& p = sim.points();
-        const double face = 2 + sim.walls()[0].dx;
-        long behind = 0;
-        for (std::size_t k = 0; k < p.size(); ++k) behind += p.x[k] < face;
-        worst = std::max(worst, behind);
+        worst = std::max(worst, points_behind(sim));
     }
     mass_error = sim.mass_inside() + sim.mass_outflow() - sim.mass_initial();
     CHECK(sim.mass_outflow() == 0.0);
@@ -300,8 +313,8 @@ TEST_CASE("a symmetric column collapses symmetrically with MOTION CENTRE, and wi
 
 namespace {
 
-// Sand (c = 0, phi = 30 deg, rho = 2000) 6 m wide and H = 4 m high behind a vertical wall
-// at x = 2 m, on a rough base, L = 0.25 m; settled under gravity with the wall held, then
+// retaining_scene's sand (6 m wide, H = 4 m high) at L = 0.25 m with MAPPING SMOOTH;
+// settled under gravity with the wall held, then
 // the wall moved away from it at 5 mm/s by 1 m (4 cells): slowly over its first 0.25 m,
 // where the force is read, then at 5 cm/s. The force the wall takes, averaged over 0.05 to
 // 0.25 m of travel (1.25 % to 6 % of H: the active state, reached at a few tenths of a
@@ -311,17 +324,8 @@ struct Retained {
     long behind = -1;
 };
 Retained retained(bool smooth_wall) {
-    const double L = 0.25;
-    Scene s;
-    s.mx = 32; s.my = 24; s.cell_m = L;
-    s.materials.push_back(Material::mohr(1, 2e7, 0.3, 2000, 30, 0));
-    s.clusters.push_back({1, {2, 0, 8, 4}, 2, {}});
-    s.fixes.push_back({kFixX | kFixY, {0, 0, 8, 0}, {}});
-    s.fixes.push_back({kFixX, {8, L, 8, 6}, {}});
-    Wall w;
-    w.id = 1; w.box = {2, L, 2, 5}; w.smooth = smooth_wall;
-    s.walls.push_back(w);
-    s.gravity_y = -9.81; s.damping = 0.8; s.mapping = Mapping::Smooth; s.steps = 1;
+    Scene s = retaining_scene(0.25, smooth_wall);
+    s.mapping = Mapping::Smooth;
     s.dt_s = 0.5 * stable_dt(s);
     REQUIRE(validate(s).empty());
     Simulation sim(s);
@@ -336,11 +340,7 @@ Retained retained(bool smooth_wall) {
             sim.step();
             const double travel = -sim.walls()[0].dx;
             if (v < 0.01 && travel > 0.05) { sum += sim.walls()[0].fx; ++count; }
-            const Points& p = sim.points();
-            const double face = 2 + sim.walls()[0].dx;
-            long now = 0;
-            for (std::size_t k = 0; k < p.size(); ++k) now += p.x[k] < face;
-            behind = std::max(behind, now);
+            behind = std::max(behind, points_behind(sim));
         }
     }
     r.force = sum / double(count);
