@@ -12,14 +12,9 @@
 # build of the program, not for a sanitizer build, whose name contains "san")
 # Needs clang and libomp-dev (make test installs them). Last line "warnings: N passed, M failed".
 set -u
+. "$(dirname "$0")/lib.sh"
 cd "$(dirname "$0")/.." || exit 2
-case $(basename "${1:-}") in
-    *san* | "")
-        echo "warnings: the check runs once, for the plain build of the program; nothing to do for ${1:-(no program)}"
-        echo "warnings: 0 passed, 0 failed"
-        exit 0
-        ;;
-esac
+plain_build_only warnings "${1:-}"
 passed=0 failed=0
 fail() { echo "FAIL warnings $1"; failed=$((failed + 1)); }
 cxx=

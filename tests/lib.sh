@@ -1,5 +1,18 @@
 # Shared by the program-level checks (sourced, not run).
 
+# plain_build_only LABEL ARG: a check that runs once, for the plain build of the program
+# (its own builds, not the program's): for a sanitizer build, or no program, it says so,
+# counts nothing and exits 0.
+plain_build_only() {
+    case $(basename "${2:-}") in
+        *san* | "")
+            echo "$1: the check runs once, for the plain build of the program; nothing to do for ${2:-(no program)}"
+            echo "$1: 0 passed, 0 failed"
+            exit 0
+            ;;
+    esac
+}
+
 # need_program LABEL ARGS...: the checks take one argument, the program. Sets exe to its
 # absolute path (the checks change directory), or exits: status 2 with the usage when the
 # arguments are wrong, status 1 with one failure and "LABEL: 0 passed, 1 failed" when it
