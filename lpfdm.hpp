@@ -55,6 +55,8 @@
 //                                                               Simulation::strain_at
 //   the cycle  steps 1-5 in order                                Simulation::step_reference
 //   boundaries fixed directions, moving walls (section 3)        Simulation::impose_supports
+//   earthquakes ground motion (SHAKE), absorbing edges (ABSORB)   Simulation::ground_step,
+//              (not in the paper)                               dynamics_begin, absorb_increments
 //
 // THE REFERENCE CYCLE, one step (Simulation::step_reference, about 250 lines)
 //   1 reference_cell_strains  eq. 5 in every cell with mass, and its rotation
@@ -174,6 +176,17 @@
 //   * The energy account (Simulation::energy) uses the leapfrog's own kinetic energy
 //     (m du_old . du_new / 2 dt^2) and trapezoidal nodal works, so an undamped linear step
 //     conserves it exactly; strain energy and plastic work are the points' (V from eq. 8).
+//   * Earthquakes (SHAKE, ABSORB; not in the paper, FLAC's dynamic option): the ground's
+//     velocity at each half step is the record's exact integral up to that time (linear
+//     between samples), its increment that velocity times dt, as eq. 13 integrates a node;
+//     the fixed nodes in a shaken direction take that increment. The lattice does not move
+//     with the ground (its displacement should stay small against L). Dashpots -C v act on
+//     the step's mean velocity (b + c) / 2 dt, solved for c (stable at any C): the explicit
+//     form, -C b / dt, is unstable once C dt / m > 2, which an edge node of a cell barely
+//     filled reaches at any dt. A compliant base's input is Joyner and Chen's traction
+//     2 rho c v_in at the start of the step. At START an absorbing edge's fixed nodes are
+//     released and keep their reaction as a constant force (FLAC does the same). Local
+//     damping acts on absolute velocities (as in FLAC), with SHAKE's DAMPING from START.
 //   * Stability: dt must not exceed L sqrt(rho / ((M + lambda)(1 + alpha))), M = K + 4G/3,
 //     lambda = K - 2G/3: below L / c_p, the limit of a full lattice, because a lone cell
 //     has a faster mode and local damping stiffens the fastest one (see stable_dt).
@@ -377,6 +390,28 @@ struct Wall {
     bool smooth = false;
 };
 
+// Ground motion (SHAKE, an earthquake): an acceleration record a(t) in one direction. Its
+// time 0 falls at model time START; before it and after its last sample the ground's
+// acceleration is zero, between samples linear. Rigid (the default): every node fixed in
+// that direction moves with the ground, by the increments of the record integrated as eq.
+// 13 integrates a node (v += a dt, du = v dt). COMPLIANT: the fixed nodes stay; the record
+// enters through the lattice's bottom edge as a stress wave (Joyner and Chen: a traction
+// 2 rho c v_in, c = c_s across x and c_p along y, on a base that absorbs as ABSORB BOTTOM).
+// BASELINE takes a linear trend c0 + c1 t off the record's acceleration so that the
+// ground's velocity and displacement, integrated step by step, end at zero (to rounding).
+struct Shake {
+    int dir = 1;                     // kFixX or kFixY
+    std::string file;                // the motion file, as the card names it
+    std::vector<double> t, a;        // the record: time [s] (increasing, >= 0), acceleration [m/s^2]
+    double scale = 1;                // SCALE: the record times this
+    double start = 0;                // START: the model time of the record's time 0 [s]
+    double damping = -1;             // DAMPING: local damping alpha from START on (< 0: the deck's)
+    bool compliant = false, baseline = false;
+    Pos pos;
+};
+// Edges of the lattice (ABSORB).
+enum : int { kBottom = 1, kTop = 2, kLeft = 4, kRight = 8 };
+
 struct Output {
     enum Kind { Points, History, Vtu, State } kind = Points;
     std::string file;  // VTU: the series' name (NAME.pvd, NAME_<step>.vtu)
@@ -428,6 +463,9 @@ struct Scene {
     std::vector<Cluster> clusters;
     std::vector<Fix> fixes;
     std::vector<Wall> walls;
+    std::vector<Shake> shakes;          // SHAKE cards (at most one per direction)
+    int absorb = 0;                     // ABSORB: edges with viscous dashpots (kBottom | kTop | kLeft | kRight)
+    Pos absorb_pos;
     double gravity_x = 0, gravity_y = 0;
     double damping = 0;                 // alpha of eq. 14
     std::uint64_t seed = 1;
@@ -515,6 +553,9 @@ inline const DeckKey kDeckKeys[] = {
     {"REORDER",   "N",       "steps between sorts of the points", "REORDER n",        false, true,  true,  0,      1e9,        false, false, true,  "",         0,   0, LPFDM_OF(reorder)},
     {"STEP",      "DT",      "dt (s)",              "the time step dt",  false, true,  true,  0,      kHuge,      true,  true,  false, "",         0,   0, LPFDM_OF(dt_s)},
     {"STEP",      "N",       "number of steps",     "number of steps",   false, true,  true,  1,      1e9,        false, false, true,  "",         0,   0, LPFDM_OF(steps)},
+    {"SHAKE",     "SCALE",   "SCALE (the record times this)", "SCALE", true, false, true, -kHuge, kHuge,      true,  true,  false, "",         1,   0, LPFDM_AT(shakes, scale)},
+    {"SHAKE",     "START",   "START (model time of the record's time 0, s)", "START", true, false, true, 0, kHuge, false, true,  false, "",         0,   0, LPFDM_AT(shakes, start)},
+    {"SHAKE",     "DAMPING", "DAMPING (local damping alpha from START on)", "SHAKE DAMPING", true, false, true, 0, 1, false, true, false, "",     -1,   0, LPFDM_AT(shakes, damping)},
     {"OUTPUT",    "EVERY",   "EVERY n",             "EVERY n",           true,  false, true,  1,      1e9,        false, false, true,  "",         0,   0, LPFDM_AT(outputs, every)},
 };
 #undef LPFDM_AT
@@ -535,6 +576,8 @@ inline const DeckCard kDeckCards[] = {
     {"CLUSTER", "", "", "PPC x PPC points in every cell whose centre lies in the box [m]"},
     {"FIX", "X|Y|XY", "", "nodes in the box held in that direction"},
     {"WALL", "", "[SMOOTH|ROUGH]", "nodes in the box driven at (VX, VY) m/s; a line inside the material drives the material line it started on, others pass to the next line of nodes after each cell; no point crosses its faces; SMOOTH: a line driven across itself only"},
+    {"SHAKE", "X|Y FILE=motion.txt", "[COMPLIANT] [BASELINE]", "ground acceleration history (time s, m/s^2): fixed nodes move with the ground, or COMPLIANT: it enters through an absorbing base"},
+    {"ABSORB", "BOTTOM|TOP|LEFT|RIGHT ...", "", "viscous dashpots rho c_p (normal) and rho c_s (shear) on those edges of the lattice: outgoing waves leave"},
     {"GRAVITY", "", "", "gravity [m/s^2]"},
     {"DAMPING", "", "", "local non-viscous damping, eq. 13-14"},
     {"HOURGLASS", "", "", "viscous control of the checkerboard mode eq. 5 cannot see (0: off)"},
@@ -662,7 +705,7 @@ inline std::string deck_help() {
         line.resize(std::max<std::size_t>(line.size() + 1, 58), ' ');
         out += line + c.meaning + "\n";
     }
-    out += "--set keys (CARD.KEY; MATERIAL and WALL by id, CLUSTER, FIX and OUTPUT by order from 1):\n";
+    out += "--set keys (CARD.KEY; MATERIAL and WALL by id, CLUSTER, FIX, SHAKE and OUTPUT by order from 1):\n";
     for (const DeckCard& c : kDeckCards) {
         const std::vector<std::string> keys = key_names(c.name, 0, true);
         if (!keys.empty()) out += std::string("  ") + c.name + ": " + joined(keys) + "\n";
@@ -1458,10 +1501,11 @@ inline void node_span(double a, double b, double L, int n, int& lo, int& hi) {
 // Measured (tests/test_hard.cpp): the limit at alpha = 0.8 is 0.74-0.75 of L / c_p,
 // predicted 0.745; a lone cell at nu = 0.25 0.866, predicted sqrt(3/4).
 inline double stable_dt(const Scene& s) {
-    double dt = std::numeric_limits<double>::infinity();
+    double dt = std::numeric_limits<double>::infinity(), alpha = std::max(0.0, s.damping);
+    for (const Shake& k : s.shakes) alpha = std::max(alpha, k.damping);  // the damping from START on
     for (const auto& m : s.materials) {
         const double K = m.bulk(), G = m.shear(), M = K + 4 * G / 3, lam = K - 2 * G / 3;
-        const double k = (lam >= 0 ? M + lam : 2 * G) * (1 + std::max(0.0, s.damping));
+        const double k = (lam >= 0 ? M + lam : 2 * G) * (1 + alpha);
         dt = std::min(dt, s.cell_m * std::sqrt(m.rho / k));
     }
     return dt;
@@ -1532,8 +1576,8 @@ inline std::string apply_setting(Scene& s, const std::string& key_in, double v) 
             if ((card == "MATERIAL" ? s.materials[i].id : s.walls[i].id) == num) { index = i; found = true; }
         if (!found) return "no " + card + " with id " + std::to_string(num);
         if (card == "MATERIAL") model = s.materials[index].model == Model::MohrCoulomb ? kMohr : kElastic;
-    } else if (card == "CLUSTER" || card == "FIX" || card == "OUTPUT") {
-        count = card == "CLUSTER" ? s.clusters.size() : card == "FIX" ? s.fixes.size() : s.outputs.size();
+    } else if (card == "CLUSTER" || card == "FIX" || card == "OUTPUT" || card == "SHAKE") {
+        count = card == "CLUSTER" ? s.clusters.size() : card == "FIX" ? s.fixes.size() : card == "SHAKE" ? s.shakes.size() : s.outputs.size();
         if (num < 1 || std::size_t(num) > count) return "there is no " + card + " number " + std::to_string(num) + " (cards of a kind count from 1)";
         index = std::size_t(num - 1);
     }
@@ -1564,6 +1608,19 @@ struct Unread {
     bool clusters = false;   // a CLUSTER card bad, or none at all (the reader said so)
     bool motion = false;     // a MOTION or ADVECT card bad: which pair was meant is unknown
 };
+
+// What is wrong with a SHAKE card's record (an empty string if nothing): at least two
+// samples, finite, times from 0 on and increasing.
+inline std::string record_problem(const Shake& k) {
+    if (k.t.size() != k.a.size()) return "has " + std::to_string(k.t.size()) + " times and " + std::to_string(k.a.size()) + " accelerations";
+    if (k.t.size() < 2) return "needs at least two samples (it has " + std::to_string(k.t.size()) + ")";
+    for (std::size_t i = 0; i < k.t.size(); ++i) {
+        if (!std::isfinite(k.t[i]) || !std::isfinite(k.a[i])) return "holds a value that is not a finite number (sample " + std::to_string(i + 1) + ")";
+        if (k.t[i] < 0) return "starts before time 0 (sample " + std::to_string(i + 1) + ")";
+        if (i > 0 && !(k.t[i] > k.t[i - 1])) return "does not increase in time (sample " + std::to_string(i + 1) + ")";
+    }
+    return "";
+}
 
 // Everything that would make a scene unrunnable, with the card each problem came from.
 // All problems are reported, not the first; what `unread` names is not checked again.
@@ -1655,6 +1712,27 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
             if (node_count(i) > 0) { err(w.pos, "the wall's nodes include fixed nodes (FIX at line " + std::to_string(f.pos.line) + ")"); break; }
         }
     }
+    for (std::size_t a = 0; a < s.shakes.size(); ++a) {
+        const Shake& k = s.shakes[a];
+        keys("SHAKE", a, k.pos, 0);
+        const std::string problem = record_problem(k);
+        if (!problem.empty()) err(k.pos, "the motion record " + problem);
+        if (k.dir != kFixX && k.dir != kFixY) err(k.pos, "a SHAKE card shakes X or Y");
+        for (std::size_t b = 0; b < a; ++b) {
+            const Shake& o = s.shakes[b];
+            if (o.dir == k.dir) err(k.pos, std::string("the ground is shaken in ") + (k.dir == kFixX ? "X" : "Y") + " twice (SHAKE at line " + std::to_string(o.pos.line) + ")");
+            else if (o.start != k.start || o.damping != k.damping || o.compliant != k.compliant)
+                err(k.pos, "the SHAKE cards must agree on START, DAMPING and COMPLIANT (line " + std::to_string(o.pos.line) + " differs)");
+        }
+    }
+    for (const Shake& k : s.shakes) {
+        bool held = false;
+        for (const Fix& f : s.fixes) held |= (f.dirs & k.dir) != 0;
+        if (!k.compliant && !held)
+            err(k.pos, std::string("SHAKE ") + (k.dir == kFixX ? "X" : "Y") + " moves the nodes fixed in " + (k.dir == kFixX ? "X" : "Y") +
+                           ", and no FIX card holds that direction (or make it COMPLIANT: through an absorbing base)");
+    }
+    if (s.absorb & ~(kBottom | kTop | kLeft | kRight)) err(s.absorb_pos, "ABSORB names BOTTOM, TOP, LEFT or RIGHT");
     if (s.advect == Advect::Points && s.mapping == Mapping::Smooth)
         err(s.advect_pos, "ADVECT POINTS carries increments cell by cell: it works with MAPPING PAPER only");
     if (s.advect == Advect::Points && s.motion == Motion::Paper && !unread.motion)
@@ -1898,16 +1976,19 @@ public:
     //             eq. 7a/7b instead: gravity + w_gravity is what the mapping gains or loses);
     //   d_damping dissipated by local damping (eq. 13, 14);
     //   d_plastic dissipated by the plastic returns (Points::plastic_work);
-    //   error     (w_walls + w_fixes - kinetic - strain - gravity - d_damping - d_plastic)
-    //             / max(|w_walls + w_fixes|, kinetic + |strain| + |gravity|, the largest
-    //             kinetic energy so far, d_damping + d_plastic): energy the discrete cycle
+    //   error     (w_walls + w_fixes + w_ground - kinetic - strain - gravity - d_damping - d_plastic
+    //             - d_absorb) / max(|w_walls + w_fixes + w_ground|, kinetic + |strain| + |gravity|, the
+    //             largest kinetic energy so far, d_damping + d_plastic + d_absorb): energy the discrete cycle
     //             created (< 0) or lost (> 0), as a fraction of the energy in play.
     // Nodal works are trapezoidal in time (the force at t and t + dt on the increment between).
     // Points that left the lattice keep the strain and potential energy they left with;
     // the kinetic energy of their nodes is lost and shows in the error. A user model's
     // dissipation is not known: its points count as elastic.
+    //   w_ground  work of the ground motion (SHAKE: the shaken fixed nodes, or a compliant
+    //             base's input traction); d_absorb  energy the dashpots of ABSORB took out.
     struct Energy {
         double kinetic = 0, strain = 0, gravity = 0, w_walls = 0, w_fixes = 0, w_gravity = 0, d_damping = 0, d_plastic = 0, error = 0;
+        double w_ground = 0, d_absorb = 0;
     };
     Energy energy() const;
     double reaction_x() const { return rx_; }                         // sum of fixed-node reactions [N/m]
@@ -2005,6 +2086,11 @@ public:
         }
     }
     double max_du() const { return max_du_; }                         // largest nodal increment of the last step [m]
+    // SHAKE: the ground's increment in the last step and its displacement after it [m]
+    // (axis 0: x, 1: y; zero where nothing shakes).
+    double ground_increment(int axis) const { return ground_[axis].du; }
+    double ground_displacement(int axis) const { return ground_[axis].d; }
+    bool dynamic() const { return dynamic_; }                          // the scene shakes or absorbs (SHAKE, ABSORB)
 
     // Restart files (write_state, read_state). What a step reads from the steps before it,
     // besides the scene and the points: f(name, member) for the step count and the running
@@ -2044,6 +2130,7 @@ public:
         chunk_team_ = 0;
         p_.each_array([&](const char*, auto& v, Points::Use, bool state) { if (!state && !v.empty()) v.resize(p_.size()); });
         mark_wall_cells();  // the cells the walls' faces may be crossed from, at the travel read
+        if (dynamic_) replay_ground();  // the ground's motion to this step, and the edges released at START
     }
 
     // The phases of step(), in order; public so that tests and lessons can step
@@ -2073,6 +2160,11 @@ private:
         f("energy_kinetic", e.kinetic); f("energy_peak_kinetic", e.peak_kinetic);
         f("energy_left_strain", e.left_strain); f("energy_left_potential", e.left_potential); f("energy_left_plastic", e.left_plastic);
         f("energy_strain0", e.strain0); f("energy_potential0", e.potential0);
+        if (s.dynamic_) {  // SHAKE, ABSORB (the ground's own motion is replayed: resumed())
+            f("energy_w_ground", e.w_ground); f("energy_h_ground", e.h_ground); f("energy_h_input", e.h_input);
+            f("energy_d_absorb", e.d_absorb); f("energy_h_absorb", e.h_absorb); f("energy_w_held", e.w_held); f("energy_h_held", e.h_held);
+            f("absorb_hold_x", s.hold_fx_); f("absorb_hold_y", s.hold_fy_);
+        }
     }
     void setup();
     void create_points();
@@ -2393,6 +2485,8 @@ private:
         double kinetic = 0, peak_kinetic = 0;                                 // now, and the most it was
         double left_strain = 0, left_potential = 0, left_plastic = 0;         // of the points that left
         double strain0 = 0, potential0 = 0;                                   // before the first step
+        double w_ground = 0, h_ground = 0, h_input = 0;                       // SHAKE: fixed nodes moved (h_ground), input traction (h_input)
+        double d_absorb = 0, h_absorb = 0, w_held = 0, h_held = 0;            // ABSORB: dashpots; the reactions taken over
     } es_;
     void start_energy();
     void keep_increments(const Range& nodes);
@@ -2407,6 +2501,34 @@ private:
         return 0.5 * std::min(p_.vol[k], g.vol0) * compliance_product(*group_consts_[p_.group[k]], s, s);
     }
     double potential_energy(std::size_t k) const { return -groups_[p_.group[k]].mass * (sc_.gravity_x * p_.x[k] + sc_.gravity_y * p_.y[k]); }
+    // Earthquakes: ground motion (SHAKE) and absorbing edges (ABSORB); see dynamics_begin.
+    struct Ground {
+        const Shake* spec = nullptr;  // the card shaking this direction (nullptr: none)
+        double c0 = 0, c1 = 0;        // BASELINE: the trend c0 + c1 t taken off the acceleration
+        std::size_t at = 0;           // the record's sample at or before the time last asked
+        double v = 0;                 // the ground's velocity at the last half step [m/s]
+        double du = 0;                // its increment this step [m]
+        double d = 0;                 // its displacement after this step [m]
+        double v_now = 0;             // its velocity at the start of this step (mean of the half steps)
+    };
+    Ground ground_[2];                // x, y
+    bool dynamic_ = false;            // the scene shakes or absorbs
+    long shake_step_ = 0;             // the first step of the shaking: START / dt, rounded up
+    double shake_damping_ = -1;       // the local damping from then on (< 0: the deck's)
+    // One dashpot per (node, edge cell) of an absorbing edge: its node's slot, the cell (it
+    // acts while the cell holds mass), its coefficients rho c L / 2 in x and y [N s/m per m],
+    // and those of a compliant base's input traction (twice them, on the bottom edge).
+    struct Dashpot { std::int32_t slot, cell; double cx, cy, ix, iy; };
+    std::vector<Dashpot> dashpots_;
+    std::vector<std::int32_t> absorb_nodes_;                       // per slot: its node
+    std::vector<std::uint8_t> released_;                           // per slot: the FIX directions it gives up at START
+    std::vector<double> absorb_cx_, absorb_cy_, input_fx_, input_fy_, hold_fx_, hold_fy_;  // per slot
+    void setup_dynamics();
+    double record_integral(Ground& g, double ta, double tb) const;
+    void ground_step(long n);
+    void replay_ground();
+    void dynamics_begin();
+    void absorb_increments();
     long step_ = 0;
     std::size_t departed_ = 0;
     double ke_ = 0, mass_in_ = 0, mass_out_ = 0, mass0_ = 0, rx_ = 0, ry_ = 0, max_du_ = 0;
@@ -2506,6 +2628,7 @@ inline void Simulation::setup() {
         fix_owner_.push_back({ox, oy});
     }
     create_points();
+    setup_dynamics();
     for (WallState& ws : walls_) contact_side(ws);
     for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
     find_mohr_groups();
@@ -2967,6 +3090,7 @@ inline void Simulation::reference_compensate() {
 // directions and moving walls; the kinetic energy summed by rows, in node order.
 inline void Simulation::reference_integrate() {
     const double dt2 = sc_.dt_s * sc_.dt_s;
+    if (dynamic_) dynamics_begin();  // the ground's step, the boundary forces (SHAKE, ABSORB)
     keep_increments({0, mx_ + 1, 0, my_ + 1});  // for the energy account
     for (std::size_t n = 0; n < nmass_.size(); ++n) {
         if (nmass_[n] == 0) { dux_[n] = duy_[n] = 0; continue; }
@@ -2974,6 +3098,7 @@ inline void Simulation::reference_integrate() {
         damped_increment(duy_[n], fy_[n], nmass_[n], dt2, sc_.damping, duy_[n]);
     }
     integrated_ = {0, mx_ + 1, 0, my_ + 1};
+    if (dynamic_) absorb_increments();  // the dashpots of ABSORB
     impose_supports();
     for (int j = 0; j <= my_; ++j) energy_row_terms(j, 0, mx_ + 1, std::false_type{});
     tally_energy(0, my_ + 1);
@@ -4111,6 +4236,7 @@ inline void Simulation::carried_row(int j, int i0, int i1) {
 inline void Simulation::integrate() {
     const Range nodes_now{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     const Range nr = nodes_now.unite(live_nodes_);
+    if (dynamic_) dynamics_begin();  // the ground's step, the boundary forces (SHAKE, ABSORB)
     keep_increments(nr);
     const double dt2 = sc_.dt_s * sc_.dt_s, alpha = sc_.damping;
     double ke = 0, maxdu = 0;
@@ -4147,6 +4273,7 @@ inline void Simulation::integrate() {
     };
     by_rows(kAdvanceRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(advance_row, j); });
     integrated_ = nr;
+    if (dynamic_) absorb_increments();  // the dashpots of ABSORB
     const Range wall_nodes = impose_supports();
     double *row_ke_of = row_ke_.data(), *row_du_of = row_du_.data();
     // The kinetic energy of row j, summed in node order, and its largest increment (nodes
@@ -4214,18 +4341,34 @@ inline Range Simulation::impose_supports() {
     double hf = 0;
     std::fill(fix_rx_.begin(), fix_rx_.end(), 0.0);
     std::fill(fix_ry_.begin(), fix_ry_.end(), 0.0);
+    // SHAKE (rigid): the nodes fixed in a shaken direction move with the ground (those
+    // with mass: a node without it touches no material), and the reaction is the force
+    // that moves them, m (c - b) / dt^2 - F; their work is the ground's.
+    const bool shake_x = ground_[0].spec && !ground_[0].spec->compliant, shake_y = ground_[1].spec && !ground_[1].spec->compliant;
+    const double dt2 = sc_.dt_s * sc_.dt_s;
+    double hg = 0;
+    auto shaken = [&](std::size_t u, double& du, double b, double f, double g, double& r, double& rf) {
+        const double m = nmass_[u];
+        du = m > 0 ? g : 0.0;
+        const double S = m > 0 ? m * (du - b) / dt2 - f : -f;
+        r += S; rf += S;
+        support_work(u, b, du, f, es_.w_ground, hg);
+    };
     for (std::size_t a = 0; a < fixed_nodes_.size(); ++a) {
         const std::size_t u = std::size_t(fixed_nodes_[a]);
-        if (fixed_[u] & kFixX) {
+        if ((fixed_[u] & kFixX) && shake_x) shaken(u, dux_[u], dux_old_[u], fx_[u], ground_[0].du, rx_, fix_rx_[std::size_t(fix_owner_[a].x)]);
+        else if (fixed_[u] & kFixX) {
             dux_[u] = 0; rx_ -= fx_[u]; fix_rx_[std::size_t(fix_owner_[a].x)] -= fx_[u];
             support_work(u, dux_old_[u], 0.0, fx_[u], es_.w_fixes, hf);
         }
-        if (fixed_[u] & kFixY) {
+        if ((fixed_[u] & kFixY) && shake_y) shaken(u, duy_[u], duy_old_[u], fy_[u], ground_[1].du, ry_, fix_ry_[std::size_t(fix_owner_[a].y)]);
+        else if (fixed_[u] & kFixY) {
             duy_[u] = 0; ry_ -= fy_[u]; fix_ry_[std::size_t(fix_owner_[a].y)] -= fy_[u];
             support_work(u, duy_old_[u], 0.0, fy_[u], es_.w_fixes, hf);
         }
     }
     es_.h_fixes = hf;
+    es_.h_ground = hg;
     for (const std::int32_t n : driven_nodes_) driven_[std::size_t(n)] = 0;
     driven_nodes_.clear();  // capacity reserved at set-up: no allocation
     Range wall_nodes{};
@@ -4288,6 +4431,201 @@ inline Range Simulation::impose_supports() {
     es_.h_walls = hw;
     mark_wall_cells();
     return wall_nodes;
+}
+
+// ------------------------------------------------ earthquakes: SHAKE, ABSORB ---
+// The integral of the ground's acceleration over the record's times [ta, tb]: the record
+// is zero outside its samples and linear between them (each piece integrated exactly),
+// SCALE applied, BASELINE's trend c0 + c1 t taken off where the record is defined.
+// g.at follows the times asked forward.
+inline double Simulation::record_integral(Ground& g, double ta, double tb) const {
+    const Shake& k = *g.spec;
+    ta = std::max(ta, k.t.front());
+    tb = std::min(tb, k.t.back());
+    if (!(tb > ta)) return 0.0;
+    while (g.at > 0 && k.t[g.at] > ta) --g.at;
+    double sum = 0;
+    for (std::size_t i = g.at; i + 1 < k.t.size() && k.t[i] < tb; ++i) {
+        const double t0 = k.t[i], t1 = k.t[i + 1], a = std::max(ta, t0), b = std::min(tb, t1);
+        if (!(b > a)) continue;
+        auto at = [&](double t) { return k.a[i] + (t - t0) / (t1 - t0) * (k.a[i + 1] - k.a[i]); };
+        sum += 0.5 * (b - a) * (at(a) + at(b));
+        if (t1 <= ta) g.at = i + 1;
+    }
+    return k.scale * sum - (g.c0 * (tb - ta) + g.c1 * 0.5 * (tb * tb - ta * ta));
+}
+
+// The ground's motion in step n (from time n dt to (n + 1) dt), integrated as eq. 13
+// integrates a node, v(n + 1/2) = v(n - 1/2) + dt a(n dt), with dt a(n dt) the record's
+// exact integral over the step's time, from (n - 1/2) dt to (n + 1/2) dt: v(n + 1/2) is
+// then the record's velocity at (n + 1/2) dt exactly (a record starting with a jump or
+// sampled coarser than dt loses nothing), du = v dt.
+inline void Simulation::ground_step(long n) {
+    const double dt = sc_.dt_s;
+    for (Ground& g : ground_) {
+        if (!g.spec) continue;
+        const double tau = double(n - shake_step_) * dt;
+        const double v0 = g.v;
+        g.v += record_integral(g, tau - 0.5 * dt, tau + 0.5 * dt);
+        g.du = g.v * dt;
+        g.d += g.du;
+        g.v_now = 0.5 * (v0 + g.v);
+    }
+}
+
+// After a restart: the ground's motion up to the step read (the same operations as the
+// run made, so the same numbers), and the edges released at START released again (their
+// reactions come from the state file).
+inline void Simulation::replay_ground() {
+    for (Ground& g : ground_) { g.at = 0; g.v = g.du = g.d = g.v_now = 0; }
+    for (long n = 0; n < step_; ++n) ground_step(n);
+    if (step_ > shake_step_)
+        for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) fixed_[std::size_t(absorb_nodes_[q])] &= std::uint8_t(~released_[q]);
+}
+
+// Ground motion and absorbing edges, made at set-up: which card shakes which direction,
+// BASELINE's trend, and the dashpots of each absorbing edge (ABSORB, and the bottom edge
+// of a COMPLIANT shake). A dashpot's impedances rho c_p and rho c_s are those of the
+// material the points of its edge cell were made of (of the nearest such cell along the
+// edge, for a cell made empty): it acts while that cell holds mass.
+inline void Simulation::setup_dynamics() {
+    dynamic_ = !sc_.shakes.empty() || sc_.absorb != 0;
+    if (!dynamic_) return;
+    const double dt = sc_.dt_s;
+    int edges = sc_.absorb;
+    for (const Shake& k : sc_.shakes) {
+        Ground& g = ground_[k.dir == kFixX ? 0 : 1];
+        g.spec = &k;
+        if (k.compliant) edges |= kBottom;
+        shake_step_ = long(std::ceil(k.start / dt - 1e-9));
+        shake_damping_ = k.damping;
+        if (!k.baseline) continue;
+        // BASELINE: the record integrated step by step as ground_step will, and the same for
+        // a = 1 and a = t where the record is defined; c0 + c1 t taken off makes the final
+        // velocity and displacement zero.
+        double va = 0, da = 0, v1 = 0, d1 = 0, vt = 0, dtt = 0;
+        for (long n = 0;; ++n) {
+            const double ta = (double(n) - 0.5) * dt, tb = (double(n) + 0.5) * dt;
+            if (ta > k.t.back()) break;
+            const double a = std::max(ta, k.t.front()), b = std::min(tb, k.t.back()), w = b > a ? b - a : 0.0;
+            va += record_integral(g, ta, tb); da += va * dt;
+            v1 += w; d1 += v1 * dt;
+            vt += b > a ? 0.5 * (b * b - a * a) : 0.0; dtt += vt * dt;
+        }
+        const double det = v1 * dtt - vt * d1;
+        if (det != 0) { g.c0 = (va * dtt - vt * da) / det; g.c1 = (v1 * da - va * d1) / det; }
+        g.at = 0;
+    }
+    // The material each edge cell's points were made of (the last cluster holding its centre).
+    auto material_of = [&](int i, int j) -> const Material* {
+        const Material* m = nullptr;
+        for (const Cluster& c : sc_.clusters) {
+            int i0, i1, j0, j1;
+            detail::cell_span(c.box.x0, c.box.x1, L_, mx_, i0, i1);
+            detail::cell_span(c.box.y0, c.box.y1, L_, my_, j0, j1);
+            if (i >= i0 && i <= i1 && j >= j0 && j <= j1) m = sc_.material(c.mat);
+        }
+        return m;
+    };
+    std::vector<std::int32_t> slot_of(std::size_t(mx_ + 1) * (my_ + 1), -1);
+    // Edge e: its cells (i, j) = start + k step, k < count, and each cell's two nodes on the edge.
+    struct Edge { int bit, i, j, di, dj, count; bool horizontal; };
+    const Edge all[] = {{kBottom, 0, 0, 1, 0, mx_, true}, {kTop, 0, my_ - 1, 1, 0, mx_, true},
+                        {kLeft, 0, 0, 0, 1, my_, false}, {kRight, mx_ - 1, 0, 0, 1, my_, false}};
+    for (const Edge& e : all) {
+        if (!(edges & e.bit)) continue;
+        std::vector<const Material*> mats(std::size_t(e.count));
+        for (int k = 0; k < e.count; ++k) mats[std::size_t(k)] = material_of(e.i + k * e.di, e.j + k * e.dj);
+        for (int k = 0; k < e.count; ++k) {
+            const Material* m = mats[std::size_t(k)];
+            for (int r = 1; !m && r < e.count; ++r) {  // the nearest cell along the edge that had material
+                if (k - r >= 0 && mats[std::size_t(k - r)]) m = mats[std::size_t(k - r)];
+                else if (k + r < e.count && mats[std::size_t(k + r)]) m = mats[std::size_t(k + r)];
+            }
+            if (!m) continue;
+            const double zp = m->rho * m->p_wave_speed() * 0.5 * L_, zs = m->rho * std::sqrt(m->shear() / m->rho) * 0.5 * L_;
+            const int ci = e.i + k * e.di, cj = e.j + k * e.dj;
+            const double cx = e.horizontal ? zs : zp, cy = e.horizontal ? zp : zs;
+            const bool in_x = e.bit == kBottom && ground_[0].spec && ground_[0].spec->compliant;
+            const bool in_y = e.bit == kBottom && ground_[1].spec && ground_[1].spec->compliant;
+            for (int side = 0; side < 2; ++side) {
+                const int ni = e.horizontal ? ci + side : (e.bit == kLeft ? 0 : mx_);
+                const int nj = e.horizontal ? (e.bit == kBottom ? 0 : my_) : cj + side;
+                const std::size_t n = std::size_t(node(ni, nj));
+                if (slot_of[n] < 0) {
+                    slot_of[n] = std::int32_t(absorb_nodes_.size());
+                    absorb_nodes_.push_back(std::int32_t(n));
+                    // A node gives up its FIX at START if every lattice edge it lies on absorbs
+                    // (a corner of a rigid base stays with the base).
+                    const int on = (nj == 0 ? kBottom : 0) | (nj == my_ ? kTop : 0) | (ni == 0 ? kLeft : 0) | (ni == mx_ ? kRight : 0);
+                    released_.push_back((on & ~edges) ? std::uint8_t(0) : fixed_[n]);
+                }
+                dashpots_.push_back({slot_of[n], cell(ci, cj), cx, cy, in_x ? 2 * cx : 0.0, in_y ? 2 * cy : 0.0});
+            }
+        }
+    }
+    for (auto* v : {&absorb_cx_, &absorb_cy_, &input_fx_, &input_fy_, &hold_fx_, &hold_fy_}) v->assign(absorb_nodes_.size(), 0.0);
+}
+
+// The start of eq. 13's phase in a scene that shakes or absorbs (both kernels): the
+// ground's step; from START on the deck's damping gives way to SHAKE's DAMPING, the
+// absorbing edges' nodes give up their FIX (each keeps the reaction it had then as a
+// constant force: the static load stays, its motion is free) and the dashpots act. The
+// nodal forces get those reactions and a compliant base's input traction 2 rho c v_in.
+inline void Simulation::dynamics_begin() {
+    ground_step(step_);
+    if (step_ < shake_step_) return;
+    if (shake_damping_ >= 0) sc_.damping = shake_damping_;
+    const bool release = step_ == shake_step_;
+    const double vx = ground_[0].v_now, vy = ground_[1].v_now;
+    for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) {
+        const std::size_t n = std::size_t(absorb_nodes_[q]);
+        if (release && released_[q]) {  // the force the support exerted: it cancelled F
+            if (released_[q] & kFixX) hold_fx_[q] = -fx_[n];
+            if (released_[q] & kFixY) hold_fy_[q] = -fy_[n];
+            fixed_[n] &= std::uint8_t(~released_[q]);
+        }
+        absorb_cx_[q] = absorb_cy_[q] = input_fx_[q] = input_fy_[q] = 0;
+    }
+    for (const Dashpot& d : dashpots_) {
+        if (cmass_[std::size_t(d.cell)] == 0) continue;
+        const std::size_t q = std::size_t(d.slot);
+        absorb_cx_[q] += d.cx; absorb_cy_[q] += d.cy;
+        input_fx_[q] += d.ix * vx; input_fy_[q] += d.iy * vy;
+    }
+    for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) {
+        const std::size_t n = std::size_t(absorb_nodes_[q]);
+        if (nmass_[n] == 0) continue;
+        fx_[n] += hold_fx_[q] + input_fx_[q];
+        fy_[n] += hold_fy_[q] + input_fy_[q];
+    }
+}
+
+// The dashpots of the absorbing edges, after eq. 13-14 gave a node the increment c0 from b:
+// a force -C v with v the step's mean velocity (b + c) / 2 dt, taken implicitly (stable at
+// any C): c (1 + beta) = c0 - beta b, beta = C dt / 2m. Directions still fixed or driven
+// are left to impose_supports. The dashpots' dissipation, the input traction's work and
+// the held reactions' work go to the energy account.
+inline void Simulation::absorb_increments() {
+    if (step_ < shake_step_) return;
+    const double dt = sc_.dt_s;
+    double ha = 0, hi = 0, hh = 0;
+    auto one = [&](std::size_t n, double C, double fin, double hold, double b, double& c) {
+        const double beta = C * dt / (2 * nmass_[n]);
+        c = (c - beta * b) / (1 + beta);
+        const double s = b + c;
+        es_.d_absorb += C * s * s / (4 * dt); ha += C * s * c / (4 * dt);
+        es_.w_ground += 0.5 * fin * s; hi += 0.5 * fin * c;
+        es_.w_held += 0.5 * hold * s; hh += 0.5 * hold * c;
+    };
+    for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) {
+        const std::size_t n = std::size_t(absorb_nodes_[q]);
+        if (nmass_[n] == 0) continue;
+        const std::uint8_t held = fixed_[n];
+        if (!(held & kFixX)) one(n, absorb_cx_[q], input_fx_[q], hold_fx_[q], dux_old_[n], dux_[n]);
+        if (!(held & kFixY)) one(n, absorb_cy_[q], input_fy_[q], hold_fy_[q], duy_old_[n], duy_[n]);
+    }
+    es_.h_absorb = ha; es_.h_input = hi; es_.h_held = hh;
 }
 
 // The cells holding the points that may cross a wall's face in the next point pass: those
@@ -4556,9 +4894,12 @@ inline Simulation::Energy Simulation::energy() const {
     e.w_gravity = es_.w_gravity - es_.h_gravity;
     e.d_damping = es_.d_damping - es_.h_damping;
     e.d_plastic = plastic + es_.left_plastic;
-    const double in = e.w_walls + e.w_fixes;
-    const double scale = std::max({std::fabs(in), e.kinetic + std::fabs(e.strain) + std::fabs(e.gravity), es_.peak_kinetic, e.d_damping + e.d_plastic});
-    e.error = scale > 0 ? (in - e.kinetic - e.strain - e.gravity - e.d_damping - e.d_plastic) / scale : 0.0;
+    e.w_ground = es_.w_ground - es_.h_ground - es_.h_input;
+    e.d_absorb = es_.d_absorb - es_.h_absorb;
+    e.w_fixes += es_.w_held - es_.h_held;  // the reactions an absorbing edge took over at START
+    const double in = e.w_walls + e.w_fixes + e.w_ground;
+    const double scale = std::max({std::fabs(in), e.kinetic + std::fabs(e.strain) + std::fabs(e.gravity), es_.peak_kinetic, e.d_damping + e.d_plastic + e.d_absorb});
+    e.error = scale > 0 ? (in - e.kinetic - e.strain - e.gravity - e.d_damping - e.d_plastic - e.d_absorb) / scale : 0.0;
     return e;
 }
 
@@ -4877,6 +5218,17 @@ public:
     void finish() {
         if (ok_ && next_ < t_.size()) fail(t_[next_].pos, "extra field '" + t_[next_].text + "'");
     }
+    // One NAME=value at the reader (more_positional() false): its two tokens, or false
+    // after an error.
+    bool one_param(const Token*& name, const Token*& value) {
+        if (!ok_ || next_ >= t_.size()) return false;
+        name = &t_[next_];
+        if (name->text == "=") { fail(name->pos, "'=' without a parameter name"); return false; }
+        if (next_ + 2 >= t_.size() || t_[next_ + 2].text == "=") { fail(t_[next_ + 1].pos, "missing value after " + upper(name->text) + "="); return false; }
+        value = &t_[next_ + 2];
+        next_ += 3;
+        return true;
+    }
 
 private:
     const std::vector<Token>& t_;
@@ -4887,6 +5239,55 @@ private:
 
 
 }  // namespace detail
+
+// The whole text of a file (what: "deck", "motion file" for the messages), or a diagnostic.
+inline Diagnostics load_file(const std::string& path, std::string& text, const char* what = "deck");
+
+// A SHAKE card's motion file into k.t, k.a: two numbers a line (time [s], acceleration
+// [m/s^2]), blanks or commas between, '#' to the end of a line a comment, times from 0 on
+// and increasing. Problems are reported at the file's line and column.
+inline Diagnostics read_motion(const std::string& path, Shake& k) {
+    std::string text;
+    Diagnostics d = load_file(path, text, "motion file");
+    if (!d.empty()) return d;
+    int line_no = 0;
+    std::size_t at = 0;
+    while (at < text.size()) {
+        std::size_t eol = text.find('\n', at);
+        if (eol == std::string::npos) eol = text.size();
+        std::string line = text.substr(at, eol - at);
+        at = eol + 1;
+        ++line_no;
+        const std::size_t hash = line.find('#');
+        if (hash != std::string::npos) line.resize(hash);
+        std::vector<std::pair<std::string, int>> words;
+        for (std::size_t c = 0; c < line.size();) {
+            if (std::strchr(" \t,\r\f\v", line[c])) { ++c; continue; }
+            const std::size_t b = c;
+            while (c < line.size() && !std::strchr(" \t,\r\f\v", line[c])) ++c;
+            words.push_back({line.substr(b, c - b), int(b) + 1});
+        }
+        if (words.empty()) continue;
+        if (words.size() != 2)
+            return one_error(path, line_no, words.size() > 2 ? words[2].second : words[0].second,
+                             fmt::format("expected two numbers, time [s] and acceleration [m/s^2]; this line has {}", words.size()));
+        double v[2];
+        for (int c = 0; c < 2; ++c) {
+            bool range = false;
+            if (!detail::parse_real(words[std::size_t(c)].first, v[c], &range) || !std::isfinite(v[c]))
+                return one_error(path, line_no, words[std::size_t(c)].second,
+                                 fmt::format("{}: expected a finite number, found '{}'", c == 0 ? "time" : "acceleration", words[std::size_t(c)].first));
+        }
+        if (v[0] < 0) return one_error(path, line_no, words[0].second, fmt::format("time {} s is before 0: the record starts at time 0 or later", words[0].first));
+        if (!k.t.empty() && !(v[0] > k.t.back()))
+            return one_error(path, line_no, words[0].second, fmt::format("time {} s does not come after the line before's {:g} s: times must increase", words[0].first, k.t.back()));
+        k.t.push_back(v[0]);
+        k.a.push_back(v[1]);
+    }
+    if (k.t.empty()) return one_error(path, 1, 1, "the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
+    if (k.t.size() < 2) return one_error(path, 1, 1, "the motion file holds one sample; a record needs at least two");
+    return {};
+}
 
 // Parses a deck (decks/README.md) into scene: every card, field and parameter checked, each
 // problem reported with file:line:column (the first problem of each card). The scene as a
@@ -4981,6 +5382,69 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
                 else if (u != "ROUGH" && w) r.fail(w->pos, "unknown word '" + w->text + "' (SMOOTH or ROUGH)" + did_you_mean(w->text, {"SMOOTH", "ROUGH"}));
             }
             if (!r.ok()) sc.walls.pop_back();
+        } else if (kw == "SHAKE") {
+            // SHAKE X|Y FILE=name [SCALE=s] [START=t] [DAMPING=alpha] [COMPLIANT] [BASELINE], the
+            // parameters and words in any order after the direction.
+            Shake k;
+            k.pos = kp;
+            const int dir = r.word_of("direction", {"X", "Y"});
+            k.dir = dir == 1 ? kFixY : kFixX;
+            sc.shakes.push_back(k);
+            const std::size_t at = sc.shakes.size() - 1;
+            const Token* file_tok = nullptr;
+            std::vector<std::string> seen;
+            const std::vector<std::string> names = {"FILE", "SCALE", "START", "DAMPING"}, words = {"COMPLIANT", "BASELINE"};
+            while (r.ok() && !r.at_end()) {
+                if (r.more_positional()) {
+                    const Token* w = r.field("COMPLIANT or BASELINE");
+                    const std::string u = upper(w->text);
+                    if (u != "COMPLIANT" && u != "BASELINE") { r.fail(w->pos, "unknown word '" + w->text + "' (COMPLIANT or BASELINE)" + did_you_mean(w->text, words)); break; }
+                    if (std::find(seen.begin(), seen.end(), u) != seen.end()) { r.fail(w->pos, u + " given twice"); break; }
+                    seen.push_back(u);
+                    (u == "COMPLIANT" ? sc.shakes[at].compliant : sc.shakes[at].baseline) = true;
+                    continue;
+                }
+                const Token *n = nullptr, *v = nullptr;
+                if (!r.one_param(n, v)) break;
+                const std::string u = upper(n->text);
+                if (std::find(names.begin(), names.end(), u) == names.end()) {
+                    r.fail(n->pos, "unknown parameter '" + n->text + "' (this card takes FILE, SCALE, START, DAMPING)" + did_you_mean(n->text, names));
+                    break;
+                }
+                if (std::find(seen.begin(), seen.end(), u) != seen.end()) { r.fail(n->pos, "parameter " + u + " given twice"); break; }
+                seen.push_back(u);
+                if (u == "FILE") { file_tok = v; continue; }
+                const DeckKey& key = *deck_key("SHAKE", u.c_str());
+                double x = 0;
+                if (!r.number(*v, u.c_str(), x)) break;
+                if (!in_range(key, x)) { r.fail(v->pos, range_message(key, x)); break; }
+                key.set(sc, at, x);
+            }
+            if (r.ok() && !file_tok) r.fail(r.end_pos(), "missing parameter FILE= (the motion file: time [s] and acceleration [m/s^2] a line)");
+            if (r.ok()) {  // the motion file, beside the deck unless its path is absolute
+                namespace fs = std::filesystem;
+                const fs::path name(file_tok->text);
+                const std::string path = name.is_absolute() ? name.string() : (fs::path(file).parent_path() / name).string();
+                sc.shakes[at].file = file_tok->text;
+                Diagnostics md = read_motion(path, sc.shakes[at]);
+                if (!md.empty()) {
+                    if (md[0].pos.line == 0) md[0].pos = file_tok->pos, md[0].message += " ('" + path + "')";  // the file itself: at the card
+                    r.fail(md[0].pos, md[0].message);
+                }
+            }
+            if (!r.ok()) sc.shakes.pop_back();
+        } else if (kw == "ABSORB") {
+            const int before = sc.absorb;
+            if (!sc.absorb) sc.absorb_pos = kp;
+            do {
+                const int e = r.word_of("edge", {"BOTTOM", "TOP", "LEFT", "RIGHT"});
+                if (e < 0) break;
+                const int bit = 1 << e;
+                static const char* const edge_names[] = {"BOTTOM", "TOP", "LEFT", "RIGHT"};
+                if (sc.absorb & bit) { r.fail(kp, std::string("ABSORB ") + edge_names[e] + " is given twice"); break; }
+                sc.absorb |= bit;
+            } while (r.ok() && !r.at_end());
+            if (!r.ok()) sc.absorb = before;
         } else if (kw == "GRAVITY") {
             once(have_gravity);
             r.fields("GRAVITY", sc, 0);
@@ -5095,16 +5559,17 @@ inline Diagnostics read_deck_text(const std::string& text, const std::string& fi
 }
 
 // The whole text of a file, or a diagnostic.
-inline Diagnostics load_file(const std::string& path, std::string& text) {
+inline Diagnostics load_file(const std::string& path, std::string& text, const char* what) {
+    const std::string the = std::string("the ") + what;
     // A deck is a regular file of reasonable size: /dev/zero or a pipe that never ends
     // must not hang the program or exhaust memory.
     constexpr std::uintmax_t kMaxDeckBytes = 64u << 20;
     std::error_code ec;
     const auto st = std::filesystem::status(path, ec);
-    if (!ec && std::filesystem::is_directory(st)) return one_error(path, 0, 0, "cannot read the deck: it is a directory");
-    if (!ec && !std::filesystem::is_regular_file(st)) return one_error(path, 0, 0, "cannot read the deck: it is not a regular file");
+    if (!ec && std::filesystem::is_directory(st)) return one_error(path, 0, 0, "cannot read " + the + ": it is a directory");
+    if (!ec && !std::filesystem::is_regular_file(st)) return one_error(path, 0, 0, "cannot read " + the + ": it is not a regular file");
     if (!ec && std::filesystem::file_size(path, ec) > kMaxDeckBytes && !ec)
-        return one_error(path, 0, 0, "the deck is larger than 64 MiB; a deck is a short text");
+        return one_error(path, 0, 0, the + " is larger than 64 MiB; a " + what + " is a short text");
     std::ifstream in(path, std::ios::binary);
     {  // a directory opens as a stream and reads as empty: ask for one byte to tell
         std::FILE* f = std::fopen(path.c_str(), "rb");
@@ -5114,13 +5579,13 @@ inline Diagnostics load_file(const std::string& path, std::string& text) {
             const bool err = got == 0 && std::ferror(f);
             const int e = errno;
             std::fclose(f);
-            if (err) return one_error(path, 0, 0, std::string("cannot read the deck: ") + (e == EISDIR ? "it is a directory" : std::strerror(e)));
+            if (err) return one_error(path, 0, 0, "cannot read " + the + ": " + (e == EISDIR ? "it is a directory" : std::strerror(e)));
         }
     }
-    if (!in) return one_error(path, 0, 0, std::string("cannot open the deck: ") + std::strerror(errno));
+    if (!in) return one_error(path, 0, 0, "cannot open " + the + ": " + std::strerror(errno));
     std::ostringstream ss;
     ss << in.rdbuf();
-    if (in.bad()) return one_error(path, 0, 0, "cannot read the deck");
+    if (in.bad()) return one_error(path, 0, 0, "cannot read " + the);
     text = ss.str();
     return {};
 }
@@ -5179,7 +5644,9 @@ inline std::string history_columns(const Simulation& sim) {
     for (const auto& w : sim.scene().walls) h += fmt::format(" w{0}_fx w{0}_fy w{0}_dx w{0}_dy", w.id);
     h += " unbal rx ry";
     for (std::size_t a = 0; a < sim.scene().fixes.size(); ++a) h += fmt::format(" f{0}_rx f{0}_ry", a + 1);
-    return h + " e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error";
+    h += " e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error";
+    if (sim.dynamic()) h += " w_ground d_absorb ground_dx ground_dy";  // SHAKE, ABSORB
+    return h;
 }
 
 // Point table: one frame; frames are separated by two blank lines.
@@ -5219,7 +5686,9 @@ inline void write_history_header(std::FILE* f, const Simulation& sim, const std:
     fmt::print(f, "#   f<n>_rx f<n>_ry = those of FIX card n (deck order; a node held by several cards counts for the first)\n");
     fmt::print(f, "#   energy [J/m] since the start (Simulation::energy): e_kin kinetic (leapfrog), e_strain elastic, e_grav potential of the points;\n");
     fmt::print(f, "#   w_walls w_fixes w_gravity work done on the material; d_damping d_plastic dissipated;\n");
-    fmt::print(f, "#   energy_error = (work in - stored - dissipated) / (energy in play), work in = w_walls + w_fixes\n");
+    fmt::print(f, "#   energy_error = (work in - stored - dissipated) / (energy in play), work in = w_walls + w_fixes{}\n", sim.dynamic() ? " + w_ground" : "");
+    if (sim.dynamic())
+        fmt::print(f, "#   w_ground work of the ground motion (SHAKE), d_absorb taken out by the dashpots (ABSORB); ground_dx ground_dy the ground's displacement [m]\n");
     fmt::print(f, "# {}\n", h);
 }
 
@@ -5231,8 +5700,11 @@ inline void write_history_row(std::FILE* f, const Simulation& sim) {
     fmt::format_to(std::back_inserter(b), " {:.6g} {:.9g} {:.9g}", sim.unbalanced_ratio(), sim.reaction_x(), sim.reaction_y());
     for (std::size_t a = 0; a < sim.scene().fixes.size(); ++a) fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g}", sim.fix_reaction_x(a), sim.fix_reaction_y(a));
     const Simulation::Energy e = sim.energy();
-    fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.6g}\n", e.kinetic, e.strain, e.gravity, e.w_walls,
+    fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.6g}", e.kinetic, e.strain, e.gravity, e.w_walls,
                    e.w_fixes, e.w_gravity, e.d_damping, e.d_plastic, e.error);
+    if (sim.dynamic())
+        fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g}", e.w_ground, e.d_absorb, sim.ground_displacement(0), sim.ground_displacement(1));
+    b.push_back('\n');
     std::fwrite(b.data(), 1, b.size(), f);
 }
 
