@@ -11,13 +11,14 @@ SAN       = $(SAN_OPT) -g1 -fsanitize=address,undefined,float-cast-overflow -fno
 PACKAGES  = libeigen3-dev libfmt-dev doctest-dev gnuplot-nox
 TESTS     = $(wildcard tests/test_*.cpp)
 
-.PHONY: all deps test-deps test demo figures verify fuzz bench clean help
+.PHONY: all deps test-deps test demo quake figures verify fuzz bench clean help
 all: lpfdm
 
 help:
 	@echo "make lpfdm    build the program (./lpfdm)"
 	@echo "make demo     build and run the collapsing cliff, draw $(OUT)/cliff.png and $(OUT)/cliff.gif"
 	@echo "make test     unit tests (-O2 and ASan+UBSan) and deck tests"
+	@echo "make quake    build and run the cliff brought down by an earthquake, draw $(OUT)/quake_cliff.png and $(OUT)/quake_cliff.gif"
 	@echo "make figures  run the paper's three scenes and draw them into $(OUT)/"
 	@echo "make verify   verification ladder (both mappings for column, PSC, footing): out/verify.tsv, work-precision and convergence plots"
 	@echo "make fuzz     fuzz the deck reader with libFuzzer (FUZZ_SECONDS, default 1800)"
@@ -103,6 +104,14 @@ demo: lpfdm
 	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.png'; title='Cliff failure (Fig. 5)'; frame=-1" tools/snapshot.gp
 	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.gif'; title='Cliff failure'; delay=25" tools/animate.gp 2>/dev/null
 	@echo "pictures: $(OUT)/cliff.png $(OUT)/cliff.gif"
+
+# The cliff of Fig. 5 standing under its own weight, then shaken down (SHAKE; decks/README.md).
+quake: lpfdm
+	@mkdir -p $(OUT)
+	./lpfdm -o $(OUT) decks/quake_cliff.deck
+	gnuplot -e "in='$(OUT)/quake_cliff_points.txt'; out='$(OUT)/quake_cliff.png'; title='Cliff shaken down'; frame=-1" tools/snapshot.gp
+	gnuplot -e "in='$(OUT)/quake_cliff_points.txt'; out='$(OUT)/quake_cliff.gif'; title='Cliff shaken down (0.4 g, 2 Hz from t = 1 s)'; delay=15" tools/animate.gp 2>/dev/null
+	@echo "pictures: $(OUT)/quake_cliff.png $(OUT)/quake_cliff.gif"
 
 # Verification ladder (resolutions, points per cell) against closed-form references.
 verify: lpfdm

@@ -1113,7 +1113,7 @@ TEST_CASE("one table of cards and keys: --help lists it, decks/README.md documen
         if (k.param) CHECK(doc.find(std::string(k.name) + "=") != std::string::npos);  // in its card's synopsis
         if (!k.settable) continue;
         // the --set table: a row "| `CARD<..>` | `KEY`, ... |"
-        const std::size_t row = doc.find(std::string("| `") + k.card + (std::strcmp(k.card, "MATERIAL") == 0 || std::strcmp(k.card, "WALL") == 0 ? "<id>` |" : std::strcmp(k.card, "CLUSTER") == 0 || std::strcmp(k.card, "FIX") == 0 || std::strcmp(k.card, "OUTPUT") == 0 ? "<n>` |" : "` |"));
+        const std::size_t row = doc.find(std::string("| `") + k.card + (std::strcmp(k.card, "MATERIAL") == 0 || std::strcmp(k.card, "WALL") == 0 ? "<id>` |" : std::strcmp(k.card, "CLUSTER") == 0 || std::strcmp(k.card, "FIX") == 0 || std::strcmp(k.card, "SHAKE") == 0 || std::strcmp(k.card, "OUTPUT") == 0 ? "<n>` |" : "` |"));
         REQUIRE(row != std::string::npos);
         const std::string line = doc.substr(row, doc.find('\n', row) - row);
         CHECK(line.find(std::string("`") + k.name + "`") != std::string::npos);
