@@ -4555,10 +4555,11 @@ inline void Simulation::setup_dynamics() {
                 if (slot_of[n] < 0) {
                     slot_of[n] = std::int32_t(absorb_nodes_.size());
                     absorb_nodes_.push_back(std::int32_t(n));
-                    // A node gives up its FIX at START if every lattice edge it lies on absorbs
-                    // (a corner of a rigid base stays with the base).
+                    // A node gives up its FIX at SHAKE's START if every lattice edge it lies on
+                    // absorbs (a corner of a rigid base stays with the base); without SHAKE
+                    // there is no moment to take its reaction at rest, and it stays fixed.
                     const int on = (nj == 0 ? kBottom : 0) | (nj == my_ ? kTop : 0) | (ni == 0 ? kLeft : 0) | (ni == mx_ ? kRight : 0);
-                    released_.push_back((on & ~edges) ? std::uint8_t(0) : fixed_[n]);
+                    released_.push_back((on & ~edges) || sc_.shakes.empty() ? std::uint8_t(0) : fixed_[n]);
                 }
                 dashpots_.push_back({slot_of[n], cell(ci, cj), cx, cy, in_x ? 2 * cx : 0.0, in_y ? 2 * cy : 0.0});
             }
@@ -5260,11 +5261,17 @@ inline Diagnostics read_motion(const std::string& path, Shake& k) {
         ++line_no;
         const std::size_t hash = line.find('#');
         if (hash != std::string::npos) line.resize(hash);
+        auto blank = [](char ch) { return ch == ' ' || ch == '\t' || ch == ',' || ch == '\r' || ch == '\f' || ch == '\v'; };
+        for (std::size_t c = 0; c < line.size(); ++c) {
+            const unsigned char ch = static_cast<unsigned char>(line[c]);
+            if ((ch < 0x20 && !blank(char(ch))) || ch == 0x7f)
+                return one_error(path, line_no, int(c) + 1, fmt::format("the motion file holds binary data (byte 0x{:02x}); it is plain text", ch));
+        }
         std::vector<std::pair<std::string, int>> words;
         for (std::size_t c = 0; c < line.size();) {
-            if (std::strchr(" \t,\r\f\v", line[c])) { ++c; continue; }
+            if (blank(line[c])) { ++c; continue; }
             const std::size_t b = c;
-            while (c < line.size() && !std::strchr(" \t,\r\f\v", line[c])) ++c;
+            while (c < line.size() && !blank(line[c])) ++c;
             words.push_back({line.substr(b, c - b), int(b) + 1});
         }
         if (words.empty()) continue;

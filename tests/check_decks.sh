@@ -179,6 +179,34 @@ head -c $((65 * 1024 * 1024)) /dev/zero | tr '\0' ' ' >"$tmp/huge.deck"
 check_not_a_deck "deck over 64 MiB" "$tmp/huge.deck" "larger than 64 MiB"
 rm -f "$tmp/huge.deck"
 
+# Motion files (SHAKE ... FILE=): missing, empty, not numbers, a line of three numbers,
+# times that go back. Exit status 2, nothing written, and the first line of stderr at the
+# motion file's own line and column (a missing file: at the card's FILE= value).
+# motion_case NAME CONTENT|- WHERE PHRASE
+motion_case() {
+    local name=$1 content=$2 where=$3 phrase=$4 deck="$tmp/quake/$1.deck"
+    mkdir -p "$tmp/quake"
+    [ "$content" = - ] || printf '%b' "$content" >"$tmp/quake/$name.txt"
+    printf 'GRID 4 4 1\nMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nCLUSTER 1 0 0 4 2\nFIX XY 0 0 4 0\nSHAKE X FILE=%s.txt\nSTEP 1E-4 10\nOUTPUT HISTORY h.txt\n' "$name" >"$deck"
+    run "motion file: $name" "$deck" || return
+    local first
+    first=$(head -n 1 "$tmp/stderr")
+    if [ $rc -ne 2 ]; then
+        fail "motion file: $name" "exit status $rc, expected 2 (stderr: $first)"
+    elif [[ $first != "$where: error: "*"$phrase"* ]]; then
+        fail "motion file: $name" "first message '$first' is not '$where: error: ...$phrase...'"
+    elif no_output "motion file: $name"; then
+        passed=$((passed + 1))
+    fi
+}
+motion_case missing - "$tmp/quake/missing.deck:5:14" "cannot open the motion file"
+motion_case empty "" "$tmp/quake/empty.txt:1:1" "holds no samples"
+motion_case comments "# time acceleration\n\n" "$tmp/quake/comments.txt:1:1" "holds no samples"
+motion_case words "0 0\n0.1 zero\n" "$tmp/quake/words.txt:2:5" "expected a finite number, found 'zero'"
+motion_case three "0 0\n0.1 1 2\n" "$tmp/quake/three.txt:2:7" "expected two numbers"
+motion_case backwards "0 0\n0.2 1\n0.1 0\n" "$tmp/quake/backwards.txt:3:1" "times must increase"
+motion_case binary "0 0\n0.1 \0\0\0\n" "$tmp/quake/binary.txt:2:5" "binary data (byte 0x00)"
+
 # The command line: --opt=value reads as --opt value; --kernel reference writes what the
 # fast kernel writes (two threads); a mistaken option or key is named with a suggestion.
 # cli NAME EXPECTED_STATUS PHRASE ARGS...: runs EXE -q ARGS into a new directory $out.

@@ -109,6 +109,12 @@ stopped_and_continued "$tmp/rs.deck" "smooth: "
 sed 's/^END/REORDER 7\nEND/' "$tmp/r.deck" >"$tmp/rr.deck"
 stopped_and_continued "$tmp/rr.deck" "reorder: "
 
+# SHAKE and ABSORB: the ground's motion (replayed on restart), the base released at START
+# (step 30) keeping its reactions (in the state), local damping switched to SHAKE's
+printf '# t a\n0 0\n0.01 20\n0.02 -30\n0.03 10\n0.05 0\n' >"$tmp/m.txt"
+sed 's/^END/SHAKE X FILE=m.txt START=0.012 DAMPING=0.1 BASELINE\nABSORB BOTTOM\nEND/' "$tmp/r.deck" >"$tmp/rq.deck"
+stopped_and_continued "$tmp/rq.deck" "quake: "
+
 # --- 2. SIGINT: the state of the interrupted step, continued ---
 cat >"$tmp/long.deck" <<'EOF'
 TITLE run to be stopped

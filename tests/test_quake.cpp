@@ -9,6 +9,9 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
 #include <vector>
 
 #include "../lpfdm.hpp"
@@ -308,4 +311,150 @@ TEST_CASE("quake: a dry slope shaken past its yield acceleration moves as Newmar
     // Below a_y nothing slides: what the crest moves is elastic and settles (under 1 cm).
     CHECK(std::hypot(qx, qy) < 0.01);
     CHECK(std::hypot(qx, qy) < 0.1 * moved);
+}
+
+namespace {
+
+// A deck text read as if it were decks/NAME (its motion files beside it): the diagnostics.
+Diagnostics read_in_decks(const std::string& text, Scene& s) { return read_deck_text(text, "decks/inline.deck", s); }
+
+// The largest kinetic energy, and the largest from time `after` on, of a run of s.
+void kinetic_peaks(const Scene& s, double after, double& peak, double& late) {
+    Simulation sim(s);
+    peak = late = 0;
+    for (long n = 0; n < s.steps; ++n) {
+        sim.step();
+        peak = std::max(peak, sim.kinetic_energy());
+        if (sim.time() >= after) late = std::max(late, sim.kinetic_energy());
+    }
+}
+
+}  // namespace
+
+TEST_CASE("quake: ABSORB RIGHT lets a P wave leave a bar that a free end would send back") {
+    // A bar 60 m long, every node held vertically (one-dimensional compression), pushed at
+    // its left end by the pulse: the wave travels at c_p = sqrt(M / rho) = 173 m/s and
+    // reaches the right end at 0.35 s; by 0.6 s it has gone through it, or come back.
+    const std::string bar = "GRID 60 2 1.0\nMATERIAL 1 ELASTIC E=5E7 NU=0.25 RHO=2000\nCLUSTER 1 0 0 60 2\nFIX Y 0 0 60 2\nFIX X 0 0 0 2\n"
+                            "SHAKE X FILE=quake_pulse.txt\nSTEP 2E-3 500\n";
+    Scene open, absorbing;
+    REQUIRE(read_in_decks(bar, open).empty());
+    REQUIRE(read_in_decks(bar + "ABSORB RIGHT\n", absorbing).empty());
+    double peak_o, late_o, peak_a, late_a;
+    kinetic_peaks(open, 0.6, peak_o, late_o);
+    kinetic_peaks(absorbing, 0.6, peak_a, late_a);
+    MESSAGE("P wave: kinetic energy after 0.6 s " << 100 * late_a / peak_a << " % of its peak with ABSORB RIGHT, " << 100 * late_o / peak_o
+                                                  << " % with a free end");
+    CHECK(late_a < 0.02 * peak_a);
+    CHECK(late_o > 0.5 * peak_o);
+}
+
+TEST_CASE("quake: an absorbing edge released at START keeps a column at rest under gravity") {
+    // Brought to rest by damping 0.8 with fixed sides and base; at START = 4 s the edges
+    // absorb, their nodes free, each keeping the reaction it had; SCALE=0: no shaking, and no
+    // damping from then on. The column must not move: its top moves less than 1e-4 of its
+    // settlement (left fixed, it moves under 0.5 um: what settling remains at 4 s).
+    const std::string deck = "GRID 4 10 1.0\nMATERIAL 1 ELASTIC E=2E7 NU=0.25 RHO=2000\nCLUSTER 1 0 0 4 10\nFIX X 0 0 0 10\nFIX X 4 0 4 10\n"
+                             "FIX XY 0 0 4 0\nGRAVITY 0 -9.81\nDAMPING 0.8\nSHAKE X FILE=quake_pulse.txt SCALE=0 START=4 DAMPING=0\n"
+                             "ABSORB BOTTOM LEFT RIGHT\nSTEP 1E-3 5000\n";
+    Scene s;
+    REQUIRE(read_in_decks(deck, s).empty());
+    Simulation sim(s);
+    const Points& p = sim.points();
+    std::size_t top = 0;
+    for (std::size_t k = 0; k < p.size(); ++k) if (p.y[k] > p.y[top]) top = k;
+    const double y0 = p.y[top];
+    double at_start = 0, worst = 0;
+    for (long n = 0; n < s.steps; ++n) {
+        if (n == 4000) at_start = p.y[top];
+        sim.step();
+        if (n >= 4000) worst = std::max(worst, std::fabs(p.y[top] - at_start));
+    }
+    const double settlement = y0 - at_start;
+    MESSAGE("released at rest: top moved " << worst << " m after START, settlement " << settlement << " m; held reactions' work " << sim.energy().w_fixes);
+    CHECK(settlement > 0);
+    CHECK(worst < 1e-4 * settlement);
+    CHECK(std::fabs(sim.energy().error) < 1e-3);
+}
+
+TEST_CASE("quake: the motion file's problems are reported at its own line and column") {
+    const std::string dir = "build/quake_motion";
+    std::filesystem::create_directories(dir);
+    auto motion = [&](const std::string& name, const std::string& text) {
+        std::ofstream(dir + "/" + name) << text;
+    };
+    const std::string deck = "GRID 4 4 1\nMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nCLUSTER 1 0 0 4 2\nFIX XY 0 0 4 0\nSTEP 1E-4 10\n";
+    auto first = [&](const std::string& card) {
+        Scene s;
+        const Diagnostics d = read_deck_text(deck + card + "\n", dir + "/t.deck", s);
+        return d.empty() ? std::string("no error") : d[0].str();
+    };
+    motion("empty.txt", "");
+    motion("comments.txt", "# nothing but\n\n# comments\n");
+    motion("one.txt", "0 1\n");
+    motion("word.txt", "0 0\n0.1 abc\n");
+    motion("three.txt", "0 0\n0.1 1 2\n");
+    motion("back.txt", "0 0\n0.2 1\n0.1 2\n");
+    motion("same.txt", "0 0\n0.1 1\n0.1 2\n");
+    motion("negative.txt", "-0.1 0\n0.1 1\n");
+    motion("nan.txt", "0 0\n0.1 nan\n");
+    motion("good.txt", "# t a\n0, 0\n0.1, 1   # a comment\n\n0.2 0\n");
+    CHECK(first("SHAKE X FILE=nowhere.txt") == "build/quake_motion/t.deck:6:14: error: cannot open the motion file: No such file or directory ('build/quake_motion/nowhere.txt')");
+    CHECK(first("SHAKE X FILE=empty.txt") == "build/quake_motion/empty.txt:1:1: error: the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
+    CHECK(first("SHAKE X FILE=comments.txt") == "build/quake_motion/comments.txt:1:1: error: the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
+    CHECK(first("SHAKE X FILE=one.txt") == "build/quake_motion/one.txt:1:1: error: the motion file holds one sample; a record needs at least two");
+    CHECK(first("SHAKE X FILE=word.txt") == "build/quake_motion/word.txt:2:5: error: acceleration: expected a finite number, found 'abc'");
+    CHECK(first("SHAKE X FILE=three.txt") == "build/quake_motion/three.txt:2:7: error: expected two numbers, time [s] and acceleration [m/s^2]; this line has 3");
+    CHECK(first("SHAKE X FILE=back.txt") == "build/quake_motion/back.txt:3:1: error: time 0.1 s does not come after the line before's 0.2 s: times must increase");
+    CHECK(first("SHAKE X FILE=same.txt") == "build/quake_motion/same.txt:3:1: error: time 0.1 s does not come after the line before's 0.1 s: times must increase");
+    CHECK(first("SHAKE X FILE=negative.txt") == "build/quake_motion/negative.txt:1:1: error: time -0.1 s is before 0: the record starts at time 0 or later");
+    CHECK(first("SHAKE X FILE=nan.txt") == "build/quake_motion/nan.txt:2:5: error: acceleration: expected a finite number, found 'nan'");
+    CHECK(first("SHAKE X FILE=.") .find("cannot read the motion file: it is a directory") != std::string::npos);
+    CHECK(first("SHAKE X FILE=/dev/zero").find("cannot read the motion file: it is not a regular file") != std::string::npos);
+    CHECK(first("SHAKE X FILE=good.txt") == "no error");
+    Scene s;
+    REQUIRE(read_deck_text(deck + "SHAKE Y FILE=good.txt SCALE=2\n", dir + "/t.deck", s).empty());
+    REQUIRE(s.shakes.size() == 1);
+    CHECK(s.shakes[0].dir == kFixY);
+    CHECK(s.shakes[0].t == std::vector<double>{0, 0.1, 0.2});
+    CHECK(s.shakes[0].a == std::vector<double>{0, 1, 0});
+    CHECK(s.shakes[0].scale == 2.0);
+}
+
+TEST_CASE("quake: SHAKE and ABSORB cards: every mistake named where it is") {
+    const std::string deck = "GRID 4 4 1\nMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nCLUSTER 1 0 0 4 2\nFIX XY 0 0 4 0\nSTEP 1E-4 10\n";
+    auto errors = [&](const std::string& cards) {
+        Scene s;
+        const Diagnostics d = read_in_decks(deck + cards, s);
+        std::string all;
+        for (const Diagnostic& x : d) all += x.str() + "\n";
+        return all;
+    };
+    CHECK(errors("SHAKE Z FILE=quake_pulse.txt\n") == "decks/inline.deck:6:7: error: unknown direction 'Z' (X or Y) (did you mean X?)\n");
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt SCALING=2\n") ==
+          "decks/inline.deck:6:30: error: unknown parameter 'SCALING' (this card takes FILE, SCALE, START, DAMPING)\n");
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt COMPLIANT COMPLIANT\n") == "decks/inline.deck:6:40: error: COMPLIANT given twice\n");
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt BASLINE\n") == "decks/inline.deck:6:30: error: unknown word 'BASLINE' (COMPLIANT or BASELINE) (did you mean BASELINE?)\n");
+    CHECK(errors("SHAKE X SCALE=2\n") == "decks/inline.deck:6:16: error: missing parameter FILE= (the motion file: time [s] and acceleration [m/s^2] a line)\n");
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt START=-1\n").find("decks/inline.deck:6:36: error: START must") == 0);
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt DAMPING=1\n").find("decks/inline.deck:6:38: error: SHAKE DAMPING must") == 0);
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt SCALE=x\n") == "decks/inline.deck:6:36: error: SCALE: expected a number, found 'x'\n");
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt\nSHAKE X FILE=quake_pulse.txt\n").find("decks/inline.deck:7:1: error: the ground is shaken in X twice (SHAKE at line 6)") == 0);
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt\nSHAKE Y FILE=quake_pulse.txt START=1\n").find("decks/inline.deck:7:1: error: the SHAKE cards must agree on START") == 0);
+    CHECK(errors("SHAKE Y FILE=quake_pulse.txt COMPLIANT\n").empty());
+    CHECK(errors("ABSORB BOTTOM SIDEWAYS\n") == "decks/inline.deck:6:15: error: unknown edge 'SIDEWAYS' (BOTTOM, TOP, LEFT or RIGHT)\n");
+    CHECK(errors("ABSORB BOTTOM\nABSORB LEFT BOTTOM\n") == "decks/inline.deck:7:1: error: ABSORB BOTTOM is given twice\n");
+    CHECK(errors("ABSORB\n") == "decks/inline.deck:6:7: error: missing field: BOTTOM, TOP, LEFT or RIGHT\n");
+    Scene s;
+    REQUIRE(read_in_decks(deck + "FIX X 0 0 0 4\nSHAKE X FILE=quake_pulse.txt\n", s).empty());
+    s.fixes.erase(s.fixes.begin(), s.fixes.end());  // nothing held in X: nothing to move
+    const Diagnostics v = validate(s);
+    REQUIRE(v.size() == 1);
+    CHECK(v[0].message.find("SHAKE X moves the nodes fixed in X, and no FIX card holds that direction") == 0);
+    // --set reaches SHAKE cards by their order.
+    Scene t;
+    REQUIRE(read_in_decks(deck + "SHAKE X FILE=quake_pulse.txt\n", t).empty());
+    CHECK(apply_setting(t, "SHAKE1.SCALE", 0.5).empty());
+    CHECK(t.shakes[0].scale == 0.5);
+    CHECK(apply_setting(t, "SHAKE2.SCALE", 0.5) == "there is no SHAKE number 2 (cards of a kind count from 1)");
 }
