@@ -1609,6 +1609,63 @@ struct Unread {
     bool motion = false;     // a MOTION or ADVECT card bad: which pair was meant is unknown
 };
 
+namespace detail {
+// The integral of a SHAKE record's acceleration over the record's times [ta, tb]: zero
+// outside its samples, linear between them (each piece integrated exactly), SCALE
+// applied, the trend c0 + c1 t taken off where the record is defined. `at` (a sample
+// index) follows the times asked forward.
+inline double record_integral(const Shake& k, double c0, double c1, std::size_t& at, double ta, double tb) {
+    ta = std::max(ta, k.t.front());
+    tb = std::min(tb, k.t.back());
+    if (!(tb > ta)) return 0.0;
+    while (at > 0 && k.t[at] > ta) --at;
+    double sum = 0;
+    for (std::size_t i = at; i + 1 < k.t.size() && k.t[i] < tb; ++i) {
+        const double t0 = k.t[i], t1 = k.t[i + 1], a = std::max(ta, t0), b = std::min(tb, t1);
+        if (!(b > a)) continue;
+        auto value = [&](double t) { return k.a[i] + (t - t0) / (t1 - t0) * (k.a[i + 1] - k.a[i]); };
+        sum += 0.5 * (b - a) * (value(a) + value(b));
+        if (t1 <= ta) at = i + 1;
+    }
+    return k.scale * sum - (c0 * (tb - ta) + c1 * 0.5 * (tb * tb - ta * ta));
+}
+// BASELINE's trend c0 + c1 t for time step dt: the record integrated step by step as the
+// ground is (Simulation::ground_step), and the same for a = 1 and a = t where the record
+// is defined; taking c0 + c1 t off makes the final velocity and displacement zero.
+inline void baseline_trend(const Shake& k, double dt, double& c0, double& c1) {
+    c0 = c1 = 0;
+    double va = 0, da = 0, v1 = 0, d1 = 0, vt = 0, dtt = 0;
+    std::size_t at = 0;
+    for (long n = 0;; ++n) {
+        const double ta = (double(n) - 0.5) * dt, tb = (double(n) + 0.5) * dt;
+        if (ta > k.t.back()) break;
+        const double a = std::max(ta, k.t.front()), b = std::min(tb, k.t.back());
+        va += record_integral(k, 0, 0, at, ta, tb); da += va * dt;
+        v1 += b > a ? b - a : 0.0; d1 += v1 * dt;
+        vt += b > a ? 0.5 * (b * b - a * a) : 0.0; dtt += vt * dt;
+    }
+    const double det = v1 * dtt - vt * d1;
+    if (det != 0) { c0 = (va * dtt - vt * da) / det; c1 = (v1 * da - va * d1) / det; }
+}
+// The largest ground displacement a rigid SHAKE gives in a run of `steps` steps of dt
+// (after the record, the ground keeps the velocity it ended with).
+inline double ground_excursion(const Shake& k, double dt, long steps) {
+    double c0 = 0, c1 = 0, v = 0, d = 0, most = 0;
+    if (k.baseline) baseline_trend(k, dt, c0, c1);
+    std::size_t at = 0;
+    const long n0 = long(std::ceil(k.start / dt - 1e-9));
+    long n = n0;
+    for (; n < steps; ++n) {
+        const double tau = double(n - n0) * dt;
+        if (tau - 0.5 * dt > k.t.back()) break;
+        v += record_integral(k, c0, c1, at, tau - 0.5 * dt, tau + 0.5 * dt);
+        d += v * dt;
+        most = std::max(most, std::fabs(d));
+    }
+    return std::max(most, std::fabs(d + v * dt * double(std::max(0L, steps - n))));
+}
+}  // namespace detail
+
 // What is wrong with a SHAKE card's record (an empty string if nothing): at least two
 // samples, finite, times from 0 on and increasing.
 inline std::string record_problem(const Shake& k) {
@@ -1761,6 +1818,8 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
 //   dt above 0.95 of the limit   the limit (stable_dt) is an estimate; the shipped decks
 //                                run at up to 0.94 of it, measured stable
 //   OUTPUT EVERY above the steps the run writes its last frame or row only
+//   SHAKE moving the ground more than L/4   the lattice does not follow it (a record
+//                                that drifts: BASELINE)
 // Each warning is at the card it comes from. What `unread` names is not looked at.
 inline Diagnostics warnings(const Scene& s, const Unread& unread = Unread()) {
     Diagnostics d;
@@ -1806,6 +1865,16 @@ inline Diagnostics warnings(const Scene& s, const Unread& unread = Unread()) {
             warn(s.step_pos);
         }
     }
+    if (!unread.step && !unread.grid && s.cell_m > 0 && s.dt_s > 0 && s.steps >= 1)
+        for (const Shake& k : s.shakes) {
+            if (k.compliant || !record_problem(k).empty() || !std::isfinite(k.scale)) continue;
+            const double most = detail::ground_excursion(k, s.dt_s, s.steps);
+            if (most > 0.25 * s.cell_m) {
+                std::snprintf(b, sizeof b, "the ground moves up to %.3g m in this run, %.2g cells: the lattice stays put, so points may leave at its edges%s", most,
+                              most / s.cell_m, k.baseline ? "" : " (BASELINE takes off the record's drift)");
+                warn(k.pos);
+            }
+        }
     if (!unread.step && s.steps >= 1)
         for (const Output& o : s.outputs)
             if (o.every > s.steps) {
@@ -4434,26 +4503,8 @@ inline Range Simulation::impose_supports() {
 }
 
 // ------------------------------------------------ earthquakes: SHAKE, ABSORB ---
-// The integral of the ground's acceleration over the record's times [ta, tb]: the record
-// is zero outside its samples and linear between them (each piece integrated exactly),
-// SCALE applied, BASELINE's trend c0 + c1 t taken off where the record is defined.
-// g.at follows the times asked forward.
-inline double Simulation::record_integral(Ground& g, double ta, double tb) const {
-    const Shake& k = *g.spec;
-    ta = std::max(ta, k.t.front());
-    tb = std::min(tb, k.t.back());
-    if (!(tb > ta)) return 0.0;
-    while (g.at > 0 && k.t[g.at] > ta) --g.at;
-    double sum = 0;
-    for (std::size_t i = g.at; i + 1 < k.t.size() && k.t[i] < tb; ++i) {
-        const double t0 = k.t[i], t1 = k.t[i + 1], a = std::max(ta, t0), b = std::min(tb, t1);
-        if (!(b > a)) continue;
-        auto at = [&](double t) { return k.a[i] + (t - t0) / (t1 - t0) * (k.a[i + 1] - k.a[i]); };
-        sum += 0.5 * (b - a) * (at(a) + at(b));
-        if (t1 <= ta) g.at = i + 1;
-    }
-    return k.scale * sum - (g.c0 * (tb - ta) + g.c1 * 0.5 * (tb * tb - ta * ta));
-}
+// The integral of the ground's acceleration over [ta, tb] (detail::record_integral).
+inline double Simulation::record_integral(Ground& g, double ta, double tb) const { return detail::record_integral(*g.spec, g.c0, g.c1, g.at, ta, tb); }
 
 // The ground's motion in step n (from time n dt to (n + 1) dt), integrated as eq. 13
 // integrates a node, v(n + 1/2) = v(n - 1/2) + dt a(n dt), with dt a(n dt) the record's
@@ -4499,22 +4550,7 @@ inline void Simulation::setup_dynamics() {
         if (k.compliant) edges |= kBottom;
         shake_step_ = long(std::ceil(k.start / dt - 1e-9));
         shake_damping_ = k.damping;
-        if (!k.baseline) continue;
-        // BASELINE: the record integrated step by step as ground_step will, and the same for
-        // a = 1 and a = t where the record is defined; c0 + c1 t taken off makes the final
-        // velocity and displacement zero.
-        double va = 0, da = 0, v1 = 0, d1 = 0, vt = 0, dtt = 0;
-        for (long n = 0;; ++n) {
-            const double ta = (double(n) - 0.5) * dt, tb = (double(n) + 0.5) * dt;
-            if (ta > k.t.back()) break;
-            const double a = std::max(ta, k.t.front()), b = std::min(tb, k.t.back()), w = b > a ? b - a : 0.0;
-            va += record_integral(g, ta, tb); da += va * dt;
-            v1 += w; d1 += v1 * dt;
-            vt += b > a ? 0.5 * (b * b - a * a) : 0.0; dtt += vt * dt;
-        }
-        const double det = v1 * dtt - vt * d1;
-        if (det != 0) { g.c0 = (va * dtt - vt * da) / det; g.c1 = (v1 * da - va * d1) / det; }
-        g.at = 0;
+        if (k.baseline) detail::baseline_trend(k, dt, g.c0, g.c1);
     }
     // The material each edge cell's points were made of (the last cluster holding its centre).
     auto material_of = [&](int i, int j) -> const Material* {

@@ -458,3 +458,29 @@ TEST_CASE("quake: SHAKE and ABSORB cards: every mistake named where it is") {
     CHECK(t.shakes[0].scale == 0.5);
     CHECK(apply_setting(t, "SHAKE2.SCALE", 0.5) == "there is no SHAKE number 2 (cards of a kind count from 1)");
 }
+
+TEST_CASE("quake: a warning when the ground moves more than a quarter cell (the lattice does not follow it)") {
+    // A record of constant acceleration 0.1 m/s^2 for 10 s, a run of 4 s: the ground moves
+    // 0.1 (4)^2 / 2 = 0.8 m, 0.8 of a cell. BASELINE takes the whole record off (a constant
+    // is a trend): no motion, no warning.
+    const std::string dir = "build/quake_motion";
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir + "/drift.txt") << "0 0.1\n10 0.1\n";
+    const std::string deck = "GRID 8 20 1.0\nMATERIAL 1 ELASTIC E=5E7 NU=0.25 RHO=2000\nCLUSTER 1 2 0 6 20\nFIX XY 0 0 8 0\nSTEP 2E-3 2000\n";
+    for (const bool baseline : {false, true}) {
+        Scene s;
+        REQUIRE(read_deck_text(deck + "SHAKE X FILE=drift.txt" + (baseline ? " BASELINE" : "") + "\n", dir + "/t.deck", s).empty());
+        const Diagnostics w = warnings(s);
+        if (baseline) {
+            CHECK(w.empty());
+            continue;
+        }
+        REQUIRE(w.size() == 1);
+        CHECK(w[0].pos.line == 6);
+        CHECK(w[0].message == "the ground moves up to 0.8 m in this run, 0.8 cells: the lattice stays put, so points may leave at its edges (BASELINE takes off the record's drift)");
+        // and the run's ground goes there
+        Simulation sim(s);
+        for (long n = 0; n < s.steps; ++n) sim.step();
+        CHECK(std::fabs(sim.ground_displacement(0) / 0.8 - 1) < 1e-9);
+    }
+}
