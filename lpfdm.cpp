@@ -487,13 +487,17 @@ int main(int argc, char** argv) {
         for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
         const char* lanes = sim.kernel() == lpfdm::Kernel::Reference ? "the reference cycle, one thread"
                             : !sim.wide() ? "points, cells and nodes one at a time"
-                            : sim.scene().motion == lpfdm::Motion::Paper ? "points, cells and nodes four per AVX2 register"
-                                                                          : "cells and nodes four per AVX2 register, points one at a time";
+                            : sim.scene().motion == lpfdm::Motion::Centre && sim.scene().advect == lpfdm::Advect::Eq12 && sim.scene().mapping == lpfdm::Mapping::Paper
+                                ? "points, cells and nodes four per AVX2 register"
+                                : "cells and nodes four per AVX2 register, points one at a time";
         std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, %s\n", nthreads,
                     double(ru.ru_maxrss) / 1024.0, sim.bytes_per_point(), lanes);
         for (int k = 0; k < lpfdm::Simulation::kPhases; ++k)
             std::printf("profile: %-15s %8.3f s  %5.1f %%\n", lpfdm::Simulation::phase_name(k), sim.phase_seconds()[k],
                         total > 0 ? 100 * sim.phase_seconds()[k] / total : 0.0);
+        if (sim.return_updates() > 0)  // inside the points phase (thread seconds)
+            std::printf("profile:   of which the Mohr-Coulomb consult (elastic test and return) %.3f s, %.1f ns per point-update (%ld)\n", sim.return_seconds(),
+                        1e9 * sim.return_seconds() / double(sim.return_updates()), sim.return_updates());
     }
     if (!opt.quiet)
         std::printf("lpfdm: %ld steps, %zu points, %.3f s, %.3g particle-steps/s; mass inside %.9g, outflow %.9g, initial %.9g kg/m\n",

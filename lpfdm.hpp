@@ -1991,6 +1991,12 @@ public:
     int threads() const { return team_; }
     bool wide() const { return wide_; }
     const double* phase_seconds() const { return phase_s_; }          // kPhases entries, in step order
+    // While profiling, the Mohr-Coulomb consult of the fast AVX2 point loop alone (eq. 6's
+    // elastic test and plastic return, four points a register; part of the points phase):
+    // its seconds (summed over threads) and the point-updates it consulted. Zero for the
+    // other loops, which consult point by point inside the motion.
+    double return_seconds() const { return return_s_; }
+    long return_updates() const { return returned_; }
     // Bytes the point arrays hold per point (capacity, all arrays).
     double bytes_per_point() const {
         const double n = double(std::max<std::size_t>(1, p_.size()));
@@ -2270,6 +2276,8 @@ private:
         int own_lo = 0, own_hi = std::numeric_limits<int>::max();
         long list_at = 0, listed = 0;
         double seconds = 0;  // the time the chunk took (advance_parted balances the chunks)
+        double return_seconds = 0;  // profiling: in the Mohr-Coulomb consults of the AVX2 loop (consult_block)
+        long returned = 0;          // ... and the point-updates they consulted
     };
     // The cells a range's points landed in, as a box of whole rows (occupied_).
     Range landed(const Landing& t) const { return t.cmax < 0 ? Range{} : Range{t.imin, t.imax + 1, t.cmin / mx_, t.cmax / mx_ + 1}; }
@@ -2466,6 +2474,8 @@ private:
     int team_ = 1;  // threads, fixed when the Simulation is made
     bool profiling_ = false;
     double phase_s_[kPhases] = {0, 0, 0, 0, 0};
+    double return_s_ = 0;  // profiling: return_seconds()
+    long returned_ = 0;
     bool wide_ = false;  // the AVX2 version of the point loop and lattice phases (LPFDM_WIDE)
 
     Scene sc_;
@@ -3294,6 +3304,7 @@ inline void Simulation::advance_points() {
     Part all;
     Landing t;
     advance_range(0, long(p_.size()), all, t);
+    return_s_ += all.return_seconds; returned_ += all.returned;
     departed_ = std::size_t(t.departed);
     if (departed_) remove_departed();
     mass_in_ = t.mass;
@@ -3379,6 +3390,7 @@ inline bool Simulation::advance_parted() {
     for (int u = 0; u < team; ++u) {
         clash |= landings_[std::size_t(u)].cmax >= parts_[std::size_t(u)].own_hi;  // landed in a higher chunk's part
         parted_.listed += parts_[std::size_t(u)].listed;
+        return_s_ += parts_[std::size_t(u)].return_seconds; returned_ += parts_[std::size_t(u)].returned;  // (thread seconds)
         t.merge(landings_[std::size_t(u)]);
     }
     if (!clash) add_listed(team);
@@ -3814,6 +3826,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
         // (detail::mohr_inside_lanes, mohr_return_lanes). A point they do not settle, and
         // the last one to three points of a material's span, take the one-point test and
         // return on the trial.
+        long consulted = 0;  // Mohr-Coulomb points consulted (profiling)
         auto consult_block = [&](long b0, long b1) LPFDM_INLINE {
             auto consult = [&](long q, const long qend, const MaterialConstants& mc, auto own) LPFDM_INLINE {
                 for (; q + 4 <= qend; q += 4) {
@@ -3847,6 +3860,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 if (mc.model == Model::MohrCoulomb) {
                     if (!p_.c0.empty()) consult(q, qend, mc, std::true_type{});  // scatter: each point's own strength
                     else consult(q, qend, mc, std::false_type{});
+                    consulted += qend - q;
                 }
                 q = qend;
             }
@@ -3865,7 +3879,15 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 while (b1 < k1 && pcell[b1] == pcell[b1 - 1]) ++b1;
                 nrun = irun = 0;
                 runs(b0, b1, std::integral_constant<int, kTrial>{});
-                consult_block(b0, b1);
+                if (profiling_) {  // two clock reads a block of about 256 points
+                    const auto c0 = std::chrono::steady_clock::now();
+                    consulted = 0;
+                    consult_block(b0, b1);
+                    pt.return_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+                    pt.returned += consulted;
+                } else {
+                    consult_block(b0, b1);
+                }
                 runs(b0, b1, std::integral_constant<int, kMotion>{});
                 b0 = b1;
             }

@@ -427,3 +427,30 @@ TEST_CASE("the deterministic log and sine agree with the C library to within a f
     CHECK(h.next() == second);
     CHECK(first != second);
 }
+
+TEST_CASE("--profile's Mohr-Coulomb consult counts every Mohr-Coulomb point once a step") {
+    // The AVX2 point loop (MOTION CENTRE, the default) consults in blocks and times them
+    // when profiling: the count is exactly points x steps (the elastic base's points are
+    // not consulted), the time positive; other loops report none; profiling off, none.
+    Scene s;
+    REQUIRE(read_deck_text("GRID 16 8 0.5\nMATERIAL 1 ELASTIC E=2E7 NU=0.25 RHO=2000\nMATERIAL 2 MOHR E=2E7 NU=0.25 RHO=2000 PHI=30 C=500\n"
+                           "CLUSTER 1 0 0 8 1\nCLUSTER 2 0 1 4 3\nFIX XY 0 0 8 0\nFIX X 0 0 0 4\nGRAVITY 0 -9.81\nSTEP 5E-4 30\n",
+                           "t.deck", s).empty());
+    const long mohr_points = 8 * 4 * 4, steps = 30;
+    for (const bool profile : {true, false}) {
+        Simulation sim(s);
+        sim.set_profiling(profile);
+        for (long n = 0; n < steps; ++n) sim.step();
+        if (!profile || !Simulation::have_wide()) {
+            CHECK(sim.return_updates() == 0);
+            continue;
+        }
+        CHECK(sim.return_updates() == mohr_points * steps);
+        CHECK(sim.return_seconds() > 0);
+        CHECK(sim.return_seconds() < sim.phase_seconds()[1]);  // a part of the points phase
+    }
+    Simulation scalar(s, Kernel::Scalar);
+    scalar.set_profiling(true);
+    for (long n = 0; n < steps; ++n) scalar.step();
+    CHECK(scalar.return_updates() == 0);
+}
