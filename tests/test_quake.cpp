@@ -6,6 +6,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -451,6 +452,20 @@ TEST_CASE("quake: SHAKE and ABSORB cards: every mistake named where it is") {
     const Diagnostics v = validate(s);
     REQUIRE(v.size() == 1);
     CHECK(v[0].message.find("SHAKE X moves the nodes fixed in X, and no FIX card holds that direction") == 0);
+    // A record BASELINE would integrate over more than 1e8 steps is refused (set-up time),
+    // and the warning's own integration stays bounded whatever the run's length.
+    Scene huge;
+    REQUIRE(read_in_decks(deck + "SHAKE X FILE=quake_pulse.txt BASELINE\n", huge).empty());
+    huge.shakes[0].t.back() = 1e6;
+    huge.steps = 1000000000;
+    const Diagnostics h = validate(huge);
+    REQUIRE(h.size() == 1);
+    CHECK(h[0].message == "the motion record lasts 1e+06 s, 1e+10 steps of dt: BASELINE integrates at most 1e8 (shorten the record's quiet end, or take a larger dt)");
+    huge.shakes[0].baseline = false;
+    CHECK(validate(huge).empty());
+    const auto t0 = std::chrono::steady_clock::now();
+    (void)warnings(huge);
+    CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 5.0);  // 1e6 coarse steps at most, not 1e9
     // --set reaches SHAKE cards by their order.
     Scene t;
     REQUIRE(read_in_decks(deck + "SHAKE X FILE=quake_pulse.txt\n", t).empty());

@@ -71,7 +71,9 @@ done
 dict=build/fuzz/deck.dict
 {
     for w in TITLE GRID MATERIAL ELASTIC MOHR CLUSTER FIX WALL GRAVITY DAMPING SEED STEP OUTPUT POINTS HISTORY EVERY END \
-             E= NU= RHO= PHI= C= PSI= TENSION= SOFTEN= SCATTER= PPC= X XY Y; do
+             E= NU= RHO= PHI= C= PSI= TENSION= SOFTEN= SCATTER= PPC= X XY Y \
+             SHAKE ABSORB FILE= SCALE= START= DAMPING= COMPLIANT BASELINE BOTTOM TOP LEFT RIGHT \
+             decks/quake_pulse.txt decks/quake_burst.txt tests/decks/good_quake.txt; do
         printf '"%s"\n' "$w"
     done
     for w in ' ' ',' '=' '!' '&' '\x0a' '\x0d\x0a' '\x0a*' '\x0a&\x0a' '5E7' '5.0D+07' '.5' '3.' '-0' '1E308' '1E-308' '4.9E-324' \
