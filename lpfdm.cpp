@@ -271,6 +271,10 @@ int main(int argc, char** argv) {
     // the scene (not --steps: a restart may run further).
     std::string scene_options = fmt::format("refine {} seed {}", opt.refine, opt.seed);
     for (const auto& kv : opt.settings) scene_options += fmt::format(" set {}={:.17g}", kv.first, kv.second);
+    for (const auto& k : scene.shakes) {  // the records (a motion file edited between the runs is another scene)
+        const std::uint64_t h = lpfdm::detail::fnv1a(k.a.data(), k.a.size() * sizeof(double), lpfdm::detail::fnv1a(k.t.data(), k.t.size() * sizeof(double)));
+        scene_options += fmt::format(" motion {:016x}", h);
+    }
     const std::uint64_t digest = lpfdm::state_digest(text, scene_options);
     bool stop = !cli_errors.empty();
     for (const auto& e : cli_errors) std::fprintf(stderr, "lpfdm: error: %s\n", e.c_str());

@@ -183,9 +183,12 @@
 //     with the ground (its displacement should stay small against L). Dashpots -C v act on
 //     the step's mean velocity (b + c) / 2 dt, solved for c (stable at any C): the explicit
 //     form, -C b / dt, is unstable once C dt / m > 2, which an edge node of a cell barely
-//     filled reaches at any dt. A compliant base's input is Joyner and Chen's traction
+//     filled reaches at any dt; under a rigid SHAKE on the motion relative to the ground
+//     (against the ground at rest they resisted a stiff layer moving with its base). A
+//     compliant base's input is Joyner and Chen's traction
 //     2 rho c v_in at the start of the step. At START an absorbing edge's fixed nodes are
-//     released and keep their reaction as a constant force (FLAC does the same). Local
+//     released (but for a rigidly shaken direction) and keep their reaction as a constant
+//     force (FLAC does the same). Local
 //     damping acts on absolute velocities (as in FLAC), with SHAKE's DAMPING from START.
 //   * Stability: dt must not exceed L sqrt(rho / ((M + lambda)(1 + alpha))), M = K + 4G/3,
 //     lambda = K - 2G/3: below L / c_p, the limit of a full lattice, because a lone cell
@@ -1622,10 +1625,10 @@ inline double record_integral(const Shake& k, double c0, double c1, std::size_t&
     double sum = 0;
     for (std::size_t i = at; i + 1 < k.t.size() && k.t[i] < tb; ++i) {
         const double t0 = k.t[i], t1 = k.t[i + 1], a = std::max(ta, t0), b = std::min(tb, t1);
+        if (t1 <= ta) { at = i + 1; continue; }  // wholly before the window: the next call starts after it
         if (!(b > a)) continue;
         auto value = [&](double t) { return k.a[i] + (t - t0) / (t1 - t0) * (k.a[i + 1] - k.a[i]); };
         sum += 0.5 * (b - a) * (value(a) + value(b));
-        if (t1 <= ta) at = i + 1;
     }
     return k.scale * sum - (c0 * (tb - ta) + c1 * 0.5 * (tb * tb - ta * ta));
 }
@@ -1658,7 +1661,7 @@ inline double ground_excursion(const Shake& k, double dt, long steps) {
     double c0 = 0, c1 = 0, v = 0, d = 0, most = 0;
     if (k.baseline) baseline_trend(k, dt, c0, c1);
     std::size_t at = 0;
-    const long n0 = long(std::ceil(k.start / dt - 1e-9));
+    const long n0 = long(std::min(std::ceil(k.start / dt - 1e-9), 1e18));
     long n = n0;
     for (; n < steps; ++n) {
         const double tau = double(n - n0) * dt;
@@ -1779,6 +1782,7 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
         keys("SHAKE", a, k.pos, 0);
         const std::string problem = record_problem(k);
         if (!problem.empty()) err(k.pos, "the motion record " + problem);
+        if (!unread.step && s.dt_s > 0 && std::isfinite(k.start) && k.start / s.dt_s > 1e15) err(k.pos, "START is more than 1e15 time steps away");
         // BASELINE integrates the record step by step when the run is set up: bounded.
         if (problem.empty() && k.baseline && !unread.step && s.dt_s > 0 && k.t.back() / s.dt_s > 1e8)
         {
@@ -1803,6 +1807,12 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
                            ", and no FIX card holds that direction (or make it COMPLIANT: through an absorbing base)");
     }
     if (s.absorb & ~(kBottom | kTop | kLeft | kRight)) err(s.absorb_pos, "ABSORB names BOTTOM, TOP, LEFT or RIGHT");
+    if (lattice && s.absorb)  // a wall drives its nodes: a dashpot there would only be overruled, its energy counted twice
+        for (const Wall& w : s.walls) {
+            const bool on = ((s.absorb & kLeft) && w.box.x0 <= tol) || ((s.absorb & kRight) && w.box.x1 >= X - tol) ||
+                            ((s.absorb & kBottom) && w.box.y0 <= tol) || ((s.absorb & kTop) && w.box.y1 >= Y - tol);
+            if (on) err(w.pos, "the wall starts on an edge of the lattice that ABSORB makes absorbing (line " + std::to_string(s.absorb_pos.line) + "): a wall drives its nodes");
+        }
     if (s.advect == Advect::Points && s.mapping == Mapping::Smooth)
         err(s.advect_pos, "ADVECT POINTS carries increments cell by cell: it works with MAPPING PAPER only");
     if (s.advect == Advect::Points && s.motion == Motion::Paper && !unread.motion)
@@ -2602,6 +2612,7 @@ private:
         double du = 0;                // its increment this step [m]
         double d = 0;                 // its displacement after this step [m]
         double v_now = 0;             // its velocity at the start of this step (mean of the half steps)
+        double du_before = 0;         // its increment in the step before
     };
     Ground ground_[2];                // x, y
     bool dynamic_ = false;            // the scene shakes or absorbs
@@ -4553,6 +4564,7 @@ inline void Simulation::ground_step(long n) {
         const double tau = double(n - shake_step_) * dt;
         const double v0 = g.v;
         g.v += record_integral(g, tau - 0.5 * dt, tau + 0.5 * dt);
+        g.du_before = g.du;
         g.du = g.v * dt;
         g.d += g.du;
         g.v_now = 0.5 * (v0 + g.v);
@@ -4563,7 +4575,7 @@ inline void Simulation::ground_step(long n) {
 // run made, so the same numbers), and the edges released at START released again (their
 // reactions come from the state file).
 inline void Simulation::replay_ground() {
-    for (Ground& g : ground_) { g.at = 0; g.v = g.du = g.d = g.v_now = 0; }
+    for (Ground& g : ground_) { g.at = 0; g.v = g.du = g.d = g.v_now = g.du_before = 0; }
     for (long n = 0; n < step_; ++n) ground_step(n);
     if (step_ > shake_step_)
         for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) fixed_[std::size_t(absorb_nodes_[q])] &= std::uint8_t(~released_[q]);
@@ -4583,7 +4595,7 @@ inline void Simulation::setup_dynamics() {
         Ground& g = ground_[k.dir == kFixX ? 0 : 1];
         g.spec = &k;
         if (k.compliant) edges |= kBottom;
-        shake_step_ = long(std::ceil(k.start / dt - 1e-9));
+        shake_step_ = long(std::min(std::ceil(k.start / dt - 1e-9), 1e18));  // (validate refuses START beyond 1e15 steps)
         shake_damping_ = k.damping;
         if (k.baseline) detail::baseline_trend(k, dt, g.c0, g.c1);
     }
@@ -4630,7 +4642,9 @@ inline void Simulation::setup_dynamics() {
                     // absorbs (a corner of a rigid base stays with the base); without SHAKE
                     // there is no moment to take its reaction at rest, and it stays fixed.
                     const int on = (nj == 0 ? kBottom : 0) | (nj == my_ ? kTop : 0) | (ni == 0 ? kLeft : 0) | (ni == mx_ ? kRight : 0);
-                    released_.push_back((on & ~edges) || sc_.shakes.empty() ? std::uint8_t(0) : fixed_[n]);
+                    // A direction a rigid SHAKE drives stays with the ground.
+                    const int rigid = (ground_[0].spec && !ground_[0].spec->compliant ? kFixX : 0) | (ground_[1].spec && !ground_[1].spec->compliant ? kFixY : 0);
+                    released_.push_back((on & ~edges) || sc_.shakes.empty() ? std::uint8_t(0) : std::uint8_t(fixed_[n] & ~rigid));
                 }
                 dashpots_.push_back({slot_of[n], cell(ci, cj), cx, cy, in_x ? 2 * cx : 0.0, in_y ? 2 * cy : 0.0});
             }
@@ -4674,28 +4688,33 @@ inline void Simulation::dynamics_begin() {
 }
 
 // The dashpots of the absorbing edges, after eq. 13-14 gave a node the increment c0 from b:
-// a force -C v with v the step's mean velocity (b + c) / 2 dt, taken implicitly (stable at
-// any C): c (1 + beta) = c0 - beta b, beta = C dt / 2m. Directions still fixed or driven
-// are left to impose_supports. The dashpots' dissipation, the input traction's work and
-// the held reactions' work go to the energy account.
+// a force -C (v - v_g) with v the step's mean velocity (b + c) / 2 dt and v_g the ground's
+// (b_g + c_g) / 2 dt where a rigid SHAKE moves it in that direction (the far field moves
+// with the base: a side dashpot against the ground at rest held the shaken layer back by a
+// third), else 0; taken implicitly (stable at any C): c (1 + beta) = c0 - beta (b - b_g -
+// c_g), beta = C dt / 2m. Fixed directions are left to impose_supports (a wall on an
+// absorbing edge is refused: validate). The energy account gets the dashpots'
+// dissipation, the ground's work through them, the input traction's and the held
+// reactions' work (each with its trapezoidal half step, as support_work).
 inline void Simulation::absorb_increments() {
     if (step_ < shake_step_) return;
     const double dt = sc_.dt_s;
     double ha = 0, hi = 0, hh = 0;
-    auto one = [&](std::size_t n, double C, double fin, double hold, double b, double& c) {
-        const double beta = C * dt / (2 * nmass_[n]);
-        c = (c - beta * b) / (1 + beta);
-        const double s = b + c;
-        es_.d_absorb += C * s * s / (4 * dt); ha += C * s * c / (4 * dt);
-        es_.w_ground += 0.5 * fin * s; hi += 0.5 * fin * c;
+    auto one = [&](std::size_t n, const Ground& g, double C, double fin, double hold, double b, double& c) {
+        const bool rigid = g.spec && !g.spec->compliant;
+        const double bg = rigid ? g.du_before : 0.0, cg = rigid ? g.du : 0.0, beta = C * dt / (2 * nmass_[n]);
+        c = (c - beta * (b - bg - cg)) / (1 + beta);
+        const double s = b + c, sg = bg + cg, f = -C * (s - sg) / (2 * dt);  // the dashpot's force on the node
+        es_.d_absorb -= 0.5 * f * (s - sg); ha -= 0.5 * f * (c - cg);
+        es_.w_ground += 0.5 * f * sg + 0.5 * fin * s; hi += 0.5 * f * cg + 0.5 * fin * c;
         es_.w_held += 0.5 * hold * s; hh += 0.5 * hold * c;
     };
     for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) {
         const std::size_t n = std::size_t(absorb_nodes_[q]);
         if (nmass_[n] == 0) continue;
         const std::uint8_t held = fixed_[n];
-        if (!(held & kFixX)) one(n, absorb_cx_[q], input_fx_[q], hold_fx_[q], dux_old_[n], dux_[n]);
-        if (!(held & kFixY)) one(n, absorb_cy_[q], input_fy_[q], hold_fy_[q], duy_old_[n], duy_[n]);
+        if (!(held & kFixX)) one(n, ground_[0], absorb_cx_[q], input_fx_[q], hold_fx_[q], dux_old_[n], dux_[n]);
+        if (!(held & kFixY)) one(n, ground_[1], absorb_cy_[q], input_fy_[q], hold_fy_[q], duy_old_[n], duy_[n]);
     }
     es_.h_absorb = ha; es_.h_input = hi; es_.h_held = hh;
 }
@@ -5058,14 +5077,20 @@ struct Lexed {
     std::vector<std::string> raw;  // the card's text after the keyword (for TITLE)
 };
 
+// The text without a leading UTF-8 byte order mark, its CR LF and lone CR (old Mac files)
+// made LF. In one pass (erasing each CR in place took quadratic time on a large file).
+inline std::string unix_lines(const std::string& in) {
+    std::string out;
+    out.reserve(in.size());
+    for (std::size_t i = in.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0; i < in.size(); ++i) {
+        if (in[i] != '\r') out += in[i];
+        else if (i + 1 >= in.size() || in[i + 1] != '\n') out += '\n';  // a lone CR; of CR LF the LF follows
+    }
+    return out;
+}
+
 inline Lexed lex(const std::string& text_in, const std::string& file, Diagnostics& diags) {
-    // A UTF-8 byte order mark is skipped; CR LF and a lone CR (old Mac files) end lines.
-    std::string text = text_in.compare(0, 3, "\xEF\xBB\xBF") == 0 ? text_in.substr(3) : text_in;
-    for (std::size_t i = 0; i < text.size(); ++i)
-        if (text[i] == '\r') {
-            if (i + 1 < text.size() && text[i + 1] == '\n') text.erase(i, 1);
-            else text[i] = '\n';
-        }
+    const std::string text = unix_lines(text_in);
     Lexed out;
     std::vector<Token> pending;
     std::string pending_raw;
@@ -5322,6 +5347,7 @@ inline Diagnostics read_motion(const std::string& path, Shake& k) {
     std::string text;
     Diagnostics d = load_file(path, text, "motion file");
     if (!d.empty()) return d;
+    text = detail::unix_lines(text);  // as a deck: a byte order mark skipped, CR LF or CR ending lines
     int line_no = 0;
     std::size_t at = 0;
     while (at < text.size()) {

@@ -186,6 +186,9 @@ refused "other deck" "another deck" "$good" "$tmp/other.deck"
 refused "other --seed" "another deck" "$good" --seed 3 "$tmp/r.deck"
 refused "other --set" "another deck" "$good" --set MATERIAL1.C=2500 "$tmp/r.deck"
 refused "at the last step" "where the run ends" "$tmp/whole/s.state" "$tmp/r.deck"
+# the motion file edited between the runs: another record, another scene
+mkdir -p "$tmp/edited" && cp "$tmp/rq.deck" "$tmp/edited/rq.deck" && sed 's/^0.02 -30$/0.02 -31/' "$tmp/m.txt" >"$tmp/edited/m.txt"
+refused "other motion file" "another deck" "$tmp/quake: fast, 1 thread-a/s.state" "$tmp/edited/rq.deck"
 run "$tmp/further" --steps 130 --restart "$tmp/whole/s.state" "$tmp/r.deck" &&
     check "--steps runs a finished state further" $([ $rc -eq 0 ] && [ "$(rows "$tmp/further/h.txt" 0 | wc -l)" = 10 ]; echo $?) \
         "exit status $rc, $(rows "$tmp/further/h.txt" 0 | wc -l) history rows (expected 10)"

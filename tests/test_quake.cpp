@@ -88,7 +88,6 @@ TEST_CASE("quake: a shear column on a rigid base rings at its free period 4H/V_s
     MESSAGE("rigid base: worst |energy_error| " << r.worst_error << ", ground work " << r.last.w_ground << " J/m");
     CHECK(r.worst_error < 1e-4);
     CHECK(r.last.w_ground > 0);
-    CHECK(r.last.d_absorb == 0.0);
 }
 
 TEST_CASE("quake: the ground's motion is its record integrated; BASELINE brings it back to rest where it began") {
@@ -134,7 +133,12 @@ TEST_CASE("quake: the ground's motion is its record integrated; BASELINE brings 
     CHECK(std::fabs(end_d[0]) > 1e-3);
     CHECK(std::fabs(end_d[1]) < 1e-10);  // of a motion of 4-8 cm: rounding over 10 300 steps
     CHECK(std::fabs(end_v[1]) < 1e-10);
-    CHECK(std::fabs(peak[1] / peak[0] - 1) < 0.5);
+    // The trend BASELINE takes off is small against the record (peak 0.5 m/s^2): the drift
+    // it removes (8 cm by the end) builds up from a tiny offset over 20 s.
+    double c0, c1;
+    detail::baseline_trend(s.shakes[0], s.dt_s, c0, c1);
+    MESSAGE("sweep: BASELINE's trend c0 = " << c0 << " m/s^2, c1 = " << c1 << " m/s^3");
+    CHECK(std::fabs(c0) + std::fabs(c1) * 20 < 1e-2 * 0.5);
 }
 
 TEST_CASE("quake: a pulse through a compliant absorbing base leaves the column after one reflection") {
@@ -319,17 +323,6 @@ namespace {
 // A deck text read as if it were decks/NAME (its motion files beside it): the diagnostics.
 Diagnostics read_in_decks(const std::string& text, Scene& s) { return read_deck_text(text, "decks/inline.deck", s); }
 
-// The largest kinetic energy, and the largest from time `after` on, of a run of s.
-void kinetic_peaks(const Scene& s, double after, double& peak, double& late) {
-    Simulation sim(s);
-    peak = late = 0;
-    for (long n = 0; n < s.steps; ++n) {
-        sim.step();
-        peak = std::max(peak, sim.kinetic_energy());
-        if (sim.time() >= after) late = std::max(late, sim.kinetic_energy());
-    }
-}
-
 }  // namespace
 
 TEST_CASE("quake: ABSORB RIGHT lets a P wave leave a bar that a free end would send back") {
@@ -338,16 +331,23 @@ TEST_CASE("quake: ABSORB RIGHT lets a P wave leave a bar that a free end would s
     // reaches the right end at 0.35 s; by 0.6 s it has gone through it, or come back.
     const std::string bar = "GRID 60 2 1.0\nMATERIAL 1 ELASTIC E=5E7 NU=0.25 RHO=2000\nCLUSTER 1 0 0 60 2\nFIX Y 0 0 60 2\nFIX X 0 0 0 2\n"
                             "SHAKE X FILE=quake_pulse.txt\nSTEP 2E-3 500\n";
+    // What the bar holds at the end (kinetic and strain energy) against what the ground put
+    // in: all of it with a free end (undamped, the account closes to 1e-6), almost none
+    // through the dashpots.
+    auto kept = [&](const Scene& s) {
+        Simulation sim(s);
+        for (long n = 0; n < s.steps; ++n) sim.step();
+        const Simulation::Energy e = sim.energy();
+        return (e.kinetic + e.strain) / e.w_ground;
+    };
     Scene open, absorbing;
     REQUIRE(read_in_decks(bar, open).empty());
     REQUIRE(read_in_decks(bar + "ABSORB RIGHT\n", absorbing).empty());
-    double peak_o, late_o, peak_a, late_a;
-    kinetic_peaks(open, 0.6, peak_o, late_o);
-    kinetic_peaks(absorbing, 0.6, peak_a, late_a);
-    MESSAGE("P wave: kinetic energy after 0.6 s " << 100 * late_a / peak_a << " % of its peak with ABSORB RIGHT, " << 100 * late_o / peak_o
-                                                  << " % with a free end");
-    CHECK(late_a < 0.02 * peak_a);
-    CHECK(late_o > 0.5 * peak_o);
+    const double held_open = kept(open), held_absorbing = kept(absorbing);
+    MESSAGE("P wave: energy left in the bar at 1 s " << 100 * held_absorbing << " % of the ground's work with ABSORB RIGHT, " << 100 * held_open
+                                                     << " % with a free end");
+    CHECK(held_absorbing < 0.02);
+    CHECK(held_open > 0.99);
 }
 
 TEST_CASE("quake: an absorbing edge released at START keeps a column at rest under gravity") {
@@ -400,6 +400,8 @@ TEST_CASE("quake: the motion file's problems are reported at its own line and co
     motion("negative.txt", "-0.1 0\n0.1 1\n");
     motion("nan.txt", "0 0\n0.1 nan\n");
     motion("good.txt", "# t a\n0, 0\n0.1, 1   # a comment\n\n0.2 0\n");
+    motion("crlf.txt", "\xEF\xBB\xBF# a byte order mark, CR LF\r\n0 0\r\n0.1 1\r\n0.2 0\r\n");
+    motion("cr.txt", "# old Mac line ends\r0 0\r0.1 1\r0.2 0\r");
     CHECK(first("SHAKE X FILE=nowhere.txt") == "build/quake_motion/t.deck:6:14: error: cannot open the motion file: No such file or directory ('build/quake_motion/nowhere.txt')");
     CHECK(first("SHAKE X FILE=empty.txt") == "build/quake_motion/empty.txt:1:1: error: the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
     CHECK(first("SHAKE X FILE=comments.txt") == "build/quake_motion/comments.txt:1:1: error: the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
@@ -413,6 +415,12 @@ TEST_CASE("quake: the motion file's problems are reported at its own line and co
     CHECK(first("SHAKE X FILE=.") .find("cannot read the motion file: it is a directory") != std::string::npos);
     CHECK(first("SHAKE X FILE=/dev/zero").find("cannot read the motion file: it is not a regular file") != std::string::npos);
     CHECK(first("SHAKE X FILE=good.txt") == "no error");
+    for (const char* name : {"crlf.txt", "cr.txt"}) {
+        Scene t;
+        REQUIRE(read_deck_text(deck + "SHAKE X FILE=" + name + "\n", dir + "/t.deck", t).empty());
+        CHECK(t.shakes[0].t == std::vector<double>{0, 0.1, 0.2});
+        CHECK(t.shakes[0].a == std::vector<double>{0, 1, 0});
+    }
     Scene s;
     REQUIRE(read_deck_text(deck + "SHAKE Y FILE=good.txt SCALE=2\n", dir + "/t.deck", s).empty());
     REQUIRE(s.shakes.size() == 1);
@@ -466,6 +474,10 @@ TEST_CASE("quake: SHAKE and ABSORB cards: every mistake named where it is") {
     const auto t0 = std::chrono::steady_clock::now();
     (void)warnings(huge);
     CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 5.0);  // 1e6 coarse steps at most, not 1e9
+    // START beyond 1e15 steps (its step number would overflow), a wall on an absorbing edge.
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt START=1E300\n").find("decks/inline.deck:6:1: error: START is more than 1e15 time steps away") == 0);
+    CHECK(errors("WALL 1 1 2 3 2 0 -0.1\nABSORB TOP LEFT\n").empty());
+    CHECK(errors("WALL 1 0 1 0 2 0.1 0\nABSORB TOP LEFT\n").find("decks/inline.deck:6:1: error: the wall starts on an edge of the lattice that ABSORB makes absorbing (line 7)") == 0);
     // --set reaches SHAKE cards by their order.
     Scene t;
     REQUIRE(read_in_decks(deck + "SHAKE X FILE=quake_pulse.txt\n", t).empty());
@@ -498,4 +510,61 @@ TEST_CASE("quake: a warning when the ground moves more than a quarter cell (the 
         for (long n = 0; n < s.steps; ++n) sim.step();
         CHECK(std::fabs(sim.ground_displacement(0) / 0.8 - 1) < 1e-9);
     }
+}
+
+TEST_CASE("quake: with a rigid base, side dashpots act on the motion relative to the ground") {
+    // A stiff layer (V_s = 1000 m/s: first frequency V_s / 4H = 50 Hz) on a rigid base
+    // shaken by the 2 Hz burst moves with the base as a rigid body. Side dashpots against
+    // the ground at rest resisted that rigid motion (force 2 rho c_p H v against the
+    // layer's inertia rho W H a: about three times it here); acting on the motion relative
+    // to the ground, they leave it alone: the centre moves as with free sides within 1 %,
+    // and they take out less than 1 % of the layer's largest kinetic energy (the ground's
+    // net work on a body that ends at rest where it began is only what its elastic
+    // vibration keeps or loses).
+    const std::string layer = "GRID 40 5 1.0\nMATERIAL 1 ELASTIC E=5E9 NU=0.25 RHO=2000\nCLUSTER 1 0 0 40 5\nFIX XY 0 0 40 0\n"
+                              "SHAKE X FILE=quake_burst.txt BASELINE\nSTEP 2E-4 15000\n";
+    double peak_ke = 0;
+    auto centre = [&](const std::string& extra, Simulation::Energy& e) {
+        Scene s;
+        REQUIRE(read_in_decks(layer + extra, s).empty());
+        Simulation sim(s);
+        const std::size_t top = std::size_t(sim.node(20, 5));
+        double u = 0, peak = 0;
+        for (long n = 0; n < s.steps; ++n) {
+            sim.step();
+            u += sim.du_x()[top];
+            peak = std::max(peak, std::fabs(u));
+            peak_ke = std::max(peak_ke, sim.kinetic_energy());
+        }
+        e = sim.energy();
+        return peak;
+    };
+    Simulation::Energy e_free, e_abs;
+    const double free_sides = centre("", e_free), absorbing = centre("ABSORB LEFT RIGHT\n", e_abs);
+    MESSAGE("stiff layer: the centre's largest displacement " << absorbing << " m with ABSORB LEFT RIGHT, " << free_sides << " m with free sides; dashpots took "
+                                                             << e_abs.d_absorb << " J/m, the layer's largest kinetic energy " << peak_ke << " J/m");
+    CHECK(std::fabs(absorbing / free_sides - 1) < 0.01);
+    CHECK(e_abs.d_absorb < 0.01 * peak_ke);
+    CHECK(std::fabs(e_abs.error) < 1e-3);
+}
+
+TEST_CASE("quake: a long record costs its samples once, not once a step") {
+    // 100 000 samples (100 s at 1 ms) with BASELINE and a short run: the record's cursor
+    // moves forward with the time asked; scanning from the first sample every step took 96 s.
+    const std::string dir = "build/quake_motion";
+    std::filesystem::create_directories(dir);
+    {
+        std::ofstream f(dir + "/long.txt");
+        for (int k = 0; k <= 100000; ++k) f << k * 1e-3 << " " << std::sin(k * 1e-3 * 2 * kPi) << "\n";
+    }
+    Scene s;
+    REQUIRE(read_deck_text("GRID 4 4 1\nMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nCLUSTER 1 0 0 4 2\nFIX XY 0 0 4 0\nSHAKE X FILE=long.txt BASELINE\nSTEP 1E-4 10\n",
+                           dir + "/t.deck", s).empty());
+    const auto t0 = std::chrono::steady_clock::now();
+    (void)warnings(s);
+    Simulation sim(s);  // BASELINE: 1e6 steps of the record
+    for (long n = 0; n < s.steps; ++n) sim.step();
+    const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    MESSAGE("long record: set-up and 10 steps in " << took << " s");
+    CHECK(took < 5.0);
 }
