@@ -3851,14 +3851,25 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
         // the last one to three points of a material's span, take the one-point test and
         // return on the trial.
         long consulted = 0;  // Mohr-Coulomb points consulted (profiling)
+        const double *pc0 = p_.c0.data(), *pnphi = p_.n_phi.data(), *psqrt = p_.sqrt_n_phi.data();
+        const std::uint8_t* pyield = p_.yielded.data();
         auto consult_block = [&](long b0, long b1) LPFDM_INLINE {
             auto consult = [&](long q, const long qend, const MaterialConstants& mc, auto own) LPFDM_INLINE {
                 for (; q + 4 <= qend; q += 4) {
                     detail::v4d xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;
                     detail::load(psxx + q, xx); detail::load(psyy + q, yy); detail::load(psxy + q, xy); detail::load(pszz + q, zz);
-                    for (int l = 0; l < 4; ++l) {
-                        const MohrStrength st = strength_of<decltype(own)::value>(mc, std::size_t(q + l));
-                        np[l] = st.n_phi; two_c_sq[l] = 2 * st.c * st.sqrt_n_phi;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
+                    {  // strength_of, four points at once: the same operations in each lane
+                        detail::v4d c0, sq;
+                        if constexpr (decltype(own)::value) {
+                            detail::load(pc0 + q, c0); detail::load(pnphi + q, np); detail::load(psqrt + q, sq);
+                        } else {
+                            c0 = detail::v4d{mc.c, mc.c, mc.c, mc.c}; np = detail::v4d{mc.n_phi, mc.n_phi, mc.n_phi, mc.n_phi};
+                            sq = detail::v4d{mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi};
+                        }
+                        const detail::v4m soft = {-std::int64_t(pyield[q] != 0), -std::int64_t(pyield[q + 1] != 0), -std::int64_t(pyield[q + 2] != 0), -std::int64_t(pyield[q + 3] != 0)};
+                        const double keep = 1 - mc.soften;
+                        const detail::v4d c = soft ? c0 * keep : c0;
+                        two_c_sq = 2 * c * sq;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
                     }
                     int settled = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
                     if (settled == 15) continue;  // all four inside: the trial stands
