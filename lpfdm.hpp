@@ -5510,8 +5510,9 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             std::vector<std::string> seen;
             const std::vector<std::string> names = {"FILE", "SCALE", "START", "DAMPING"}, words = {"COMPLIANT", "BASELINE"};
             while (r.ok() && !r.at_end()) {
-                if (r.more_positional()) {
+                if (r.more_positional() && r.peek()->text != "=") {  // a word (a lone '=' goes to one_param, which names it)
                     const Token* w = r.field("COMPLIANT or BASELINE");
+                    if (!w) break;
                     const std::string u = upper(w->text);
                     if (u != "COMPLIANT" && u != "BASELINE") { r.fail(w->pos, "unknown word '" + w->text + "' (COMPLIANT or BASELINE)" + did_you_mean(w->text, words)); break; }
                     if (std::find(seen.begin(), seen.end(), u) != seen.end()) { r.fail(w->pos, u + " given twice"); break; }

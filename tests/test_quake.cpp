@@ -451,6 +451,10 @@ TEST_CASE("quake: SHAKE and ABSORB cards: every mistake named where it is") {
     CHECK(errors("SHAKE X FILE=quake_pulse.txt\nSHAKE X FILE=quake_pulse.txt\n").find("decks/inline.deck:7:1: error: the ground is shaken in X twice (SHAKE at line 6)") == 0);
     CHECK(errors("SHAKE X FILE=quake_pulse.txt\nSHAKE Y FILE=quake_pulse.txt START=1\n").find("decks/inline.deck:7:1: error: the SHAKE cards must agree on START") == 0);
     CHECK(errors("SHAKE Y FILE=quake_pulse.txt COMPLIANT\n").empty());
+    // A lone '=' where a word or a parameter belongs (the fuzzer's find: a null token).
+    CHECK(errors("SHAKE X = 3\n") == "decks/inline.deck:6:7: error: missing field: X or Y\n");  // read as X=3
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt COMPLIANT =\n") == "decks/inline.deck:6:40: error: missing value after COMPLIANT=\n");
+    CHECK(errors("SHAKE X FILE=quake_pulse.txt =\n") == "decks/inline.deck:6:30: error: '=' without a parameter name\n");
     CHECK(errors("ABSORB BOTTOM SIDEWAYS\n") == "decks/inline.deck:6:15: error: unknown edge 'SIDEWAYS' (BOTTOM, TOP, LEFT or RIGHT)\n");
     CHECK(errors("ABSORB BOTTOM\nABSORB LEFT BOTTOM\n") == "decks/inline.deck:7:1: error: ABSORB BOTTOM is given twice\n");
     CHECK(errors("ABSORB\n") == "decks/inline.deck:6:7: error: missing field: BOTTOM, TOP, LEFT or RIGHT\n");
