@@ -1654,23 +1654,48 @@ inline void baseline_trend(const Shake& k, double dt, double& c0, double& c1) {
 // (after the record, the ground keeps the velocity it ended with). For a warning only:
 // over a record of more than 1e6 steps the steps are made longer (at most 1e6 of them),
 // so that the check stays quick whatever the deck.
+// The first step of a SHAKE card's motion: START / dt rounded up (validate refuses START
+// beyond 1e15 steps; the bound keeps the conversion defined for a scene built in code).
+inline long start_step(const Shake& k, double dt) { return long(std::min(std::ceil(k.start / dt - 1e-9), 1e18)); }
+// The ground's motion under one SHAKE card, step by step (Simulation::ground_step, and the
+// warning's ground_excursion): step n (from time n dt to (n + 1) dt) is integrated as eq.
+// 13 integrates a node, v(n + 1/2) = v(n - 1/2) + dt a(n dt), with dt a(n dt) the record's
+// exact integral over the step's time, from (n - 1/2) dt to (n + 1/2) dt: v(n + 1/2) is then
+// the record's velocity at (n + 1/2) dt exactly (a record starting with a jump or sampled
+// coarser than dt loses nothing), du = v dt.
+struct GroundMotion {
+    const Shake* spec = nullptr;  // the card (nullptr: this direction is not shaken)
+    double c0 = 0, c1 = 0;        // BASELINE: the trend c0 + c1 t taken off the acceleration
+    long first = 0;               // start_step
+    std::size_t at = 0;           // the record's sample at or before the time last asked
+    double v = 0;                 // velocity at the last half step [m/s]
+    double du = 0, du_before = 0; // increment in this step and in the one before [m]
+    double d = 0;                 // displacement after this step [m]
+    double v_now = 0;             // velocity at the start of this step (mean of the half steps)
+    void rewind() { at = 0; v = du = du_before = d = v_now = 0; }
+    void step(long n, double dt) {
+        const double tau = double(n - first) * dt, v0 = v;
+        v += record_integral(*spec, c0, c1, at, tau - 0.5 * dt, tau + 0.5 * dt);
+        du_before = du;
+        du = v * dt;
+        d += du;
+        v_now = 0.5 * (v0 + v);
+    }
+};
 inline double ground_excursion(const Shake& k, double dt, long steps) {
     const double h = std::max(dt, (k.start + k.t.back()) / 1e6);
     steps = long(std::min(double(steps), std::ceil(double(steps) * dt / h)));
-    dt = h;
-    double c0 = 0, c1 = 0, v = 0, d = 0, most = 0;
-    if (k.baseline) baseline_trend(k, dt, c0, c1);
-    std::size_t at = 0;
-    const long n0 = long(std::min(std::ceil(k.start / dt - 1e-9), 1e18));
-    long n = n0;
-    for (; n < steps; ++n) {
-        const double tau = double(n - n0) * dt;
-        if (tau - 0.5 * dt > k.t.back()) break;
-        v += record_integral(k, c0, c1, at, tau - 0.5 * dt, tau + 0.5 * dt);
-        d += v * dt;
-        most = std::max(most, std::fabs(d));
+    GroundMotion g;
+    g.spec = &k;
+    g.first = start_step(k, h);
+    if (k.baseline) baseline_trend(k, h, g.c0, g.c1);
+    double most = 0;
+    long n = g.first;
+    for (; n < steps && double(n - g.first) * h - 0.5 * h <= k.t.back(); ++n) {
+        g.step(n, h);
+        most = std::max(most, std::fabs(g.d));
     }
-    return std::max(most, std::fabs(d + v * dt * double(std::max(0L, steps - n))));
+    return std::max(most, std::fabs(g.d + g.v * h * double(std::max(0L, steps - n))));
 }
 }  // namespace detail
 
@@ -2604,20 +2629,10 @@ private:
     }
     double potential_energy(std::size_t k) const { return -groups_[p_.group[k]].mass * (sc_.gravity_x * p_.x[k] + sc_.gravity_y * p_.y[k]); }
     // Earthquakes: ground motion (SHAKE) and absorbing edges (ABSORB); see dynamics_begin.
-    struct Ground {
-        const Shake* spec = nullptr;  // the card shaking this direction (nullptr: none)
-        double c0 = 0, c1 = 0;        // BASELINE: the trend c0 + c1 t taken off the acceleration
-        std::size_t at = 0;           // the record's sample at or before the time last asked
-        double v = 0;                 // the ground's velocity at the last half step [m/s]
-        double du = 0;                // its increment this step [m]
-        double d = 0;                 // its displacement after this step [m]
-        double v_now = 0;             // its velocity at the start of this step (mean of the half steps)
-        double du_before = 0;         // its increment in the step before
-    };
+    using Ground = detail::GroundMotion;
     Ground ground_[2];                // x, y
     bool dynamic_ = false;            // the scene shakes or absorbs
-    long shake_step_ = 0;             // the first step of the shaking: START / dt, rounded up
-    double shake_damping_ = -1;       // the local damping from then on (< 0: the deck's)
+    long shake_step_ = 0;             // the first step of the shaking (detail::start_step; 0 without SHAKE)
     // One dashpot per (node, edge cell) of an absorbing edge: its node's slot, the cell (it
     // acts while the cell holds mass), its coefficients rho c L / 2 in x and y [N s/m per m],
     // and those of a compliant base's input traction (twice them, on the bottom edge).
@@ -2627,7 +2642,6 @@ private:
     std::vector<std::uint8_t> released_;                           // per slot: the FIX directions it gives up at START
     std::vector<double> absorb_cx_, absorb_cy_, input_fx_, input_fy_, hold_fx_, hold_fy_;  // per slot
     void setup_dynamics();
-    double record_integral(Ground& g, double ta, double tb) const;
     void ground_step(long n);
     void replay_ground();
     void dynamics_begin();
@@ -4560,33 +4574,17 @@ inline Range Simulation::impose_supports() {
 }
 
 // ------------------------------------------------ earthquakes: SHAKE, ABSORB ---
-// The integral of the ground's acceleration over [ta, tb] (detail::record_integral).
-inline double Simulation::record_integral(Ground& g, double ta, double tb) const { return detail::record_integral(*g.spec, g.c0, g.c1, g.at, ta, tb); }
-
-// The ground's motion in step n (from time n dt to (n + 1) dt), integrated as eq. 13
-// integrates a node, v(n + 1/2) = v(n - 1/2) + dt a(n dt), with dt a(n dt) the record's
-// exact integral over the step's time, from (n - 1/2) dt to (n + 1/2) dt: v(n + 1/2) is
-// then the record's velocity at (n + 1/2) dt exactly (a record starting with a jump or
-// sampled coarser than dt loses nothing), du = v dt.
+// The ground's motion in step n, each shaken direction (detail::GroundMotion::step).
 inline void Simulation::ground_step(long n) {
-    const double dt = sc_.dt_s;
-    for (Ground& g : ground_) {
-        if (!g.spec) continue;
-        const double tau = double(n - shake_step_) * dt;
-        const double v0 = g.v;
-        g.v += record_integral(g, tau - 0.5 * dt, tau + 0.5 * dt);
-        g.du_before = g.du;
-        g.du = g.v * dt;
-        g.d += g.du;
-        g.v_now = 0.5 * (v0 + g.v);
-    }
+    for (Ground& g : ground_)
+        if (g.spec) g.step(n, sc_.dt_s);
 }
 
 // After a restart: the ground's motion up to the step read (the same operations as the
 // run made, so the same numbers), and the edges released at START released again (their
 // reactions come from the state file).
 inline void Simulation::replay_ground() {
-    for (Ground& g : ground_) { g.at = 0; g.v = g.du = g.d = g.v_now = g.du_before = 0; }
+    for (Ground& g : ground_) g.rewind();
     for (long n = 0; n < step_; ++n) ground_step(n);
     if (step_ > shake_step_)
         for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) fixed_[std::size_t(absorb_nodes_[q])] &= std::uint8_t(~released_[q]);
@@ -4606,8 +4604,7 @@ inline void Simulation::setup_dynamics() {
         Ground& g = ground_[k.dir == kFixX ? 0 : 1];
         g.spec = &k;
         if (k.compliant) edges |= kBottom;
-        shake_step_ = long(std::min(std::ceil(k.start / dt - 1e-9), 1e18));  // (validate refuses START beyond 1e15 steps)
-        shake_damping_ = k.damping;
+        shake_step_ = g.first = detail::start_step(k, dt);
         if (k.baseline) detail::baseline_trend(k, dt, g.c0, g.c1);
     }
     // The material each edge cell's points were made of (the last cluster holding its centre).
@@ -4672,7 +4669,7 @@ inline void Simulation::setup_dynamics() {
 inline void Simulation::dynamics_begin() {
     ground_step(step_);
     if (step_ < shake_step_) return;
-    if (shake_damping_ >= 0) sc_.damping = shake_damping_;
+    if (!sc_.shakes.empty() && sc_.shakes.front().damping >= 0) sc_.damping = sc_.shakes.front().damping;  // the cards agree (validate)
     const bool release = step_ == shake_step_;
     const double vx = ground_[0].v_now, vy = ground_[1].v_now;
     for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) {
@@ -5088,6 +5085,16 @@ struct Lexed {
     std::vector<std::string> raw;  // the card's text after the keyword (for TITLE)
 };
 
+// The next line of text from `at` on (without its LF) into line; false at the end.
+inline bool next_line(const std::string& text, std::size_t& at, std::string& line) {
+    if (at >= text.size()) return false;
+    std::size_t eol = text.find('\n', at);
+    if (eol == std::string::npos) eol = text.size();
+    line.assign(text, at, eol - at);
+    at = eol + 1;
+    return true;
+}
+
 // The text without a leading UTF-8 byte order mark, its CR LF and lone CR (old Mac files)
 // made LF. In one pass (erasing each CR in place took quadratic time on a large file).
 inline std::string unix_lines(const std::string& in) {
@@ -5109,11 +5116,8 @@ inline Lexed lex(const std::string& text_in, const std::string& file, Diagnostic
     Pos last_amp;
     int line_no = 0;
     std::size_t at = 0;
-    while (at < text.size()) {
-        std::size_t eol = text.find('\n', at);
-        if (eol == std::string::npos) eol = text.size();
-        std::string line = text.substr(at, eol - at);
-        at = eol + 1;
+    std::string line;
+    while (detail::next_line(text, at, line)) {
         ++line_no;
         bool binary = false;
         for (std::size_t c = 0; c < line.size(); ++c) {
@@ -5361,11 +5365,8 @@ inline Diagnostics read_motion(const std::string& path, Shake& k) {
     text = detail::unix_lines(text);  // as a deck: a byte order mark skipped, CR LF or CR ending lines
     int line_no = 0;
     std::size_t at = 0;
-    while (at < text.size()) {
-        std::size_t eol = text.find('\n', at);
-        if (eol == std::string::npos) eol = text.size();
-        std::string line = text.substr(at, eol - at);
-        at = eol + 1;
+    std::string line;
+    while (detail::next_line(text, at, line)) {
         ++line_no;
         const std::size_t hash = line.find('#');
         if (hash != std::string::npos) line.resize(hash);
