@@ -1466,10 +1466,10 @@ __attribute__((target("avx2"))) inline int mohr_inside_lanes(const v4d& xx, cons
     return __builtin_ia32_movmskpd256(v4d(shear_ok & (hi <= 0) & (two_c_sq >= 0) & (np < inf)));
 }
 // The rest of mohr_inside (the tension planes) and the closed-form shear return of
-// mohr_coulomb_correct. Bit l of the result: lane l is settled; bit 4 + l: it was
-// returned by shear (its stress replaced, d_gamma[l] its plastic shear increment). A lane
-// left unsettled (tension, an edge, or a return the closed form cannot make admissible)
-// takes the one-point code. n_psi, tension, a1, a2: the material's (MaterialConstants).
+// mohr_coulomb_correct (where FLAC's h chooses shear). Bit l of the result: lane l is
+// settled; bit 4 + l: it was returned by shear (its stress replaced, d_gamma[l] its plastic
+// shear increment). A lane left unsettled (tension, an edge, or a return the closed form
+// cannot make admissible) takes the one-point code. n_psi, tension, a1, a2: the material's (MaterialConstants).
 __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, v4d& d_gamma) {
     constexpr double huge = std::numeric_limits<double>::infinity();
     const v4d inf = {huge, huge, huge, huge}, zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
@@ -1495,7 +1495,12 @@ __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v
     const v4d s0 = t0 + mu * (C ? d2 : d1), s1 = t1 + mu * (A ? d2 : d3), s2 = t2 + mu * (A ? d3 : B ? d2 : d1);
     const v4d m01 = s1 < s0 ? s1 : s0, M01 = s0 < s1 ? s1 : s0;
     const v4d lo_n = s2 < m01 ? s2 : m01, hi_n = M01 < s2 ? s2 : M01;
-    const v4m shear = ~inside & (fs < 0) & (ft >= 0) & (lo_n - np * hi_n + two_c_sq >= -tol) & (sig_t - hi_n >= -tol);
+    // FLAC's h chooses shear where the tension plane is violated too (h_fn, the same
+    // operations; a lane with ft >= 0 does not need it, as the one-point code skips it).
+    const v4d alpha_p = __builtin_ia32_sqrtpd256(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
+    const v4d h = ti3 - sig_t + alpha_p * (ti1 - sig_p);
+    const v4m shear_first = (fs < 0) & ((ft >= 0) | ~(h > 0));
+    const v4m shear = ~inside & shear_first & (lo_n - np * hi_n + two_c_sq >= -tol) & (sig_t - hi_n >= -tol);
     // to_xy: the same principal direction, the new principal values
     const v4d pn = 0.5 * (s1 + s0), rn = 0.5 * (s1 - s0);
     const v4d c2 = r > 0 ? a / r : one, s2xy = r > 0 ? xy / r : zero;
@@ -3906,7 +3911,9 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
         // return on the trial.
         long consulted = 0;  // Mohr-Coulomb points consulted (profiling)
         const double *pc0 = p_.c0.data(), *pnphi = p_.n_phi.data(), *psqrt = p_.sqrt_n_phi.data();
-        const std::uint8_t* pyield = p_.yielded.data();
+        std::uint8_t* pyielded = p_.yielded.data();
+        const std::uint8_t* pyield = pyielded;
+        double *pshear = p_.plastic_shear.data(), *pwork = p_.plastic_work.data();
         auto consult_block = [&](long b0, long b1) LPFDM_INLINE {
             auto consult = [&](long q, const long qend, const MaterialConstants& mc, auto own) LPFDM_INLINE {
                 for (; q + 4 <= qend; q += 4) {
@@ -3930,15 +3937,25 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     const detail::v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
                     settled = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma);
                     detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy); detail::store(pszz + q, zz);
-                    if (settled == 15) continue;
-                    for (int l = 0; l < 4; ++l) {
-                        const long r = q + l;
-                        if (settled >> (4 + l) & 1) {
-                            record_yield(mc, std::size_t(r), d_gamma[l], Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]}, Stress{xx[l], yy[l], xy[l], zz[l]});
-                        } else if (!(settled >> l & 1)) {
-                            consult_point(mc, r, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]}, own);
-                        }
+                    if (const int sh = settled >> 4) {  // record_yield of the lanes returned by shear: the same operations
+                        using detail::v4d;
+                        const v4d bxx = t_xx - xx, byy = t_yy - yy, bxy = t_xy - xy, bzz = t_zz - zz;  // trial - s
+                        const v4d pa = (xx + yy + zz) / 3, pb = (bxx + byy + bzz) / 3;  // compliance_product(mc, s, b)
+                        const v4d dev = (xx - pa) * (bxx - pb) + (yy - pa) * (byy - pb) + (zz - pa) * (bzz - pb) + 2 * xy * bxy;
+                        const v4d work = pa * pb / ((mc.a1 + 2 * mc.a2) / 3) + dev / (2 * mc.G);
+                        const v4d v0 = {groups_[pgroup[q]].vol0, groups_[pgroup[q + 1]].vol0, groups_[pgroup[q + 2]].vol0, groups_[pgroup[q + 3]].vol0};
+                        const detail::v4m m = {-std::int64_t(sh & 1), -std::int64_t(sh >> 1 & 1), -std::int64_t(sh >> 2 & 1), -std::int64_t(sh >> 3 & 1)};
+                        v4d gamma, pw, vol;
+                        detail::load(pshear + q, gamma); detail::load(pwork + q, pw); detail::load(pvol + q, vol);
+                        const v4d vk = v0 < vol ? v0 : vol;  // std::min(vol, vol0)
+                        gamma = m ? gamma + d_gamma : gamma;
+                        pw = m ? pw + vk * work : pw;
+                        detail::store(pshear + q, gamma); detail::store(pwork + q, pw);
+                        for (int l = 0; l < 4; ++l) if (sh >> l & 1) pyielded[q + l] = 1;  // softening from the next consult
                     }
+                    if ((settled & 15) == 15) continue;
+                    for (int l = 0; l < 4; ++l)  // the lanes left: the one-point code
+                        if (!(settled >> l & 1)) consult_point(mc, q + l, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]}, own);
                 }
                 for (; q < qend; ++q) consult_point(mc, q, Stress{psxx[q], psyy[q], psxy[q], pszz[q]}, own);
             };

@@ -296,7 +296,7 @@ TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as th
         return pick < 9 ? odd[pick] : scale * (r.uniform() - shift);
     };
     auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
-    long passed = 0, first_exits = 0, inside = 0, shear = 0, other = 0;
+    long passed = 0, first_exits = 0, inside = 0, shear = 0, other = 0, past_tension = 0;
     for (int k = 0; k < 60000; ++k) {
         Material m = Material::mohr(1, 5e7, 0.1 + 0.35 * r.uniform(), 2000, 45 * r.uniform(), 1e4 * r.uniform());
         m.psi_deg = m.phi_deg * r.uniform();
@@ -346,6 +346,7 @@ TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as th
                 CHECK(res.mode == MohrResult::Shear);
                 CHECK((same(xx[l], one.xx) && same(yy[l], one.yy) && same(xy[l], one.xy) && same(zz[l], one.zz)));
                 CHECK(same(d_gamma[l], res.d_gamma_p));
+                past_tension += t.sig_t - std::max(t.sig[1], t.sig[2]) < 0;  // FLAC's h chose shear
             } else {
                 ++other;
                 REQUIRE(!in);
@@ -353,9 +354,10 @@ TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as th
         }
     }
     CHECK(passed == first_exits);  // and takes it wherever mohr_inside does
-    MESSAGE("lanes through the first exit " << passed << ", settled as inside " << inside << ", returned by shear " << shear << ", left to the one-point code " << other);
+    MESSAGE("lanes through the first exit " << passed << ", settled as inside " << inside << ", returned by shear " << shear << " (" << past_tension << " of them past the tension limit too), left to the one-point code " << other);
     CHECK(inside > 20000);  // every outcome is frequent
     CHECK(shear > 10000);
+    CHECK(past_tension > 1000);
     CHECK(other > 20000);
 #else
     MESSAGE("built without the AVX2 version (LPFDM_WIDE): nothing to compare");
