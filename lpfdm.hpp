@@ -1166,44 +1166,37 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // The nine planes: f = n . sig + kk >= 0, flow m. Shear plane (i, j): n = e_i - N_phi
     // e_j, m = e_i - N_psi e_j; tension plane i: n = m = -e_i. The components are the
     // values e_i - N e_j takes (1 - N 0, 0 - N 1, 0 - N 0), written out once per flow rule
-    // instead of looped over an identity table (a search pays this once or twice).
+    // instead of looped over an identity table. Each plane is made when a set first holds
+    // it (most searches need two or three of the nine), and again for the second flow rule.
     struct Plane { double n[3], kk, m[3]; };
     Plane pl[9];
-    int npl = 0;
+    const int npl = std::isfinite(sig_t) ? 9 : 6;
     static constexpr int kShear[6][2] = {{0, 1}, {0, 2}, {1, 0}, {1, 2}, {2, 0}, {2, 1}};  // (i, j), i the compressive side
     auto shear_plane = [](int i, int j) { return 2 * i + (j > i ? j - 1 : j); };  // kShear's index of (i, j)
-    auto build = [&]() {
-        const double n_one = 1.0 - np * 0.0, n_neg = 0.0 - np * 1.0, n_zero = 0.0 - np * 0.0;
-        const double m_one = 1.0 - ns * 0.0, m_neg = 0.0 - ns * 1.0, m_zero = 0.0 - ns * 0.0;
-        for (npl = 0; npl < 6; ++npl) {
-            Plane& q = pl[npl];
-            const int i = kShear[npl][0], j = kShear[npl][1];
-            q.n[0] = q.n[1] = q.n[2] = n_zero; q.n[i] = n_one; q.n[j] = n_neg;
-            q.m[0] = q.m[1] = q.m[2] = m_zero; q.m[i] = m_one; q.m[j] = m_neg;
-            q.kk = two_c_sq;
-        }
-        if (std::isfinite(sig_t))
-            for (int i = 0; i < 3; ++i) {
-                Plane& q = pl[npl++];
-                q.n[0] = q.n[1] = q.n[2] = q.m[0] = q.m[1] = q.m[2] = -0.0;
-                q.n[i] = q.m[i] = -1.0;
-                q.kk = sig_t;
-            }
-    };
     auto f_at = [&](const Plane& q, const double sg[3]) { return q.n[0] * sg[0] + q.n[1] * sg[1] + q.n[2] * sg[2] + q.kk; };
     // Per plane, once per flow rule: D m in principal space and f at the trial stress.
     double dmp[9][3], ftrial[9];
-    auto prepare = [&]() {
-        build();
-        const double d12 = a1 - a2;
-        for (int a = 0; a < npl; ++a) {
-            const Plane& q = pl[a];
-            const double a2_tr = a2 * (q.m[0] + q.m[1] + q.m[2]);  // a2 trace(m)
-            dmp[a][0] = a2_tr + d12 * q.m[0]; dmp[a][1] = a2_tr + d12 * q.m[1]; dmp[a][2] = a2_tr + d12 * q.m[2];
-            ftrial[a] = f_at(q, trial);
+    unsigned made = 0;  // bit a: plane a made for this flow rule
+    auto plane = [&](int a) {
+        if (made >> a & 1) return;
+        made |= 1u << a;
+        Plane& q = pl[a];
+        if (a < 6) {
+            const double n_one = 1.0 - np * 0.0, n_neg = 0.0 - np * 1.0, n_zero = 0.0 - np * 0.0;
+            const double m_one = 1.0 - ns * 0.0, m_neg = 0.0 - ns * 1.0, m_zero = 0.0 - ns * 0.0;
+            const int i = kShear[a][0], j = kShear[a][1];
+            q.n[0] = q.n[1] = q.n[2] = n_zero; q.n[i] = n_one; q.n[j] = n_neg;
+            q.m[0] = q.m[1] = q.m[2] = m_zero; q.m[i] = m_one; q.m[j] = m_neg;
+            q.kk = two_c_sq;
+        } else {
+            q.n[0] = q.n[1] = q.n[2] = q.m[0] = q.m[1] = q.m[2] = -0.0;
+            q.n[a - 6] = q.m[a - 6] = -1.0;
+            q.kk = sig_t;
         }
+        const double d12 = a1 - a2, a2_tr = a2 * (q.m[0] + q.m[1] + q.m[2]);  // a2 trace(m)
+        dmp[a][0] = a2_tr + d12 * q.m[0]; dmp[a][1] = a2_tr + d12 * q.m[1]; dmp[a][2] = a2_tr + d12 * q.m[2];
+        ftrial[a] = f_at(q, trial);
     };
-    prepare();
 
     // Solves the active set act[0..na) and checks the result; true if admissible.
     double best[3] = {0, 0, 0}, best_mu[3] = {0, 0, 0};
@@ -1215,7 +1208,7 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
         constexpr int na = decltype(NA)::value;
         double A[3][3], b[3], mu[3] = {0, 0, 0};
         const double* dm[3];
-        for (int u = 0; u < na; ++u) dm[u] = dmp[act[u]];
+        for (int u = 0; u < na; ++u) { plane(act[u]); dm[u] = dmp[act[u]]; }
         for (int u = 0; u < na; ++u) {
             b[u] = -ftrial[act[u]];
             for (int v = 0; v < na; ++v) A[u][v] = pl[act[u]].n[0] * dm[v][0] + pl[act[u]].n[1] * dm[v][1] + pl[act[u]].n[2] * dm[v][2];
@@ -1242,7 +1235,11 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
             if (mu[u] < mu_min) return false;
             for (int t = 0; t < 3; ++t) sg[t] += mu[u] * dm[u][t];
         }
-        for (int q = 0; q < npl; ++q) if (f_at(pl[q], sg) < -tol) return false;
+        // Every plane at sg: the lowest shear plane is that of the smallest and the largest
+        // principal value, the lowest tension plane that of the largest (f_at gives the same
+        // numbers: its terms with a zero component are exact zeros).
+        const double lo = std::min(std::min(sg[0], sg[1]), sg[2]), hi = std::max(std::max(sg[0], sg[1]), sg[2]);
+        if (lo - np * hi + two_c_sq < -tol || (npl > 6 && sig_t - hi < -tol)) return false;
         for (int t = 0; t < 3; ++t) best[t] = sg[t];
         for (int u = 0; u < na; ++u) { best_mu[u] = mu[u]; best_act[u] = act[u]; }
         best_na = na;
@@ -1269,32 +1266,26 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // admissible returns, of which the one beside FLAC's own plane is taken.
     bool found = false;
     const int p0 = shear_first ? shear_plane(i1, i3) : 6 + i3;
-    int near[8], n_near = 0;  // the planes to pair with p0, in order
-    auto add_near = [&](int q) {
-        if (q == p0 || q >= npl || p0 >= npl) return;
-        for (int u = 0; u < n_near; ++u) if (near[u] == q) return;
-        near[n_near++] = q;
-    };
-    auto near_planes = [&]() {
-        n_near = 0;
-        if (shear_first) { add_near(shear_plane(i1, i2)); add_near(6 + i1); add_near(shear_plane(i2, i3)); }
-        else {  // sig_i3's tension plane: first the shear planes of the in-plane pair holding i3
-            const int o = i3 == 2 ? i1 : 1 - i3;
-            add_near(shear_plane(o, i3)); add_near(shear_plane(i3, o));
-        }
-        for (int q = 0; q < npl; ++q) add_near(q);
-    };
+    int first[3] = {-1, -1, -1};  // the planes to pair with p0 before the others, in order
+    if (shear_first) { first[0] = shear_plane(i1, i2); first[1] = 6 + i1; first[2] = shear_plane(i2, i3); }
+    else {  // sig_i3's tension plane: first the shear planes of the in-plane pair holding i3
+        const int o = i3 == 2 ? i1 : 1 - i3;
+        first[0] = shear_plane(o, i3); first[1] = shear_plane(i3, o);
+    }
     for (int pass = 0; pass < 2 && !found; ++pass) {
-        if (pass == 1) { ns = np; prepare(); }
+        if (pass == 1) { ns = np; made = 0; }  // the associated flow rule: the planes made again
         using One = std::integral_constant<int, 1>;
         using Two = std::integral_constant<int, 2>;
         using Three = std::integral_constant<int, 3>;
         int act[3];
-        near_planes();
-        for (int u = 0; u < n_near && !found; ++u) {  // p0 and a plane it meets
-            act[0] = std::min(p0, near[u]); act[1] = std::max(p0, near[u]);
+        auto try_pair = [&](int q) {  // p0 and plane q
+            if (q < 0 || q >= npl || q == p0 || p0 >= npl) return;
+            act[0] = std::min(p0, q); act[1] = std::max(p0, q);
             if ((found = try_set(act, Two{}))) res.mode = MohrResult::Edge;
-        }
+        };
+        for (int u = 0; u < 3 && !found; ++u) try_pair(first[u]);
+        for (int q = 0; q < npl && !found; ++q)
+            if (q != first[0] && q != first[1] && q != first[2]) try_pair(q);
         for (act[0] = 0; act[0] < npl && !found; ++act[0]) {
             if (found = try_set(act, One{}), found) { res.mode = act[0] < 6 ? MohrResult::Shear : MohrResult::Tension; break; }
         }
