@@ -839,7 +839,8 @@ inline void elastic_increment(const MaterialConstants& k, const StrainIncrement&
 // (K = (a1 + 2 a2) / 3, G): p_a p_b / K + s_a : s_b / (2G), p the mean stress, s the
 // deviator. Half of it with a = b is the elastic energy per unit volume; with a the
 // corrected stress and b the correction a Mohr-Coulomb return removed it is the plastic
-// work per unit volume of that step (a : d_eps^p, d_eps^p = C^-1 b).
+// work per unit volume of that step (a : d_eps^p, d_eps^p = C^-1 b). The AVX2 point loop
+// (run_points, the lanes' record_yield) repeats its operations four points at a time.
 inline double compliance_product(const MaterialConstants& k, const Stress& a, const Stress& b) {
     const double K = (k.a1 + 2 * k.a2) / 3, G = k.G;
     const double pa = (a.xx + a.yy + a.zz) / 3, pb = (b.xx + b.yy + b.zz) / 3;
@@ -1165,8 +1166,8 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
 
     // The nine planes: f = n . sig + kk >= 0, flow m. Shear plane (i, j): n = e_i - N_phi
     // e_j, m = e_i - N_psi e_j; tension plane i: n = m = -e_i. The components are the
-    // values e_i - N e_j takes (1 - N 0, 0 - N 1, 0 - N 0), written out once per flow rule
-    // instead of looped over an identity table. Each plane is made when a set first holds
+    // values e_i - N e_j takes (1 - N 0, 0 - N 1, 0 - N 0), written out per plane instead
+    // of looped over an identity table. Each plane is made when a set first holds
     // it (most searches need two or three of the nine), and again for the second flow rule.
     struct Plane { double n[3], kk, m[3]; };
     Plane pl[9];
@@ -1236,8 +1237,8 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
             for (int t = 0; t < 3; ++t) sg[t] += mu[u] * dm[u][t];
         }
         // Every plane at sg: the lowest shear plane is that of the smallest and the largest
-        // principal value, the lowest tension plane that of the largest (f_at gives the same
-        // numbers: its terms with a zero component are exact zeros).
+        // principal value, the lowest tension plane that of the largest (for finite values
+        // f_at gives the same numbers: its terms with a zero component are exact zeros).
         const double lo = std::min(std::min(sg[0], sg[1]), sg[2]), hi = std::max(std::max(sg[0], sg[1]), sg[2]);
         if (lo - np * hi + two_c_sq < -tol || (npl > 6 && sig_t - hi < -tol)) return false;
         for (int t = 0; t < 3; ++t) best[t] = sg[t];
@@ -1259,16 +1260,16 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // other pairs, the triples holding p0, the other triples, each in index order. In a
     // flowing collapse (decks/bench_flow.deck) 4 % of the point-updates search, and 94 % of
     // the searches end at the first or second set, instead of after the 9 single planes and
-    // up to 36 pairs of the index order (about 240 ns per search). Where only one set is
-    // admissible (always with psi = phi: tests/test_mohr.cpp) the order changes nothing;
-    // with psi < phi two sets can meet at the same point to round-off (the apex line lies on
-    // both), and rarely (8 of 4.5 million searches in that collapse) give two different
-    // admissible returns, of which the one beside FLAC's own plane is taken.
+    // up to 36 pairs of the index order (about 240 ns per search). With psi = phi the
+    // admissible sets give one stress (tests/test_mohr.cpp), and the order changes only its
+    // round-off where two sets meet (the apex line lies on a shear and a tension plane);
+    // with psi < phi they rarely (8 of 4.5 million searches in that collapse) give two
+    // different returns, of which the one beside FLAC's own plane is taken.
     bool found = false;
     const int p0 = shear_first ? shear_plane(i1, i3) : 6 + i3;
     int first[3] = {-1, -1, -1};  // the planes to pair with p0 before the others, in order
     if (shear_first) { first[0] = shear_plane(i1, i2); first[1] = 6 + i1; first[2] = shear_plane(i2, i3); }
-    else {  // sig_i3's tension plane: first the shear planes of the in-plane pair holding i3
+    else {  // sig_i3's tension plane: first the shear planes of i3 and the other in-plane stress (i1 if i3 is zz)
         const int o = i3 == 2 ? i1 : 1 - i3;
         first[0] = shear_plane(o, i3); first[1] = shear_plane(i3, o);
     }
@@ -1303,7 +1304,9 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
             if (found) res.mode = MohrResult::Edge;
         }
     }
-    if (!found) return res;  // unreachable: the associated projection always exists
+    // The associated projection always exists, but within about 0.1 degree of phi = 90
+    // (N_phi above 1e6) the tolerances fail and no set passes: the trial stress is kept.
+    if (!found) return res;
     // Plastic strains d_eps^p = -sum mu_a m_a (sig = sig_trial - D d_eps^p).
     double ep[3] = {0, 0, 0};
     for (int u = 0; u < best_na; ++u)
@@ -2455,7 +2458,8 @@ private:
     // Point q was returned from the trial stress to s with plastic shear increment
     // d_gamma_p: its plastic shear, its yielded flag and the work its return dissipated,
     // V s : C^-1 (trial - s), V = min(V, V0) as in eq. 8 (this step's volume: every kernel
-    // changes V before the consult).
+    // changes V before the consult). The AVX2 point loop (run_points) repeats these
+    // operations four points at a time: a change here is a change there.
     void record_yield(const MaterialConstants& mc, std::size_t q, double d_gamma_p, const Stress& trial, const Stress& s) {
         p_.plastic_shear[q] += d_gamma_p;
         p_.yielded[q] = 1;  // softening takes effect from the next consult

@@ -632,7 +632,7 @@ namespace {
 bool same_points(const Points& a, const Points& b) {
     return a.x == b.x && a.y == b.y && a.sxx == b.sxx && a.syy == b.syy && a.sxy == b.sxy && a.szz == b.szz &&
            a.vol == b.vol && a.cell == b.cell && a.id == b.id && a.group == b.group &&
-           a.plastic_shear == b.plastic_shear && a.yielded == b.yielded;
+           a.plastic_shear == b.plastic_shear && a.yielded == b.yielded && a.plastic_work == b.plastic_work;
 }
 
 // Two simulations of one scene after the same steps: the points and every cell and node

@@ -143,22 +143,32 @@ TEST_CASE("after every plastic correction the stress lies on the yield surface")
     CHECK(tension > 100);
 }
 
-TEST_CASE("with psi = phi every return, edges and apex included, is the projection in the energy norm") {
+TEST_CASE("with psi = phi every return, edges, corners and the apex included, is the projection in the energy norm") {
     // With associated flow the return of a trial t is the admissible stress s closest to t in
     // the norm of the compliance (a convex set's projection): (t - s) : C^-1 : (y - s) <= 0 for
     // every admissible y. The search for an edge, corner or apex tries the sets holding the
     // closed form's plane first; the projection is unique, so the order must not change it.
-    // y: the returns of other trials (on the surface) and the apex, all admissible.
+    // y: the returns of other trials (on the surface) and the corner of the tension planes,
+    // all admissible. Tolerance: 1e-9 of the correction's own energy (round-off of a few
+    // operations on the stresses), plus 1e-12 of the energy of stresses of the trials' scale;
+    // a return with a wrong multiplier or flow rule breaks it by more than 1e8 times (tried).
+    // Every fourth trial is a tension in all three directions beyond the tension limit:
+    // those return to the apex (or the corner of a lower cut-off).
     Random rnd(41);
-    int edges = 0;
+    int edges = 0, apex = 0, inside = 0;
     for (int k = 0; k < 300; ++k) {
         const double phi = 5 + 40 * rnd.uniform(), c = 1e3 + 2e4 * rnd.uniform();
         const double tens = k % 2 ? -1 : c * rnd.uniform();
         const Material m = Material::mohr(1, 5e7, 0.45 * rnd.uniform(), 1700, phi, c, phi, tens);
         const MaterialConstants mc = constants_of(m);
         const double scale = 5 * c;
+        const double np = mc.n_phi, st = tens >= 0 ? std::min(2 * c * std::sqrt(np) / (np - 1), tens) : 2 * c * std::sqrt(np) / (np - 1);
         auto random_stress = [&]() {
             return Stress{scale * (2 * rnd.uniform() - 1.5), scale * (2 * rnd.uniform() - 1.5), scale * (rnd.uniform() - 0.5), scale * (2 * rnd.uniform() - 1.5)};
+        };
+        auto beyond_apex = [&]() {  // principal values all above st
+            const double p = st + scale * (0.05 + rnd.uniform()), r = 0.5 * (p - st) * rnd.uniform(), a = 6.283185307179586 * rnd.uniform();
+            return Stress{p + r * std::cos(a), p - r * std::cos(a), r * std::sin(a), st + (p - r - st) * rnd.uniform() + 1e-3 * scale};
         };
         std::vector<Stress> ys;
         for (int j = 0; j < 60; ++j) {
@@ -166,25 +176,33 @@ TEST_CASE("with psi = phi every return, edges and apex included, is the projecti
             mohr_coulomb_return(mc, strength(mc), y);
             ys.push_back(y);
         }
-        const double np = mc.n_phi, apex = 2 * c * std::sqrt(np) / (np - 1), st = tens >= 0 ? std::min(apex, tens) : apex;
         ys.push_back({st, st, 0, st});
         for (int j = 0; j < 40; ++j) {
-            const Stress t = random_stress();
+            const Stress t = j % 4 == 3 ? beyond_apex() : random_stress();
             Stress s = t;
             const MohrResult r = mohr_coulomb_return(mc, strength(mc), s);
-            if (r.mode == MohrResult::Elastic) continue;
+            INFO("trial " << t.xx << " " << t.yy << " " << t.xy << " " << t.zz << ", mode " << int(r.mode) << ", phi " << phi << ", c " << c << ", tension " << tens);
+            if (r.mode == MohrResult::Elastic) {  // then the trial itself must be admissible
+                const Yield f = yield_functions(t, c, phi, tens);
+                CHECK(f.fs >= -1e-9 * scale);
+                CHECK(f.ft >= -1e-9 * scale);
+                ++inside;
+                continue;
+            }
             edges += r.mode == MohrResult::Edge;
+            const Eigen::Vector3d pv = principal(s);
+            apex += pv(2) - pv(0) <= 1e-9 * scale;
             const Stress b{t.xx - s.xx, t.yy - s.yy, t.xy - s.xy, t.zz - s.zz};
             const double tol = 1e-9 * compliance_product(mc, b, b) + 1e-12 * scale * scale / m.E;
             for (const Stress& y : ys) {
                 const Stress d{y.xx - s.xx, y.yy - s.yy, y.xy - s.xy, y.zz - s.zz};
-                INFO("trial " << t.xx << " " << t.yy << " " << t.xy << " " << t.zz << ", mode " << int(r.mode));
                 CHECK(compliance_product(mc, b, d) <= tol);
             }
         }
     }
-    MESSAGE(edges << " returns to an edge, corner or apex");
+    MESSAGE(edges << " returns to an edge, corner or apex, " << apex << " of them to the apex (or the tension corner); " << inside << " trials inside");
     CHECK(edges > 500);
+    CHECK(apex > 500);
 }
 
 TEST_CASE("flow rule: plastic volume / plastic shear = sin(psi); none with psi = 0") {

@@ -73,7 +73,7 @@ Trace run(const Scene& s, Kernel k, int threads, long steps, long every, const U
         digest(t, n, "x", p.x); digest(t, n, "y", p.y);
         digest(t, n, "sxx", p.sxx); digest(t, n, "syy", p.syy); digest(t, n, "sxy", p.sxy); digest(t, n, "szz", p.szz);
         digest(t, n, "vol", p.vol); digest(t, n, "cell", p.cell); digest(t, n, "id", p.id);
-        digest(t, n, "plastic_shear", p.plastic_shear); digest(t, n, "yielded", p.yielded);
+        digest(t, n, "plastic_shear", p.plastic_shear); digest(t, n, "yielded", p.yielded); digest(t, n, "plastic_work", p.plastic_work);
         digest(t, n, "du_x", sim.du_x()); digest(t, n, "du_y", sim.du_y());
         digest(t, n, "force_x", sim.force_x()); digest(t, n, "force_y", sim.force_y());
         digest(t, n, "node_mass", sim.node_mass()); digest(t, n, "cell_mass", sim.cell_mass()); digest(t, n, "cell_volume", sim.cell_volume());
