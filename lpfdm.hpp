@@ -839,13 +839,20 @@ inline void elastic_increment(const MaterialConstants& k, const StrainIncrement&
 // (K = (a1 + 2 a2) / 3, G): p_a p_b / K + s_a : s_b / (2G), p the mean stress, s the
 // deviator. Half of it with a = b is the elastic energy per unit volume; with a the
 // corrected stress and b the correction a Mohr-Coulomb return removed it is the plastic
-// work per unit volume of that step (a : d_eps^p, d_eps^p = C^-1 b). The AVX2 point loop
-// (run_points, the lanes' record_yield) repeats its operations four points at a time.
-inline double compliance_product(const MaterialConstants& k, const Stress& a, const Stress& b) {
+// work per unit volume of that step (a : d_eps^p, d_eps^p = C^-1 b).
+// T: one value, or the lanes of a vector (the AVX2 point loop's record_yield).
+template <class T>
+LPFDM_INLINE inline void compliance_product(const MaterialConstants& k, const T& axx, const T& ayy, const T& axy, const T& azz,
+                                            const T& bxx, const T& byy, const T& bxy, const T& bzz, T& out) {
     const double K = (k.a1 + 2 * k.a2) / 3, G = k.G;
-    const double pa = (a.xx + a.yy + a.zz) / 3, pb = (b.xx + b.yy + b.zz) / 3;
-    const double dev = (a.xx - pa) * (b.xx - pb) + (a.yy - pa) * (b.yy - pb) + (a.zz - pa) * (b.zz - pb) + 2 * a.xy * b.xy;
-    return pa * pb / K + dev / (2 * G);
+    const T pa = (axx + ayy + azz) / 3, pb = (bxx + byy + bzz) / 3;
+    const T dev = (axx - pa) * (bxx - pb) + (ayy - pa) * (byy - pb) + (azz - pa) * (bzz - pb) + 2 * axy * bxy;
+    out = pa * pb / K + dev / (2 * G);
+}
+inline double compliance_product(const MaterialConstants& k, const Stress& a, const Stress& b) {
+    double out;
+    compliance_product(k, a.xx, a.yy, a.xy, a.zz, b.xx, b.yy, b.xy, b.zz, out);
+    return out;
 }
 
 // The rotation of eq. 5f as an exact orthogonal matrix (Cayley form, no trigonometry):
@@ -1689,10 +1696,6 @@ inline void baseline_trend(const Shake& k, double dt, double& c0, double& c1) {
     const double det = v1 * dtt - vt * d1;
     if (det != 0) { c0 = (va * dtt - vt * da) / det; c1 = (v1 * da - va * d1) / det; }
 }
-// The largest ground displacement a rigid SHAKE gives in a run of `steps` steps of dt
-// (after the record, the ground keeps the velocity it ended with). For a warning only:
-// over a record of more than 1e6 steps the steps are made longer (at most 1e6 of them),
-// so that the check stays quick whatever the deck.
 // The first step of a SHAKE card's motion: START / dt rounded up (validate refuses START
 // beyond 1e15 steps; the bound keeps the conversion defined for a scene built in code).
 inline long start_step(const Shake& k, double dt) { return long(std::min(std::ceil(k.start / dt - 1e-9), 1e18)); }
@@ -1721,6 +1724,10 @@ struct GroundMotion {
         v_now = 0.5 * (v0 + v);
     }
 };
+// The largest ground displacement a rigid SHAKE gives in a run of `steps` steps of dt
+// (after the record, the ground keeps the velocity it ended with). For a warning only:
+// over a record of more than 1e6 steps the steps are made longer (at most 1e6 of them),
+// so that the check stays quick whatever the deck.
 inline double ground_excursion(const Shake& k, double dt, long steps) {
     const double h = std::max(dt, (k.start + k.t.back()) / 1e6);
     steps = long(std::min(double(steps), std::ceil(double(steps) * dt / h)));
@@ -2458,8 +2465,8 @@ private:
     // Point q was returned from the trial stress to s with plastic shear increment
     // d_gamma_p: its plastic shear, its yielded flag and the work its return dissipated,
     // V s : C^-1 (trial - s), V = min(V, V0) as in eq. 8 (this step's volume: every kernel
-    // changes V before the consult). The AVX2 point loop (run_points) repeats these
-    // operations four points at a time: a change here is a change there.
+    // changes V before the consult). The AVX2 point loop (run_points) does the same four
+    // points at a time: a change here is a change there.
     void record_yield(const MaterialConstants& mc, std::size_t q, double d_gamma_p, const Stress& trial, const Stress& s) {
         p_.plastic_shear[q] += d_gamma_p;
         p_.yielded[q] = 1;  // softening takes effect from the next consult
@@ -3907,7 +3914,6 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
         long consulted = 0;  // Mohr-Coulomb points consulted (profiling)
         const double *pc0 = p_.c0.data(), *pnphi = p_.n_phi.data(), *psqrt = p_.sqrt_n_phi.data();
         std::uint8_t* pyielded = p_.yielded.data();
-        const std::uint8_t* pyield = pyielded;
         double *pshear = p_.plastic_shear.data(), *pwork = p_.plastic_work.data();
         auto consult_block = [&](long b0, long b1) LPFDM_INLINE {
             auto consult = [&](long q, const long qend, const MaterialConstants& mc, auto own) LPFDM_INLINE {
@@ -3922,7 +3928,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                             c0 = detail::v4d{mc.c, mc.c, mc.c, mc.c}; np = detail::v4d{mc.n_phi, mc.n_phi, mc.n_phi, mc.n_phi};
                             sq = detail::v4d{mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi};
                         }
-                        const detail::v4m soft = {-std::int64_t(pyield[q] != 0), -std::int64_t(pyield[q + 1] != 0), -std::int64_t(pyield[q + 2] != 0), -std::int64_t(pyield[q + 3] != 0)};
+                        const detail::v4m soft = {-std::int64_t(pyielded[q] != 0), -std::int64_t(pyielded[q + 1] != 0), -std::int64_t(pyielded[q + 2] != 0), -std::int64_t(pyielded[q + 3] != 0)};
                         const double keep = 1 - mc.soften;
                         const detail::v4d c = soft ? c0 * keep : c0;
                         two_c_sq = 2 * c * sq;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
@@ -3934,10 +3940,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy); detail::store(pszz + q, zz);
                     if (const int sh = settled >> 4) {  // record_yield of the lanes returned by shear: the same operations
                         using detail::v4d;
-                        const v4d bxx = t_xx - xx, byy = t_yy - yy, bxy = t_xy - xy, bzz = t_zz - zz;  // trial - s
-                        const v4d pa = (xx + yy + zz) / 3, pb = (bxx + byy + bzz) / 3;  // compliance_product(mc, s, b)
-                        const v4d dev = (xx - pa) * (bxx - pb) + (yy - pa) * (byy - pb) + (zz - pa) * (bzz - pb) + 2 * xy * bxy;
-                        const v4d work = pa * pb / ((mc.a1 + 2 * mc.a2) / 3) + dev / (2 * mc.G);
+                        v4d work;  // compliance_product(mc, s, trial - s)
+                        compliance_product(mc, xx, yy, xy, zz, v4d(t_xx - xx), v4d(t_yy - yy), v4d(t_xy - xy), v4d(t_zz - zz), work);
                         const v4d v0 = {groups_[pgroup[q]].vol0, groups_[pgroup[q + 1]].vol0, groups_[pgroup[q + 2]].vol0, groups_[pgroup[q + 3]].vol0};
                         const detail::v4m m = {-std::int64_t(sh & 1), -std::int64_t(sh >> 1 & 1), -std::int64_t(sh >> 2 & 1), -std::int64_t(sh >> 3 & 1)};
                         v4d gamma, pw, vol;
