@@ -947,11 +947,17 @@ TEST_CASE("threads in one pass over the points: the serial pass's numbers bit fo
         CHECK(pass.steps == spread.steps);
         CHECK(pass.listed > spread.steps * 100);
         CHECK(pass.clashes == 0);
-        // Shuffled: each chunk but the last lists most of its points.
+        const long in_order = pass.listed;
+        // Shuffled: every chunk's points lie in every row, so the parts of the cells go to the
+        // first chunks and the later ones list their points: 20-25 % of the 8 560 points a
+        // step with 2 threads. How many exactly follows the chunks, which follow the threads'
+        // measured times (a bound of 2 000 a step failed now and then on a busy machine): at
+        // least 1 000 a step, and four times as many as in cell order.
         pass = compare_threads(spread, threads, true);
         CHECK(pass.steps == spread.steps);
         CHECK(pass.clashes == 0);
-        CHECK(pass.listed > spread.steps * 2000);
+        CHECK(pass.listed > spread.steps * 1000);
+        CHECK(pass.listed > 4 * in_order);
         // A point of the first chunk put at the top between steps: the second step's parts
         // are cut from where the chunk's points were, the point lands in the last part, and
         // that step is mapped again.
