@@ -3285,7 +3285,11 @@ inline void Simulation::reference_integrate() {
 // --------------------------------------------------------- the fast kernel ---
 
 // Rows j0 .. j1-1 of a lattice phase, f(j) for each, by threads when they visit more than
-// 8 192 cells or nodes in all (work; the lattice loops' threshold from the start). Each row writes
+// 4 096 cells or nodes in all (work), the point pass's threshold in points. Left to one
+// thread, a loop reads what the other threads wrote in the phase before from their caches:
+// with the threshold at 8 192, bench_peer.deck's 8 192 cells took eq. 5 twice as long
+// alone in a two-thread run as in a one-thread run (70 us a step against 36), and they
+// take 24-33 us by two threads. Each row writes
 // only its own nodes or cells, so which thread takes a row changes no number: thread u
 // takes a block of rows, and the blocks follow the threads' times (detail::balance), as
 // rows cost unequal amounts (eq. 12 costs more where nodes cross cells: the elastic bench
@@ -3295,7 +3299,7 @@ inline void Simulation::by_rows([[maybe_unused]] RowLoop loop, int j0, int j1, [
 #if defined(_OPENMP)
     RowBlocks& b = row_blocks_[loop];
     const int cap = std::min(team_, int(b.seconds.size()));
-    if (work > 8192 && cap > 1 && !omp_in_parallel()) {
+    if (work > 4096 && cap > 1 && !omp_in_parallel()) {
         const int n = j1 - j0;
         int team = 1;
         LPFDM_OMP(omp parallel num_threads(cap))
