@@ -4,9 +4,18 @@
 #ifndef LPFDM_TESTS_COMMON_HPP
 #define LPFDM_TESTS_COMMON_HPP
 
+#include <doctest/doctest.h>
+
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180;  // radians per degree
+
+// x == approx(v).epsilon(e): |x - v| < e max(|x|, |v|), a relative tolerance. doctest's
+// own Approx adds its scale, 1 unless set, to those magnitudes, so that for values below
+// one its epsilon is an absolute tolerance: a check of a strain of 1e-3 "within 1 %"
+// passed anything within 0.01. Every check uses this one; .scale(s) still sets a floor
+// where a value may be zero.
+inline doctest::Approx approx(double v) { return doctest::Approx(v).scale(0); }
 }  // namespace
 
 #endif

@@ -11,6 +11,7 @@
 #endif
 
 #include "../lpfdm.hpp"
+#include "common.hpp"
 
 using namespace lpfdm;
 
@@ -47,12 +48,12 @@ TEST_CASE("eq. 5: a linear nodal field gives its exact gradient in every cell") 
     for (int j = 0; j < sim.my(); ++j)
         for (int i = 0; i < sim.mx(); ++i) {
             const StrainIncrement e = sim.strain_of_cell(i, j);
-            CHECK(e.xx == doctest::Approx(a).epsilon(1e-12));  // eq. 5a
-            CHECK(e.yy == doctest::Approx(d).epsilon(1e-12));  // eq. 5b
-            CHECK(e.xy == doctest::Approx(b).epsilon(1e-12));  // eq. 5c: d(du_x)/dy
-            CHECK(e.yx == doctest::Approx(c).epsilon(1e-12));  // eq. 5d: d(du_y)/dx
-            CHECK(e.gamma() == doctest::Approx(b + c).epsilon(1e-12));       // eq. 5e
-            CHECK(e.theta() == doctest::Approx(0.5 * (c - b)).epsilon(1e-12));  // eq. 5f
+            CHECK(e.xx == approx(a).epsilon(1e-12));  // eq. 5a
+            CHECK(e.yy == approx(d).epsilon(1e-12));  // eq. 5b
+            CHECK(e.xy == approx(b).epsilon(1e-12));  // eq. 5c: d(du_x)/dy
+            CHECK(e.yx == approx(c).epsilon(1e-12));  // eq. 5d: d(du_y)/dx
+            CHECK(e.gamma() == approx(b + c).epsilon(1e-12));       // eq. 5e
+            CHECK(e.theta() == approx(0.5 * (c - b)).epsilon(1e-12));  // eq. 5f
         }
 }
 
@@ -69,7 +70,7 @@ TEST_CASE("eq. 5: a rigid translation strains nothing; a small rigid rotation gi
     CHECK(std::fabs(e.xx) < 1e-16);
     CHECK(std::fabs(e.yy) < 1e-16);
     CHECK(std::fabs(e.gamma()) < 1e-16);
-    CHECK(e.theta() == doctest::Approx(th).epsilon(1e-12));
+    CHECK(e.theta() == approx(th).epsilon(1e-12));
     for (int j = 0; j <= 3; ++j)
         for (int i = 0; i <= 3; ++i) {
             sim.du_x()[std::size_t(sim.node(i, j))] = 0.3;
@@ -87,7 +88,7 @@ TEST_CASE("nodal forces are the virtual-work transpose of eq. 5: sum F.du = -L^2
     Simulation sim(s);
     Noise rnd;
     Points& p = sim.points();
-    REQUIRE(p.vol[0] == doctest::Approx(L * L).epsilon(1e-12));
+    REQUIRE(p.vol[0] == approx(L * L).epsilon(1e-12));
     for (int trial = 0; trial < 200; ++trial) {
         const double sxx = 1e5 * rnd(), syy = 1e5 * rnd(), sxy = 1e5 * rnd();
         p.sxx[0] = sxx; p.syy[0] = syy; p.sxy[0] = sxy;
@@ -102,7 +103,7 @@ TEST_CASE("nodal forces are the virtual-work transpose of eq. 5: sum F.du = -L^2
         }
         const StrainIncrement e = sim.strain_of_cell(0, 0);
         const double expect = -p.vol[0] * (sxx * e.xx + syy * e.yy + sxy * e.gamma());
-        CHECK(work == doctest::Approx(expect).epsilon(1e-12).scale(1e-6));
+        CHECK(work == approx(expect).epsilon(1e-12).scale(1e-6));
         CHECK(std::fabs(sum_x) < 1e-9);  // a cell's forces are self-equilibrated
         CHECK(std::fabs(sum_y) < 1e-9);
     }
@@ -127,8 +128,8 @@ TEST_CASE("a uniform stress in a full block gives no force at interior nodes; lu
                 CHECK(std::fabs(sim.force_y()[n]) < 1e-8);
             }
             if (i == 1 && j > 1 && j < 5) {  // left face: traction -sigma . n with n = (-1, 0)
-                CHECK(sim.force_x()[n] == doctest::Approx(-3e4 * 2 * edge));
-                CHECK(sim.force_y()[n] == doctest::Approx(1e4 * 2 * edge));
+                CHECK(sim.force_x()[n] == approx(-3e4 * 2 * edge));
+                CHECK(sim.force_y()[n] == approx(1e4 * 2 * edge));
             }
         }
 }
@@ -151,8 +152,8 @@ TEST_CASE("eq. 12 on a linear field: the compensated increment is the field at x
     for (int j = 1; j < 6; ++j)
         for (int i = 1; i < 6; ++i) {
             const double ux = fx(i, j), uy = fy(i, j);
-            CHECK(sim.du_x()[std::size_t(sim.node(i, j))] == doctest::Approx(fx(i - ux, j - uy)).epsilon(1e-12));
-            CHECK(sim.du_y()[std::size_t(sim.node(i, j))] == doctest::Approx(fy(i - ux, j - uy)).epsilon(1e-12));
+            CHECK(sim.du_x()[std::size_t(sim.node(i, j))] == approx(fx(i - ux, j - uy)).epsilon(1e-12));
+            CHECK(sim.du_y()[std::size_t(sim.node(i, j))] == approx(fy(i - ux, j - uy)).epsilon(1e-12));
         }
     // A uniform field (a translation) is left as it is.
     for (auto& v : sim.du_x()) v = 0.01;
@@ -369,9 +370,9 @@ TEST_CASE("eq. 13-14: a free block falls at g undamped and at (1 - alpha) g with
             const double g = 9.81, dt2 = s.dt_s * s.dt_s;
             const double expect = -g * dt2 * ((n - 1) + (1 - alpha) * (n - 1) * (n - 2) / 2.0);
             const double du_n = g * dt2 * (1 + (n - 1) * (1 - alpha));
-            CHECK(sim.points().y[0] - y0 == doctest::Approx(expect).epsilon(1e-9));
+            CHECK(sim.points().y[0] - y0 == approx(expect).epsilon(1e-9));
             CHECK(std::fabs(sim.points().syy[0]) < 1e-6);  // a free fall strains nothing
-            CHECK(sim.kinetic_energy() == doctest::Approx(0.5 * sim.mass_inside() * du_n * du_n / dt2).epsilon(1e-9));
+            CHECK(sim.kinetic_energy() == approx(0.5 * sim.mass_inside() * du_n * du_n / dt2).epsilon(1e-9));
         }
 }
 
@@ -459,7 +460,7 @@ ColumnErrors column_errors(int refine_by) {
         }
     }
     CHECK(sim.mass_inside() == sim.mass_initial());
-    CHECK(sim.reaction_y() == doctest::Approx(sim.mass_initial() * 9.81).epsilon(1e-6));
+    CHECK(sim.reaction_y() == approx(sim.mass_initial() * 9.81).epsilon(1e-6));
     return {std::sqrt(num / den), top_err / top_ref};
 }
 
@@ -519,8 +520,8 @@ TEST_CASE("undamped column rings with period 4H/c_p and twice the static settlem
     const double cp = Material::elastic(1, 2e7, 0.25, 2000).p_wave_speed(), T = 4 * 12 / cp;
     const Ringing r1 = column_ringing(1);
     MESSAGE("ringing column, 24 cells over H: period " << r1.period << " s (4H/c_p = " << T << " s), peak / static " << r1.amplitude_ratio);
-    CHECK(r1.period == doctest::Approx(T).epsilon(0.02));
-    CHECK(r1.amplitude_ratio == doctest::Approx(2.0).epsilon(0.05));
+    CHECK(r1.period == approx(T).epsilon(0.02));
+    CHECK(r1.amplitude_ratio == approx(2.0).epsilon(0.05));
     const Ringing r2 = column_ringing(2);
     MESSAGE("ringing column, 48 cells over H: period " << r2.period << " s, peak / static " << r2.amplitude_ratio);
     CHECK(std::fabs(r2.period - T) < std::fabs(r1.period - T));
@@ -999,7 +1000,7 @@ TEST_CASE("the lattice phases by threads: each row's numbers whatever thread tak
     }
     CHECK(big > 0);
     CHECK(sim.max_du() == big);
-    CHECK(sim.kinetic_energy() == doctest::Approx(ke / (tower.dt_s * tower.dt_s)).epsilon(1e-12));
+    CHECK(sim.kinetic_energy() == approx(ke / (tower.dt_s * tower.dt_s)).epsilon(1e-12));
 #endif
 }
 
@@ -1023,7 +1024,7 @@ TEST_CASE("detail::balance: blocks of work cut halfway towards equal shares of t
     double f[3] = {0, 0.5, 1};
     const double fw[3] = {0, 0.5, 1}, fs[2] = {1, 3};
     CHECK(detail::balance(2, [&](int u) { return fw[u]; }, [&](int u) { return fs[u]; }, f));
-    CHECK(f[1] == doctest::Approx(0.5 + (0.5 + 0.5 / 3 - 0.5) / 2).epsilon(1e-15));
+    CHECK(f[1] == approx(0.5 + (0.5 + 0.5 / 3 - 0.5) / 2).epsilon(1e-15));
     // Any team, any times (zeros too): the edges stay in order, the outer ones in place.
     Random r{99};
     long bad = 0;

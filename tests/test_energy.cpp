@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "../lpfdm.hpp"
+#include "common.hpp"
 
 using namespace lpfdm;
 
@@ -36,9 +37,9 @@ TEST_CASE("energy: a free fall turns potential energy into kinetic energy, exact
     // energy went down by m g times that, and the leapfrog's kinetic energy rose by as much.
     const double m = 2000, g = 9.81, t = 0.5, dt = 2.5e-4;
     const double fall = g * t * (t - dt) / 2;
-    CHECK(e.gravity == doctest::Approx(-m * g * fall).epsilon(1e-12));
-    CHECK(e.kinetic == doctest::Approx(m * g * fall).epsilon(1e-12));
-    CHECK(e.w_gravity == doctest::Approx(m * g * fall).epsilon(1e-12));
+    CHECK(e.gravity == approx(-m * g * fall).epsilon(1e-12));
+    CHECK(e.kinetic == approx(m * g * fall).epsilon(1e-12));
+    CHECK(e.w_gravity == approx(m * g * fall).epsilon(1e-12));
     CHECK(std::fabs(e.strain) < 1e-20 * e.kinetic);  // no stress while falling (round-off only)
     CHECK(std::fabs(e.error) < 1e-12);
 }
@@ -84,9 +85,9 @@ TEST_CASE("energy: a wall's work in confined compression is the strain energy M 
     // Oedometric: sigma_yy = M eps everywhere (sigma_xx = sigma_zz = lambda eps), so the
     // elastic energy is M eps^2 / 2 per unit volume: 2 % covers the discretisation, as the
     // wall-force test of tests/test_walls.cpp.
-    CHECK(e.strain == doctest::Approx(0.5 * M * eps * eps * W * H).epsilon(0.02));
+    CHECK(e.strain == approx(0.5 * M * eps * eps * W * H).epsilon(0.02));
     // The wall did that work and what damping took: the account closes.
-    CHECK(e.w_walls == doctest::Approx(e.strain + e.kinetic + e.d_damping).epsilon(1e-3));
+    CHECK(e.w_walls == approx(e.strain + e.kinetic + e.d_damping).epsilon(1e-3));
     CHECK(std::fabs(e.error) < 1e-3);
     // The base and sides do not move: only the increments eq. 12 gives fixed nodes that
     // gained mass (and the supports take back) do work there.
@@ -113,6 +114,6 @@ TEST_CASE("energy: in plane-strain compression the wall's work goes into plastic
     for (int n = 0; n < 500; ++n) sim.step();
     const Simulation::Energy e1 = sim.energy();
     const double travel = 500 * s.dt_s * 0.001;
-    CHECK(e1.w_walls - w0 == doctest::Approx(-0.5 * (f0 + sim.walls()[0].fy) * travel).epsilon(0.05));
-    CHECK(e1.d_plastic - d0 == doctest::Approx(e1.w_walls - w0).epsilon(0.05));
+    CHECK(e1.w_walls - w0 == approx(-0.5 * (f0 + sim.walls()[0].fy) * travel).epsilon(0.05));
+    CHECK(e1.d_plastic - d0 == approx(e1.w_walls - w0).epsilon(0.05));
 }

@@ -349,7 +349,7 @@ TEST_CASE("hard: a cap 1000 times stiffer than the soil below it [slow]") {
     MESSAGE("cap 1000 x stiffer: soil sigma_yy L2 error " << soil << " (uniform column " << soil1 << "), cap error up to " << cap
                                                           << " of its own weight per area, unbalanced ratio " << unbal << ", energy max - start " << grow);
     CHECK(soil < 0.03);
-    CHECK(soil == doctest::Approx(soil1).epsilon(0.02));  // the stiff cap costs no accuracy below it
+    CHECK(soil == approx(soil1).epsilon(0.02));  // the stiff cap costs no accuracy below it
     CHECK(cap < 0.25);
     CHECK(unbal < 1e-6);
     CHECK(grow <= 0);
@@ -915,7 +915,7 @@ TEST_CASE("hard: a wall pushed through a soil mass at a tenth of a cell per step
                                         << "; largest point volume " << r.vol_ratio << " x its initial");
     CHECK(r.bad == -1);
     CHECK(r.mass);
-    CHECK(r.travel == doctest::Approx(1.5).epsilon(1e-9));
+    CHECK(r.travel == approx(1.5).epsilon(1e-9));
     CHECK(r.fmean > 0);                 // on average the wall pushes the soil the way it moves
     CHECK(r.excess <= 1e-6 * r.work);   // no energy beyond the wall's work
 }

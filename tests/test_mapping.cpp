@@ -28,9 +28,9 @@ TEST_CASE("square_overlap: fractions that sum to one, change continuously across
     for (double x = 0.25 - l; x <= 0.25 + l; x += l / 50) {
         square_overlap(x, l, L, m, a, w, c);
         const double left = a == 0 ? w[0] : 0.0;
-        CHECK(w[0] + w[1] == doctest::Approx(1.0).epsilon(1e-15));
+        CHECK(w[0] + w[1] == approx(1.0).epsilon(1e-15));
         CHECK(std::fabs(left - prev) <= 1.0 / 100 + 1e-12);  // a step of l/50 moves 1/100 of the square
-        CHECK(left == doctest::Approx(std::clamp((0.25 - (x - l)) / (2 * l), 0.0, 1.0)).epsilon(1e-12));
+        CHECK(left == approx(std::clamp((0.25 - (x - l)) / (2 * l), 0.0, 1.0)).epsilon(1e-12));
         prev = left;
     }
     // Mirrored about the middle of the lattice (x -> 2 - x), the fractions swap.
@@ -40,9 +40,9 @@ TEST_CASE("square_overlap: fractions that sum to one, change continuously across
     square_overlap(x, l, L, m, a, w, c);
     square_overlap(m * L - x, l, L, m, b, v, d);
     CHECK(a + b == m - 2);
-    CHECK(w[0] == doctest::Approx(v[1]).epsilon(1e-14));
-    CHECK(w[1] == doctest::Approx(v[0]).epsilon(1e-14));
-    CHECK(c[0] == doctest::Approx(m * L - d[1]).epsilon(1e-14));
+    CHECK(w[0] == approx(v[1]).epsilon(1e-14));
+    CHECK(w[1] == approx(v[0]).epsilon(1e-14));
+    CHECK(c[0] == approx(m * L - d[1]).epsilon(1e-14));
     // At the lattice's edges the part outside is left out.
     square_overlap(0.01, l, L, m, a, w, c);
     CHECK(a == 0);
@@ -76,7 +76,7 @@ double mass_left(Mapping mapping, double x) {
 TEST_CASE("MAPPING SMOOTH: a point's mass passes to the next cell continuously; the paper's jumps") {
     const double m = 1000;  // rho L^2, PPC 1
     for (double x : {0.9, 0.99, 0.999, 1.001, 1.01, 1.1}) {
-        CHECK(mass_left(Mapping::Smooth, x) == doctest::Approx(m * std::clamp(1.5 - x, 0.0, 1.0)).epsilon(1e-12));
+        CHECK(mass_left(Mapping::Smooth, x) == approx(m * std::clamp(1.5 - x, 0.0, 1.0)).epsilon(1e-12));
         CHECK(mass_left(Mapping::Paper, x) == (x < 1 ? m : 0.0));
     }
 }
@@ -137,9 +137,15 @@ TEST_CASE("MAPPING SMOOTH: without gravity the wall's force equals the base reac
                                                            << plateau_smooth << " q (SMOOTH), " << plateau_paper << " q (PAPER)");
     CHECK(smooth < 0.03);
     CHECK(paper > 0.1);  // the spikes SMOOTH removes: the cap's points crossing the wall's line
-    CHECK(plateau_paper == doctest::Approx(1).epsilon(0.10));
     // The perfectly plastic specimen holds q on its plateau (8 cells across the specimen).
-    CHECK(plateau_smooth == doctest::Approx(1).epsilon(0.03));
+    CHECK(plateau_smooth == approx(1).epsilon(0.03));
+    // The paper's mapping does not. Its base reads q within 0.1 % up to 2.8 % strain; then
+    // the bulging sides' outermost points cross into the next column of cells, which they
+    // only partly fill, and eq. 8 spreads their V sigma over the whole cell (max(L^2, sum V)):
+    // 0.99 q at 3.1 %, 0.91 q at 3.4 %, 0.86 q at 3.75 %. This check read "within 10 % of
+    // q" and passed only through doctest's absolute floor (see approx in common.hpp).
+    CHECK(plateau_paper < 0.95);
+    CHECK(plateau_paper > 0.75);  // a plateau, not a collapse
 }
 
 // A point whose square reaches past a free surface into a cell that holds nothing else:
@@ -173,8 +179,8 @@ TEST_CASE("MAPPING SMOOTH: a free surface of a compressed specimen keeps its loa
     edge /= double(ne); middle /= double(nm);
     MESSAGE("verify_psc with MAPPING SMOOTH: plateau " << plateau / q << " q; mean sigma_yy of the outermost points " << edge
                                                        << " Pa, of the middle ones " << middle << " Pa");
-    CHECK(plateau == doctest::Approx(q).epsilon(0.03));
-    CHECK(edge == doctest::Approx(middle).epsilon(0.25));
+    CHECK(plateau == approx(q).epsilon(0.03));
+    CHECK(edge == approx(middle).epsilon(0.25));
 }
 
 namespace {
@@ -253,8 +259,8 @@ TEST_CASE("a SMOOTH wall drives its line of nodes across the line only") {
     Simulation sim(s);
     for (int n = 0; n < 50; ++n) sim.step();
     CHECK(sim.walls()[0].dx == 0.0);  // no travel along the line
-    CHECK(sim.walls()[0].dy == doctest::Approx(-0.005 * 50 * 4e-4).epsilon(1e-12));
-    CHECK(sim.du_y()[std::size_t(sim.node(5, 20))] == doctest::Approx(-0.005 * 4e-4).epsilon(1e-12));
+    CHECK(sim.walls()[0].dy == approx(-0.005 * 50 * 4e-4).epsilon(1e-12));
+    CHECK(sim.du_y()[std::size_t(sim.node(5, 20))] == approx(-0.005 * 4e-4).epsilon(1e-12));
     CHECK(sim.walls()[0].fx == 0.0);  // x is free: the wall exerts no force along itself
     // A box of nodes (not a line) cannot be smooth.
     s.walls[0].box = {0, 1.9, 1, 2};
@@ -272,7 +278,7 @@ TEST_CASE("the reaction of each FIX card, and their sum rx ry") {
     double sx = 0, sy = 0;
     for (std::size_t f = 0; f < s.fixes.size(); ++f) { sx += sim.fix_reaction_x(f); sy += sim.fix_reaction_y(f); }
     CHECK(std::fabs(sx - sim.reaction_x()) < 1e-12 * std::fabs(sim.reaction_y()));
-    CHECK(sy == doctest::Approx(sim.reaction_y()).epsilon(1e-12));
+    CHECK(sy == approx(sim.reaction_y()).epsilon(1e-12));
     CHECK(sim.fix_reaction_y(1) != 0.0);  // the first card holding a node in y takes its reaction
 }
 
@@ -307,7 +313,7 @@ TEST_CASE("a symmetric column collapses symmetrically with MOTION CENTRE, and wi
         runouts(mapping, motion, left, right);
         INFO("mapping " << int(mapping) << ", motion " << int(motion) << ": left " << left << " m, right " << right << " m");
         CHECK(left > 3);  // it did collapse (the column is 1 m either side)
-        CHECK(right == doctest::Approx(left).epsilon(0.01));
+        CHECK(right == approx(left).epsilon(0.01));
     }
 }
 
@@ -366,7 +372,7 @@ TEST_CASE("a retaining wall moved away from sand: Rankine's thrust on a smooth w
         const double ref = smooth ? rankine : coulomb;
         MESSAGE(std::string(smooth ? "smooth wall: " : "rough wall: ") << r.force << " N/m against " << std::string(smooth ? "Rankine " : "Coulomb ") << ref << " N/m ("
                                                             << r.force / ref << "); points behind it at most " << r.behind);
-        CHECK(r.force == doctest::Approx(ref).epsilon(0.10));
+        CHECK(r.force == approx(ref).epsilon(0.10));
         CHECK(r.behind == 0);
         CHECK(r.mass_error == 0.0);
         CHECK(r.outflow == 0.0);

@@ -109,8 +109,8 @@ TEST_CASE("unconfined plane-strain compression peaks at exactly 2c tan(45 + phi/
             peak = std::max(peak, -s.yy);
         }
         const double expect = 2 * 9800 * std::tan((45 + 15) * kDeg);
-        CHECK(peak == doctest::Approx(expect).epsilon(1e-12));
-        CHECK(-s.yy == doctest::Approx(expect).epsilon(1e-12));  // perfectly plastic: stays at the peak
+        CHECK(peak == approx(expect).epsilon(1e-12));
+        CHECK(-s.yy == approx(expect).epsilon(1e-12));  // perfectly plastic: stays at the peak
     }
 }
 
@@ -224,7 +224,7 @@ TEST_CASE("flow rule: plastic volume / plastic shear = sin(psi); none with psi =
             // d_eps - C d_sig cancels to ~1e-13 of the increment; the plastic part is >= 1e-3 of it.
             CHECK(std::fabs(vp.first / vp.second - std::sin(psi * kDeg)) < 1e-8);
             CHECK(std::fabs(r.d_vol_p / r.d_gamma_p - std::sin(psi * kDeg)) < 1e-12);
-            CHECK(r.d_gamma_p == doctest::Approx(vp.second).epsilon(1e-6));
+            CHECK(r.d_gamma_p == approx(vp.second).epsilon(1e-6));
         }
         CHECK(n > 200);
     }
@@ -244,7 +244,7 @@ TEST_CASE("tension cut-off: sigma3 never exceeds the limit, the apex c/tan(phi) 
             CHECK(s3 <= limit * (1 + 1e-12));
             top = std::max(top, s3);
         }
-        CHECK(top == doctest::Approx(limit).epsilon(1e-12));
+        CHECK(top == approx(limit).epsilon(1e-12));
     }
 }
 
@@ -393,7 +393,7 @@ TEST_CASE("Jaumann, eq. 5f: a stressed point turned 360 degrees in small rigid s
     for (int k = 0; k < n; ++k) {
         op.strain(0, -th, th, 0);  // du = theta x (x - x_p): no strain, rotation theta
         const Eigen::Vector3d inv = principal(op.stress());
-        for (int a = 0; a < 3; ++a) REQUIRE(inv(a) == doctest::Approx(inv0(a)).epsilon(1e-12));
+        for (int a = 0; a < 3; ++a) REQUIRE(inv(a) == approx(inv0(a)).epsilon(1e-12));
     }
     // The Cayley rotation turns the material by 2 atan(theta/2) per step, not theta: after
     // n steps it lacks delta = n (theta - 2 atan(theta/2)) (1.6e-6 rad here), and the
@@ -406,7 +406,7 @@ TEST_CASE("Jaumann, eq. 5f: a stressed point turned 360 degrees in small rigid s
     CHECK(std::fabs(s.yy - s0.yy) < tol);
     CHECK(std::fabs(s.xy - s0.xy) < tol);
     CHECK(s.zz == s0.zz);
-    CHECK(p.x[0] == doctest::Approx(0.5).epsilon(1e-9));
+    CHECK(p.x[0] == approx(0.5).epsilon(1e-9));
     CHECK(op.sim.points().plastic_shear[0] == 0.0);
 }
 
@@ -420,8 +420,8 @@ TEST_CASE("softening: the first yield costs SOFTEN of the cohesion, once") {
         tau.push_back(std::hypot(0.5 * (s.xx - s.yy), s.xy));
     }
     const double peak = *std::max_element(tau.begin(), tau.end());
-    CHECK(peak == doctest::Approx(c * std::cos(phi * kDeg)).epsilon(1e-12));  // Mohr circle about 0 touching the envelope
-    CHECK(tau.back() == doctest::Approx(0.5 * c * std::cos(phi * kDeg)).epsilon(1e-12));
+    CHECK(peak == approx(c * std::cos(phi * kDeg)).epsilon(1e-12));  // Mohr circle about 0 touching the envelope
+    CHECK(tau.back() == approx(0.5 * c * std::cos(phi * kDeg)).epsilon(1e-12));
     CHECK(op.sim.points().yielded[0] == 1);
     CHECK(op.sim.points().plastic_shear[0] > 0);
 }
@@ -478,9 +478,9 @@ TEST_CASE("the deterministic log and sine agree with the C library to within a f
     Random r(3);
     for (int k = 0; k < 100000; ++k) {
         const double x = std::ldexp(r.uniform() + 1e-300, int(r.uniform() * 80) - 60);
-        CHECK(detail::log_det(x) == doctest::Approx(std::log(x)).epsilon(1e-15).scale(1e-300));
+        CHECK(detail::log_det(x) == approx(std::log(x)).epsilon(1e-15).scale(1e-300));
         const double a = (r.uniform() - 0.5) * 3.14159265358979323846;
-        CHECK(detail::sin_det(a) == doctest::Approx(std::sin(a)).epsilon(1e-15).scale(1e-300));
+        CHECK(detail::sin_det(a) == approx(std::sin(a)).epsilon(1e-15).scale(1e-300));
     }
     // Known values of the stream (xoshiro256** after splitmix64, seed 1): a change of the
     // generator would silently change every scattered run.

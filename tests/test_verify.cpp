@@ -169,7 +169,7 @@ TEST_CASE("verify: stiff confined column at rest: the sigma_yy error is one stre
     MESSAGE("sigma_yy L2 error " << c.syy_l2 << " (one stress per cell: " << c.representation << "), top settlement error " << c.settlement_err);
     // Every point takes its cell's stress, the exact value at the cell centre; the points of
     // 2x2 per cell sit L/4 above or below it, so each is off by rho g L/4. Strain 1e-4.
-    CHECK(c.syy_l2 == doctest::Approx(c.representation).epsilon(0.02));
+    CHECK(c.syy_l2 == approx(c.representation).epsilon(0.02));
     // The nodes of the lumped-mass lattice settle as the exact column does; a point between
     // two nodes moves with the straight line between them, off the parabola by up to
     // (3/32) L^2 u'' at a quarter cell: 3 L^2 / (16 H^2) of the top settlement (3.3e-4
@@ -196,16 +196,16 @@ TEST_CASE("verify: stiff ringing column: period 4H/c_p and peak twice the static
     MESSAGE("period " << r.period << " s (4H/c_p " << r.reference_period << "), peak " << r.peak << " x static");
     // 24 cells over H: the lattice's dispersion of the fundamental mode is below 1e-3
     // (first order in L, 6e-4 measured), the strain (2e-4) does not matter.
-    CHECK(r.period == doctest::Approx(r.reference_period).epsilon(1e-3));
-    CHECK(r.peak == doctest::Approx(2).epsilon(1e-3));
+    CHECK(r.period == approx(r.reference_period).epsilon(1e-3));
+    CHECK(r.peak == approx(2).epsilon(1e-3));
 }
 
 TEST_CASE("verify: ringing column at 1 % strain: period and peak off by about the strain [slow]") {
     const Ring r = ringing("decks/verify_ringing.deck");
     MESSAGE("period " << r.period << " s (4H/c_p " << r.reference_period << "), peak " << r.peak << " x static, strain " << r.strain);
     // As at rest, the column is softer by up to its strain (dynamic peak strain 2 rho g H / M).
-    CHECK(r.period == doctest::Approx(r.reference_period).epsilon(r.strain));
-    CHECK(r.peak == doctest::Approx(2).epsilon(2 * r.strain));
+    CHECK(r.period == approx(r.reference_period).epsilon(r.strain));
+    CHECK(r.peak == approx(2).epsilon(2 * r.strain));
 }
 
 TEST_CASE("verify: plane-strain compression reaches 2 c tan(45 + phi/2) on its plateau [slow]") {
@@ -220,7 +220,7 @@ TEST_CASE("verify: plane-strain compression reaches 2 c tan(45 + phi/2) on its p
     MESSAGE("plateau q " << plateau << " Pa, Mohr-Coulomb " << expect << " Pa");
     // Five cells across the specimen: the plateau fluctuates by about 1 % as yielding moves
     // between cells, and the wall's speed adds up to its impact stress, 2 % of q.
-    CHECK(plateau == doctest::Approx(expect).epsilon(0.03));
+    CHECK(plateau == approx(expect).epsilon(0.03));
 }
 
 TEST_CASE("verify: a vertical cut stands at the limit-analysis critical height and falls above it [slow]") {

@@ -41,7 +41,7 @@ TEST_CASE("a wall's nodes move exactly as prescribed and pass to the next line a
         const int line = 20 - (n - 1) / 10;  // node row driven during step n
         for (int i = 0; i <= 10; ++i) CHECK(sim.du_y()[std::size_t(sim.node(i, line))] == du);
         for (int i = 0; i <= 10; ++i) CHECK(sim.du_x()[std::size_t(sim.node(i, line))] == 0.0);
-        CHECK(sim.walls()[0].dy == doctest::Approx(du * n).epsilon(1e-14));
+        CHECK(sim.walls()[0].dy == approx(du * n).epsilon(1e-14));
         CHECK(sim.walls()[0].shift_j == -(n / 10));  // whole cells travelled after n increments
     }
 }
@@ -58,12 +58,12 @@ TEST_CASE("confined elastic compression by a wall: force = M strain W, and equal
     // Confined (oedometric) compression: one-dimensional, sigma_yy = M strain over W.
     const double expect = M * strain * W;
     MESSAGE("wall force " << -w.fy << " N/m, M strain W " << expect << " N/m (while moving)");
-    CHECK(-w.fy == doctest::Approx(expect).epsilon(0.02));
+    CHECK(-w.fy == approx(expect).epsilon(0.02));
     sim.set_wall_velocity(1, 0, 0);  // hold the wall and let the column come to rest
     for (int n = 0; n < 3000; ++n) sim.step();
     MESSAGE("at rest: wall force " << -w.fy << " N/m, base reaction " << sim.reaction_y() << " N/m, ke " << sim.kinetic_energy());
-    CHECK(-w.fy == doctest::Approx(sim.reaction_y()).epsilon(1e-6));
-    CHECK(-w.fy == doctest::Approx(M * (-w.dy / H) * W).epsilon(0.02));
+    CHECK(-w.fy == approx(sim.reaction_y()).epsilon(1e-6));
+    CHECK(-w.fy == approx(M * (-w.dy / H) * W).epsilon(0.02));
 }
 
 namespace {
@@ -120,8 +120,8 @@ TEST_CASE("compression test without scatter or softening peaks at 2c tan(45 + ph
     const double peak = *std::max_element(c.q.begin(), c.q.end());
     const double expect = 2 * 9800 * std::tan((45 + 28.648 / 2) * kDeg);
     MESSAGE("peak q = " << peak << " Pa, Mohr-Coulomb " << expect << " Pa (rough ends, wall impact 4 % of the peak)");
-    CHECK(peak == doctest::Approx(expect).epsilon(0.05));
-    CHECK(c.q.back() == doctest::Approx(expect).epsilon(0.05));  // perfectly plastic: a plateau
+    CHECK(peak == approx(expect).epsilon(0.05));
+    CHECK(c.q.back() == approx(expect).epsilon(0.05));  // perfectly plastic: a plateau
 }
 
 TEST_CASE("compression test with the paper's scatter and softening: a peak, then a drop; shear bands [slow]") {
