@@ -4437,21 +4437,24 @@ inline void Simulation::integrate() {
     const Range nodes_now{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     const Range nr = nodes_now.unite(live_nodes_);
     if (dynamic_) dynamics_begin();  // the ground's step, the boundary forces (SHAKE, ABSORB)
-    keep_increments(nr);
     const double dt2 = sc_.dt_s * sc_.dt_s, alpha = sc_.damping;
     double ke = 0, maxdu = 0;
     const int mx = mx_;
     double *ux_n = dux_.data(), *uy_n = duy_.data(), *nm = nmass_.data(), *fxn = fx_.data(), *fyn = fy_.data();
+    double *ux_old = dux_old_.data(), *uy_old = duy_old_.data();
     // Node n of the nodes this step's cells touch, or the nodes n .. n + 3 in the lanes of
-    // a vector T.
+    // a vector T. Each node of nr keeps the increment eq. 13 begins from (keep_increments,
+    // done here in the same pass, by the same threads).
     auto advance = [&](int n, auto tag) LPFDM_INLINE {
         using T = typename decltype(tag)::type;
         constexpr bool one = std::is_same_v<T, double>;
         T m, fx, fy, ux0, uy0;
+        detail::load(ux_n + n, ux0); detail::load(uy_n + n, uy0);
+        detail::store(ux_old + n, ux0); detail::store(uy_old + n, uy0);
         detail::load(nm + n, m);
         if constexpr (one)
             if (m == 0) { ux_n[n] = uy_n[n] = 0; return; }  // no mass, no motion
-        detail::load(fxn + n, fx); detail::load(fyn + n, fy); detail::load(ux_n + n, ux0); detail::load(uy_n + n, uy0);
+        detail::load(fxn + n, fx); detail::load(fyn + n, fy);
         T ux, uy;
         damped_increment(ux0, fx, m, dt2, alpha, ux);  // eq. 13, 14
         damped_increment(uy0, fy, m, dt2, alpha, uy);
@@ -4466,7 +4469,11 @@ inline void Simulation::integrate() {
         const bool row_inside = j >= nodes_now.j0 && j < nodes_now.j1;  // then nr holds nodes_now's columns
         const int ia = row_inside ? nodes_now.i0 : nr.i1, ib = row_inside ? nodes_now.i1 : nr.i1;
         const int n0 = j * (mx + 1);
-        auto idle = [&](int i) { const int n = n0 + i; nm[n] = 0; fxn[n] = fyn[n] = 0; ux_n[n] = uy_n[n] = 0; };  // no mass, no motion
+        auto idle = [&](int i) {  // no mass, no motion
+            const int n = n0 + i;
+            ux_old[n] = ux_n[n]; uy_old[n] = uy_n[n];
+            nm[n] = 0; fxn[n] = fyn[n] = 0; ux_n[n] = uy_n[n] = 0;
+        };
         for (int i = nr.i0; i < ia; ++i) idle(i);
         detail::sweep(n0 + ia, n0 + ib, wide, advance);
         for (int i = ib; i < nr.i1; ++i) idle(i);
