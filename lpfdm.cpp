@@ -404,15 +404,6 @@ int main(int argc, char** argv) {
 
     std::signal(SIGINT, on_sigint);
     const long steps = scene.steps, first = sim.step_count() + 1;
-    // Energy made by the cycle, not supplied by any work: the energy account's
-    // energy_error below -kEnergyMade (a tenth of the energy in play), looked at every
-    // kEnergyEvery steps and at the last; reported once, as a warning (the run goes on).
-    // Below a tenth the account's own lag at impacts can show it (decks/freefall.deck
-    // reads -0.055 for a few steps of its impact); a growing instability passes it long
-    // before a node moves half a cell in a step.
-    constexpr double kEnergyMade = 0.10;
-    constexpr long kEnergyEvery = 100;
-    bool energy_warned = false;
     const bool progress = !opt.quiet && isatty(2);
     const auto t0 = std::chrono::steady_clock::now();
     auto last_print = t0;
@@ -469,15 +460,6 @@ int main(int argc, char** argv) {
             case lpfdm::Output::Points: lpfdm::write_points_frame(o.f, sim, o.first_frame); o.first_frame = false; break;
             case lpfdm::Output::Vtu: vtu_frame(o); break;
             case lpfdm::Output::State: save_state(o); break;
-            }
-        }
-        if (!energy_warned && (n % kEnergyEvery == 0 || n == steps)) {
-            const double made = -sim.energy().error;
-            if (made > kEnergyMade) {
-                energy_warned = true;
-                std::fprintf(stderr, "%slpfdm: warning: energy made by the cycle at step %ld (t = %.6g s): energy_error = %.3f, %.1f %% of the energy in play "
-                                     "came from no work (energy_error in decks/README.md)\n",
-                             progress ? "\n" : "", n, sim.time(), -made, 100 * made);
             }
         }
         if (stop) {
