@@ -3285,11 +3285,12 @@ inline void Simulation::reference_integrate() {
 // --------------------------------------------------------- the fast kernel ---
 
 // Rows j0 .. j1-1 of a lattice phase, f(j) for each, by threads when they visit more than
-// 4 096 cells or nodes in all (work), the point pass's threshold in points. Left to one
-// thread, a loop reads what the other threads wrote in the phase before from their caches:
-// with the threshold at 8 192, bench_peer.deck's 8 192 cells took eq. 5 twice as long
-// alone in a two-thread run as in a one-thread run (70 us a step against 36), and they
-// take 24-33 us by two threads. Each row writes
+// 4 096 cells or nodes in all (work; the same number as the point pass's threshold in
+// points). A loop left to one thread in a threaded run is slow: with the threshold at
+// 8 192, bench_peer.deck's 8 192 cells took eq. 5 twice as long on one thread of a
+// two-thread run as in a one-thread run (70 us a step against 36; most likely reading
+// from the other core's cache what the other thread wrote in the phase before), and
+// they take 24-33 us by two threads. Each row writes
 // only its own nodes or cells, so which thread takes a row changes no number: thread u
 // takes a block of rows, and the blocks follow the threads' times (detail::balance), as
 // rows cost unequal amounts (eq. 12 costs more where nodes cross cells: the elastic bench
@@ -4443,8 +4444,8 @@ inline void Simulation::integrate() {
     double *ux_n = dux_.data(), *uy_n = duy_.data(), *nm = nmass_.data(), *fxn = fx_.data(), *fyn = fy_.data();
     double *ux_old = dux_old_.data(), *uy_old = duy_old_.data();
     // Node n of the nodes this step's cells touch, or the nodes n .. n + 3 in the lanes of
-    // a vector T. Each node of nr keeps the increment eq. 13 begins from (keep_increments,
-    // done here in the same pass, by the same threads).
+    // a vector T. Each node of nr keeps the increment eq. 13 begins from, in this same pass
+    // and by the same threads (what keep_increments does in the reference cycle).
     auto advance = [&](int n, auto tag) LPFDM_INLINE {
         using T = typename decltype(tag)::type;
         constexpr bool one = std::is_same_v<T, double>;

@@ -11,10 +11,11 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180;  // radians per degree
 
 // x == approx(v).epsilon(e): |x - v| < e max(|x|, |v|), a relative tolerance. doctest's
-// own Approx adds its scale, 1 unless set, to those magnitudes, so that for values below
-// one its epsilon is an absolute tolerance: a check of a strain of 1e-3 "within 1 %"
-// passed anything within 0.01. Every check uses this one; .scale(s) still sets a floor
-// where a value may be zero.
+// own Approx adds its scale, 1 unless set, to those magnitudes: for values below one its
+// epsilon is an absolute tolerance (a strain of 1e-3 "within 1 %" passed anything within
+// 0.01), and for values near one the tolerance is twice the one written. Every Approx
+// comparison of the tests is this one. The comparison is strict, so approx(0) passes
+// nothing, not even 0: where a value may be zero, .scale(s) gives the floor s.
 inline doctest::Approx approx(double v) { return doctest::Approx(v).scale(0); }
 }  // namespace
 

@@ -143,9 +143,10 @@ TEST_CASE("MAPPING SMOOTH: without gravity the wall's force equals the base reac
     // the bulging sides' outermost points cross into the next column of cells, which they
     // only partly fill, and eq. 8 spreads their V sigma over the whole cell (max(L^2, sum V)):
     // 0.99 q at 3.1 %, 0.91 q at 3.4 %, 0.86 q at 3.75 %. This check read "within 10 % of
-    // q" and passed only through doctest's absolute floor (see approx in common.hpp).
+    // q" and passed only through doctest's scale, which doubled that tolerance near 1
+    // (see approx in common.hpp).
     CHECK(plateau_paper < 0.95);
-    CHECK(plateau_paper > 0.75);  // a plateau, not a collapse
+    CHECK(plateau_paper > 0.75);  // still most of q: the outer cells' loss, not a failure of the specimen
 }
 
 // A point whose square reaches past a free surface into a cell that holds nothing else:
