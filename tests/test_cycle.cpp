@@ -67,6 +67,8 @@ TEST_CASE("eq. 5: a rigid translation strains nothing; a small rigid rotation gi
             sim.du_y()[std::size_t(sim.node(i, j))] = -0.1 + th * i;
         }
     const StrainIncrement e = sim.strain_of_cell(1, 1);  // zero but for the rounding of 0.3 - th j
+    // Each nodal value is rounded by half an ulp of 0.3 or 0.1 (2.8e-17, 6.9e-18); eq. 5 sums
+    // four of them and halves the sum: gamma is off by under 9e-17 even when the roundings add up.
     CHECK(std::fabs(e.xx) < 1e-16);
     CHECK(std::fabs(e.yy) < 1e-16);
     CHECK(std::fabs(e.gamma()) < 1e-16);
@@ -104,7 +106,9 @@ TEST_CASE("nodal forces are the virtual-work transpose of eq. 5: sum F.du = -L^2
         const StrainIncrement e = sim.strain_of_cell(0, 0);
         const double expect = -p.vol[0] * (sxx * e.xx + syy * e.yy + sxy * e.gamma());
         CHECK(work == approx(expect).epsilon(1e-12).scale(1e-6));
-        CHECK(std::fabs(sum_x) < 1e-9);  // a cell's forces are self-equilibrated
+        // A cell's forces are self-equilibrated: zero but for the rounding of a few operations
+        // on forces of order sigma L = 7e4 N/m (ulp 1.5e-11).
+        CHECK(std::fabs(sum_x) < 1e-9);
         CHECK(std::fabs(sum_y) < 1e-9);
     }
 }
@@ -123,7 +127,7 @@ TEST_CASE("a uniform stress in a full block gives no force at interior nodes; lu
         for (int i = 1; i <= 7; ++i) {
             const std::size_t n = std::size_t(sim.node(i, j));
             const bool interior = i > 1 && i < 7 && j > 1 && j < 5;
-            if (interior) {
+            if (interior) {  // the four cells' forces on the node, of order sigma L / 2 = 1e4 N/m (ulp 2e-12), cancel but for rounding
                 CHECK(std::fabs(sim.force_x()[n]) < 1e-8);
                 CHECK(std::fabs(sim.force_y()[n]) < 1e-8);
             }
@@ -371,7 +375,9 @@ TEST_CASE("eq. 13-14: a free block falls at g undamped and at (1 - alpha) g with
             const double expect = -g * dt2 * ((n - 1) + (1 - alpha) * (n - 1) * (n - 2) / 2.0);
             const double du_n = g * dt2 * (1 + (n - 1) * (1 - alpha));
             CHECK(sim.points().y[0] - y0 == approx(expect).epsilon(1e-9));
-            CHECK(std::fabs(sim.points().syy[0]) < 1e-6);  // a free fall strains nothing
+            // A free fall strains nothing: rounding only, a few ulps of du (5e-3 m at most) over L
+            // a step, 500 steps in M = 2.4e7 Pa: below 1e-7 Pa.
+            CHECK(std::fabs(sim.points().syy[0]) < 1e-6);
             CHECK(sim.kinetic_energy() == approx(0.5 * sim.mass_inside() * du_n * du_n / dt2).epsilon(1e-9));
         }
 }

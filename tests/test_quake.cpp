@@ -81,8 +81,10 @@ TEST_CASE("quake: a shear column on a rigid base rings at its free period 4H/V_s
     const double period = 1 / best_f, expected = 4 * 20.0 / 100.0;
     MESSAGE("rigid base: free period " << period << " s, 4H/V_s = " << expected << " s (" << 100 * (period / expected - 1) << " %)");
     // The issue asks 3 %; the lattice's dispersion for 20 cells over a quarter wavelength is
-    // (k L)^2 / 24 = 2.6e-4, and the scan's step 5e-4 Hz is 0.04 % of 1.25 Hz.
-    CHECK(std::fabs(period / expected - 1) < 0.005);
+    // (k L)^2 / 24 = 2.6e-4, and the scan's step 5e-4 Hz is 0.04 % of 1.25 Hz (half of it at
+    // most to the peak): 0.05 % together, and 0.1 % leaves a margin of two. A mass or a
+    // modulus off by 1 % moves the period by 0.5 %.
+    CHECK(std::fabs(period / expected - 1) < 0.001);
     // Undamped and linear: the energy account closes (the ground's work is the column's
     // energy) but for eq. 12's compensation, second order in the increments.
     MESSAGE("rigid base: worst |energy_error| " << r.worst_error << ", ground work " << r.last.w_ground << " J/m");
@@ -100,11 +102,15 @@ TEST_CASE("quake: the ground's motion is its record integrated; BASELINE brings 
             sim.step();
             peak_v = std::max(peak_v, sim.ground_increment(0) / s.dt_s);
         }
-        // The leapfrog's velocity at half steps of 2 ms samples the sine within 1 - cos(pi 0.01) = 5e-4.
+        // The leapfrog's velocity at half steps of 2 ms samples the sine within 1 - cos(pi 0.01) = 4.9e-4,
+        // and the record's 1 ms samples integrated as straight lines add (pi 0.01)^2 / 12 = 8e-5.
         CHECK(std::fabs(peak_v / 0.1 - 1) < 1e-3);
-        // Its displacement, the midpoint rule's sum: within (pi dt / 0.1)^2 / 24 = 1.6e-4 (and the samples' 1 ms).
-        CHECK(std::fabs(sim.ground_displacement(0) / (0.02 / kPi) - 1) < 2e-3);
-        CHECK(std::fabs(sim.ground_increment(0)) < 1e-6 * 0.1 * s.dt_s);  // at rest after the pulse (a cosine's samples sum to zero)
+        // Its displacement, the midpoint rule's sum: within (pi dt / 0.1)^2 / 24 = 1.6e-4, and the
+        // samples' 1 ms (pi 0.01)^2 / 12 = 8e-5: 2.5e-4 if both had the same sign.
+        CHECK(std::fabs(sim.ground_displacement(0) / (0.02 / kPi) - 1) < 3e-4);
+        // At rest after the pulse: a cosine's samples sum to zero; the record's 8 decimals could
+        // leave 101 x 5e-9 m/s^2 x 1 ms = 5e-10 m/s at most, 5e-9 of the peak velocity.
+        CHECK(std::fabs(sim.ground_increment(0)) < 1e-6 * 0.1 * s.dt_s);
     }
     // The sweep of quake_sweep.txt starting 0.3 s later: its velocity and displacement drift
     // (the record is not a whole number of cycles); BASELINE ends both at zero, and changes the
@@ -131,7 +137,9 @@ TEST_CASE("quake: the ground's motion is its record integrated; BASELINE brings 
     MESSAGE("sweep: ground displacement at the end " << end_d[0] << " m, velocity " << end_v[0] << " m/s; with BASELINE " << end_d[1] << ", " << end_v[1]
                                                      << "; largest displacement " << peak[0] << " and " << peak[1] << " m");
     CHECK(std::fabs(end_d[0]) > 1e-3);
-    CHECK(std::fabs(end_d[1]) < 1e-10);  // of a motion of 4-8 cm: rounding over 10 300 steps
+    // Rounding over 10 300 steps: half an ulp of a velocity of 0.16 m/s at most (1.4e-17) a
+    // step, 1.4e-13 m/s, 1.4e-12 m once integrated over the 20 s; of a motion of 4-8 cm.
+    CHECK(std::fabs(end_d[1]) < 1e-10);
     CHECK(std::fabs(end_v[1]) < 1e-10);
     // The trend BASELINE takes off is small against the record (peak 0.5 m/s^2): the drift
     // it removes (8 cm by the end) builds up from a tiny offset over 20 s.
@@ -151,7 +159,9 @@ TEST_CASE("quake: a pulse through a compliant absorbing base leaves the column a
                                                                    << " J/m; worst |energy_error| " << r.worst_error);
     CHECK(worst_after <= 0.05 * r.peak_ke);
     CHECK(r.worst_error < 1e-4);
-    // What the ground put in, the dashpots took out (what is left is the little above).
+    // What the ground put in, the dashpots took out. What is left is what the base reflects:
+    // a dashpot on the lattice's edge node (half mass) reflects (k L)^2 / 16 of a wave, so
+    // (k L)^4 / 256 of its energy, 0.3 % at 15 Hz where the pulse's spectrum has its first zero.
     MESSAGE("compliant base: the dashpots took " << r.last.d_absorb << " J/m of the ground's " << r.last.w_ground << " J/m");
     CHECK(std::fabs(r.last.d_absorb / r.last.w_ground - 1) < 0.01);
 }
@@ -201,11 +211,16 @@ TEST_CASE("quake: a layer's transfer function under a sine sweep is |1 / cos(ome
         band(trough_at, trough, trough_form);
         MESSAGE("mode " << n << ": resonance at " << best_f << " Hz ((2n - 1) V_s / 4H = " << fn << "); smoothed peak " << peak << " (closed form "
                         << peak_form << "); at " << trough_at << " Hz " << trough << " (" << trough_form << ")");
-        CHECK(std::fabs(best_f / fn - 1) < 0.03);  // the issue's tolerance; the lattice's dispersion is below 1 % here
-        // At n V_s / 2H the layer passes the base's motion unchanged whatever the damping.
+        // The ratio scatters from one frequency to the next, so its largest value may lie
+        // anywhere near the top of the resonance, whose half width at half power is D f_n
+        // = 3.2 % of f_n; the lattice's dispersion, (k L)^2 / 24 = 0.6 % at the third mode, is below it.
+        CHECK(std::fabs(best_f / fn - 1) < 0.03);
+        // At n V_s / 2H the layer passes the base's motion unchanged whatever the damping: the
+        // damping's whole effect there is 1 - 1 / cosh(n alpha), 4.4 % at the third trough.
         CHECK(std::fabs(trough / trough_form - 1) < 0.05);
         // The peaks' heights depend on how local damping (not viscous) acts on one mode:
-        // alpha / pi is its damping ratio in steady vibration only.
+        // alpha / pi is its damping ratio in steady vibration only. A peak's height is 1 / 2D:
+        // 15 % is an effective damping ratio within 15 % of alpha / pi.
         CHECK(std::fabs(peak / peak_form - 1) < 0.15);
     }
 }
@@ -292,7 +307,7 @@ TEST_CASE("quake: a dry slope shaken past its yield acceleration moves as Newmar
         }
         crest.moved(sim, dx, dy);
         dx -= sim.ground_displacement(0);
-        CHECK(std::fabs(sim.ground_displacement(0)) < 1e-9);
+        CHECK(std::fabs(sim.ground_displacement(0)) < 1e-9);  // rounding over 8000 steps of a motion of 2.5 cm
     };
     double dx, dy, qx, qy;
     shaken(1.0, dx, dy);
@@ -375,7 +390,9 @@ TEST_CASE("quake: an absorbing edge released at START keeps a column at rest und
     MESSAGE("released at rest: top moved " << worst << " m after START, settlement " << settlement << " m; held reactions' work " << sim.energy().w_fixes);
     CHECK(settlement > 0);
     CHECK(worst < 1e-4 * settlement);
-    CHECK(std::fabs(sim.energy().error) < 1e-3);
+    // The account closes to the order of the strain (the column settled under damping before
+    // START): rho g H / M = 8.2e-3 at the base, as test_energy.cpp's ringing column, 1 % at 0.9 %.
+    CHECK(std::fabs(sim.energy().error) < 8e-3);
 }
 
 TEST_CASE("quake: the motion file's problems are reported at its own line and column") {
@@ -512,6 +529,7 @@ TEST_CASE("quake: a warning when the ground moves more than a quarter cell (the 
         // and the run's ground goes there
         Simulation sim(s);
         for (long n = 0; n < s.steps; ++n) sim.step();
+        // The midpoint rule integrates a constant acceleration exactly: rounding of 2000 steps.
         CHECK(std::fabs(sim.ground_displacement(0) / 0.8 - 1) < 1e-9);
     }
 }
@@ -547,9 +565,13 @@ TEST_CASE("quake: with a rigid base, side dashpots act on the motion relative to
     const double free_sides = centre("", e_free), absorbing = centre("ABSORB LEFT RIGHT\n", e_abs);
     MESSAGE("stiff layer: the centre's largest displacement " << absorbing << " m with ABSORB LEFT RIGHT, " << free_sides << " m with free sides; dashpots took "
                                                              << e_abs.d_absorb << " J/m, the layer's largest kinetic energy " << peak_ke << " J/m");
+    // The dashpots see only the layer's motion relative to its base, quasi-static at 2 Hz against
+    // 50 Hz: (2 / 50)^2 = 0.16 % of the base's; they cannot change the centre's by more.
     CHECK(std::fabs(absorbing / free_sides - 1) < 0.01);
     CHECK(e_abs.d_absorb < 0.01 * peak_ke);
-    CHECK(std::fabs(e_abs.error) < 1e-3);
+    // Elastic and undamped: the account closes to the layer's strain (rho a H / G = 2e-5 at
+    // 0.4 g) and the leapfrog's (omega dt)^2 = 6e-6 at 2 Hz; a dashpot work off by half would show.
+    CHECK(std::fabs(e_abs.error) < 1e-4);
 }
 
 TEST_CASE("quake: a long record costs its samples once, not once a step") {
