@@ -1271,7 +1271,9 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // admissible sets give one stress (tests/test_mohr.cpp), and the order changes only its
     // round-off where two sets meet (the apex line lies on a shear and a tension plane);
     // with psi < phi they rarely (8 of 4.5 million searches in that collapse) give two
-    // different returns, of which the one beside FLAC's own plane is taken.
+    // different returns, of which the one beside FLAC's own plane is taken. The AVX2 point
+    // loop makes those first two sets four points at a time (detail::mohr_edge_lanes, the
+    // same operations): a change to the search's order or arithmetic is a change there.
     bool found = false;
     const int p0 = shear_first ? shear_plane(i1, i3) : 6 + i3;
     int first[3] = {-1, -1, -1};  // the planes to pair with p0 before the others, in order
@@ -1511,6 +1513,152 @@ __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v
     zz = shear ? s2 : zz;
     abs_of(-mu - mu * ns0, d_gamma);  // |e1 - e3|
     return __builtin_ia32_movmskpd256(v4d(inside | shear)) | __builtin_ia32_movmskpd256(v4d(shear)) << 4;
+}
+// The lanes mohr_return_lanes left (bits of `left`; their trials in xx .. zz): the first two
+// sets of mohr_coulomb_correct's search, with the same operations in the same order, four
+// lanes at a time. FLAC's closed form (shear, or tension on sig3) was not admissible there;
+// the search then pairs its plane p0 with first[0], then first[1], the pairs that end most
+// searches in a flowing collapse (an edge of two shear planes, the apex line of shear and
+// tension, the corner of tension and shear). Bit l of the result: lane l was returned by
+// one of them (xx .. zz its stress, d_gamma[l] its plastic shear, as the one-point code's
+// mode Edge gives them); a lane left unsettled (a third set, an infinite or NaN value, an
+// admissible tension return) takes the one-point code, which tries the same two sets first.
+__attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, int left, v4d& d_gamma) {
+    constexpr double huge = std::numeric_limits<double>::infinity();
+    const v4d inf = {huge, huge, huge, huge}, zero = {0, 0, 0, 0}, one = {1, 1, 1, 1}, two = {2, 2, 2, 2};
+    v4d a, t0, t1, hi;
+    v4m shear_ok;
+    mohr_circle_lanes(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
+    const v4d t2 = zz;
+    v4d sig_t = np > 1 ? two_c_sq / (np - 1) : inf;  // tension_limit
+    if (tension >= 0) sig_t = tension < sig_t ? v4d{tension, tension, tension, tension} : sig_t;
+    v4d a0, a1v, a2v, at, ar, anp, ac;
+    abs_of(t0, a0); abs_of(t1, a1v); abs_of(t2, a2v); abs_of(sig_t, at); abs_of(r, ar); abs_of(np, anp); abs_of(two_c_sq, ac);
+    // Finite values only (then nine planes, and t0 <= t1): any other lane takes the one-point code.
+    const v4m finite = (a0 < inf) & (a1v < inf) & (a2v < inf) & (at < inf) & (ar < inf) & (anp < inf) & (ac < inf);
+    const v4m lanes = {-std::int64_t(left & 1), -std::int64_t(left >> 1 & 1), -std::int64_t(left >> 2 & 1), -std::int64_t(left >> 3 & 1)};
+    v4m todo = lanes & finite;
+    if (!__builtin_ia32_movmskpd256(v4d(todo))) return 0;
+    const v4d tol = 1e-11 * (a0 + a1v + a2v + two_c_sq + sig_t);
+    // i1, i2, i3: the order of the trial's principal values, as mohr_coulomb_correct sorts them
+    const v4m above = t1 > t2, below = t0 > t2;
+    const v4m A = ~above, C = above & below;  // (0 1 2), (2 0 1); else (0 2 1)
+    const v4d i1 = C ? two : zero, i2 = A ? one : (C ? zero : two), i3 = A ? two : one;
+    const v4d ti1 = C ? t2 : t0, ti3 = A ? t2 : t1;
+    const v4d fs = ti1 - ti3 * np + two_c_sq, ft = sig_t - ti3;
+    const v4d alpha_p = __builtin_ia32_sqrtpd256(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
+    const v4d h = ti3 - sig_t + alpha_p * (ti1 - sig_p);
+    const v4m shear_first = (fs < 0) & ((ft >= 0) | ~(h > 0));
+    const v4d ns = np < n_psi ? np : v4d{n_psi, n_psi, n_psi, n_psi};  // st.n_psi
+    {  // the tension return of the closed form, where FLAC's h chose it: admissible lanes are the one-point code's
+        const v4d mu = -ft / a1;
+        const v4d d_other = mu * a2, d_i3 = mu * a1;  // sg[i1] -= mu a2, sg[i2] -= mu a2, sg[i3] -= mu a1
+        const v4d g0 = t0 - (i3 == zero ? d_i3 : d_other), g1 = t1 - (i3 == one ? d_i3 : d_other), g2 = t2 - (i3 == two ? d_i3 : d_other);
+        const v4d m01 = g1 < g0 ? g1 : g0, M01 = g0 < g1 ? g1 : g0;
+        const v4d lo = g2 < m01 ? g2 : m01, hi_t = M01 < g2 ? g2 : M01;
+        const v4m admissible = (lo - np * hi_t + two_c_sq >= -tol) & (sig_t - hi_t >= -tol);
+        todo &= shear_first | ~admissible;
+    }
+    // A plane of the nine, lane by lane: shear (i, j), n = e_i - N_phi e_j and m = e_i - N_psi e_j,
+    // or tension on i, n = m = -e_i; idx its number in mohr_coulomb_correct (2 i + (j > i ? j - 1 : j), 6 + i).
+    struct Plane { v4d n[3], m[3], kk, idx; };
+    const v4d n_one = 1.0 - np * 0.0, n_neg = 0.0 - np * 1.0, n_zero = 0.0 - np * 0.0;
+    const v4d m_one = 1.0 - ns * 0.0, m_neg = 0.0 - ns * 1.0, m_zero = 0.0 - ns * 0.0;
+    const v4d minus_one = -one, minus_zero = {-0.0, -0.0, -0.0, -0.0};
+    auto shear_plane = [&](const v4d& i, const v4d& j, Plane& q) LPFDM_INLINE {
+        for (int t = 0; t < 3; ++t) {
+            const v4d tt = {double(t), double(t), double(t), double(t)};
+            q.n[t] = i == tt ? n_one : (j == tt ? n_neg : n_zero);
+            q.m[t] = i == tt ? m_one : (j == tt ? m_neg : m_zero);
+        }
+        q.kk = two_c_sq;
+        q.idx = 2 * i + (j > i ? j - 1 : j);
+    };
+    auto tension_plane = [&](const v4d& i, Plane& q) LPFDM_INLINE {
+        for (int t = 0; t < 3; ++t) {
+            const v4d tt = {double(t), double(t), double(t), double(t)};
+            q.n[t] = q.m[t] = i == tt ? minus_one : minus_zero;
+        }
+        q.kk = sig_t;
+        q.idx = 6 + i;
+    };
+    auto pick = [](const v4m& c, const Plane& x, const Plane& y, Plane& q) LPFDM_INLINE {
+        for (int t = 0; t < 3; ++t) { q.n[t] = c ? x.n[t] : y.n[t]; q.m[t] = c ? x.m[t] : y.m[t]; }
+        q.kk = c ? x.kk : y.kk;
+        q.idx = c ? x.idx : y.idx;
+    };
+    // p0 and first[0], first[1] (mohr_coulomb_correct's order)
+    const v4d o = i3 == two ? i1 : 1 - i3;
+    Plane p0, q1, q2, x, y;
+    shear_plane(i1, i3, x); tension_plane(i3, y); pick(shear_first, x, y, p0);
+    shear_plane(i1, i2, x); shear_plane(o, i3, y); pick(shear_first, x, y, q1);
+    tension_plane(i1, x); shear_plane(i3, o, y); pick(shear_first, x, y, q2);
+    const double d12 = a1 - a2;
+    const v4d mu_min = -tol / (a1 + 1);
+    const v4d tr[3] = {t0, t1, t2};
+    // try_set of the pair (p0, q), its planes in index order: true in the lanes where it is admissible
+    auto try_pair = [&](const Plane& q, v4d sg[3], v4d& gamma, v4m& ok) LPFDM_INLINE {
+        const v4m p_first = p0.idx < q.idx;
+        Plane u, v;
+        pick(p_first, p0, q, u); pick(p_first, q, p0, v);
+        v4d dm[2][3], f[2];
+        const Plane* pl[2] = {&u, &v};
+        for (int w = 0; w < 2; ++w) {
+            const Plane& z = *pl[w];
+            const v4d a2_tr = a2 * (z.m[0] + z.m[1] + z.m[2]);
+            for (int t = 0; t < 3; ++t) dm[w][t] = a2_tr + d12 * z.m[t];
+            f[w] = z.n[0] * tr[0] + z.n[1] * tr[1] + z.n[2] * tr[2] + z.kk;
+        }
+        v4d A[2][2];
+        for (int w = 0; w < 2; ++w)
+            for (int x = 0; x < 2; ++x) A[w][x] = pl[w]->n[0] * dm[x][0] + pl[w]->n[1] * dm[x][1] + pl[w]->n[2] * dm[x][2];
+        const v4d b0 = -f[0], b1 = -f[1];
+        // Gaussian elimination with partial pivoting, 2 x 2, as try_set
+        v4d abs00, abs10;
+        abs_of(A[0][0], abs00); abs_of(A[1][0], abs10);
+        const v4m sw = abs10 > abs00;
+        const v4d p00 = sw ? A[1][0] : A[0][0], p01 = sw ? A[1][1] : A[0][1], q10 = sw ? A[0][0] : A[1][0], q11 = sw ? A[0][1] : A[1][1];
+        const v4d pb = sw ? b1 : b0, qb = sw ? b0 : b1;
+        const v4d fr = q10 / p00;
+        const v4d a11 = q11 - fr * p01, bb1 = qb - fr * pb;
+        const v4d mu1 = bb1 / a11, mu0 = (pb - p01 * mu1) / p00;
+        v4d ap00, aa11;
+        abs_of(p00, ap00); abs_of(a11, aa11);
+        const v4d tiny = {1e-300, 1e-300, 1e-300, 1e-300};
+        ok = ~(ap00 < tiny) & ~(aa11 < tiny) & ~(mu0 < mu_min) & ~(mu1 < mu_min);
+        for (int t = 0; t < 3; ++t) { sg[t] = tr[t]; sg[t] += mu0 * dm[0][t]; sg[t] += mu1 * dm[1][t]; }
+        const v4d m01 = sg[1] < sg[0] ? sg[1] : sg[0], M01 = sg[0] < sg[1] ? sg[1] : sg[0];
+        const v4d lo = sg[2] < m01 ? sg[2] : m01, hi_n = M01 < sg[2] ? sg[2] : M01;
+        ok &= ~(lo - np * hi_n + two_c_sq < -tol) & ~(sig_t - hi_n < -tol);
+        // plastic strains d_eps^p = -sum mu_a m_a; d_gamma = max - min
+        v4d ep[3];
+        for (int t = 0; t < 3; ++t) { ep[t] = zero; ep[t] -= mu0 * u.m[t]; ep[t] -= mu1 * v.m[t]; }
+        const v4d e01 = ep[0] < ep[1] ? ep[1] : ep[0], e_max = e01 < ep[2] ? ep[2] : e01;
+        const v4d f01 = ep[1] < ep[0] ? ep[1] : ep[0], e_min = ep[2] < f01 ? ep[2] : f01;
+        gamma = e_max - e_min;
+    };
+    v4d sg[3], best[3], gamma, best_gamma;
+    v4m done, second;
+    try_pair(q1, sg, gamma, done);
+    done &= todo;
+    for (int t = 0; t < 3; ++t) best[t] = sg[t];
+    best_gamma = gamma;
+    if (__builtin_ia32_movmskpd256(v4d(todo & ~done))) {
+        try_pair(q2, sg, gamma, second);
+        second &= todo & ~done;
+        for (int t = 0; t < 3; ++t) best[t] = second ? sg[t] : best[t];
+        best_gamma = second ? gamma : best_gamma;
+        done |= second;
+    }
+    // to_xy: the same principal direction, the new principal values
+    const v4d pn = 0.5 * (best[1] + best[0]), rn = 0.5 * (best[1] - best[0]);
+    const v4d c2 = r > 0 ? a / r : one, s2xy = r > 0 ? xy / r : zero;
+    xx = done ? pn + rn * c2 : xx;
+    yy = done ? pn - rn * c2 : yy;
+    xy = done ? rn * s2xy : xy;
+    zz = done ? best[2] : zz;
+    d_gamma = done ? best_gamma : d_gamma;
+    return __builtin_ia32_movmskpd256(v4d(done));
 }
 #endif
 // f(i, Tag<T>) for i = i0 .. i1 - 1: with Wide (std::true_type, inside a function built for
@@ -3912,10 +4060,10 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
 #if LPFDM_WIDE
     if constexpr (Wide) {
         // The Mohr-Coulomb points of b0 .. b1-1, holding their elastic trials: the elastic
-        // test and the closed-form shear return four points per register
-        // (detail::mohr_inside_lanes, mohr_return_lanes). A point they do not settle, and
-        // the last one to three points of a material's span, take the one-point test and
-        // return on the trial.
+        // test, the closed-form shear return and the search's first two sets (an edge, the
+        // apex line) four points per register (detail::mohr_inside_lanes, mohr_return_lanes,
+        // mohr_edge_lanes). A point they do not settle, and the last one to three points of
+        // a material's span, take the one-point test and return on the trial.
         long consulted = 0;  // Mohr-Coulomb points consulted (profiling)
         const double *pc0 = p_.c0.data(), *pnphi = p_.n_phi.data(), *psqrt = p_.sqrt_n_phi.data();
         std::uint8_t* pyielded = p_.yielded.data();
@@ -3942,6 +4090,10 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     if (settled == 15) continue;  // all four inside: the trial stands
                     const detail::v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
                     settled = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma);
+                    if ((settled & 15) != 15) {  // the search's first two sets (an edge, the apex line)
+                        const int edge = detail::mohr_edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, ~settled & 15, d_gamma);
+                        settled |= edge | edge << 4;
+                    }
                     detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy); detail::store(pszz + q, zz);
                     if (const int sh = settled >> 4) {  // record_yield of the lanes returned by shear: the same operations
                         using detail::v4d;

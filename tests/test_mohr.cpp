@@ -389,6 +389,83 @@ TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as th
 #endif
 }
 
+TEST_CASE("Mohr-Coulomb edges in AVX2 lanes: the search's first two sets, as the one-point code makes them, bit for bit") {
+    // Where FLAC's closed form is not admissible, mohr_coulomb_correct searches sets of
+    // planes; detail::mohr_edge_lanes makes its first two (p0 with first[0], then first[1])
+    // four lanes at a time. A lane it settles must get the one-point code's mode Edge, its
+    // stress and its plastic shear exactly; a lane it leaves is the one-point code's (the
+    // closed form's tension return, a later set, or values that are not finite). Trials
+    // from the flowing collapse's range (a weak soil near its apex, sig_zz anywhere between
+    // and beyond the in-plane pair), then the odd values of the test above.
+#if LPFDM_WIDE
+    if (!Simulation::have_wide()) return;
+    Random r(31);
+    const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+    const double odd[] = {0.0, -0.0, 1e-310, -1e-310, 1e300, -1e300, inf, -inf, nan};
+    auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+    long tried = 0, edge = 0, left = 0, past_shear_only = 0, past_tension = 0, tension_first = 0;
+    for (int k = 0; k < 60000; ++k) {
+        Material m = Material::mohr(1, 1e7 * (0.5 + r.uniform()), 0.1 + 0.35 * r.uniform(), 2000, 5 + 40 * r.uniform(), 2000 * r.uniform());
+        m.psi_deg = k % 4 == 0 ? m.phi_deg : m.phi_deg * r.uniform();
+        m.tension = k % 3 == 0 ? -1.0 : (k % 3 == 1 ? 0.0 : 1e3 * r.uniform());
+        const MaterialConstants mc = constants_of(m);
+        detail::v4d xx, yy, xy, zz, np, two_c_sq, d_gamma, radius;
+        Stress s[4];
+        for (int l = 0; l < 4; ++l) {
+            const double scale = k % 7 == 0 ? std::ldexp(1.0, int(r.uniform() * 40) - 20) * 1e3 : 2e4;
+            auto value = [&](double shift) { return k % 11 == 0 && r.uniform() < 0.1 ? odd[int(r.uniform() * 9)] : scale * (r.uniform() - shift); };
+            s[l] = {value(0.8), value(0.8), value(0.5), value(0.8)};
+            xx[l] = s[l].xx; yy[l] = s[l].yy; xy[l] = s[l].xy; zz[l] = s[l].zz;
+            np[l] = mc.n_phi * (1 + 0.2 * (r.uniform() - 0.5));  // scattered
+            two_c_sq[l] = 2 * mc.c * (r.uniform() < 0.5 ? 0.5 : 1.0) * std::sqrt(np[l]);  // softened or intact
+        }
+        detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
+        const int bits = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma);
+        const int unsettled = ~bits & 15;
+        if (!unsettled) continue;
+        const int got = detail::mohr_edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, unsettled, d_gamma);
+        CHECK((got & ~unsettled) == 0);  // only the lanes it was given
+        for (int l = 0; l < 4; ++l) {
+            if (!(unsettled >> l & 1)) continue;
+            ++tried;
+            detail::MohrTrial t;
+            t.np = np[l];
+            t.two_c_sq = two_c_sq[l];
+            Stress one = s[l];
+            REQUIRE(!detail::mohr_inside(t, mc.tension, one));
+            MohrStrength st;
+            st.n_phi = t.np;
+            st.n_psi = std::min(mc.n_psi, t.np);
+            st.tension = mc.tension;
+            const MohrResult res = detail::mohr_coulomb_correct(mc, st, t, one);
+            INFO("stress " << s[l].xx << " " << s[l].yy << " " << s[l].xy << " " << s[l].zz << ", N_phi " << np[l] << ", 2c sqrt(N_phi) " << two_c_sq[l] << ", tension " << mc.tension);
+            if (!(got >> l & 1)) {  // left: the stress is still the trial
+                ++left;
+                CHECK((same(xx[l], s[l].xx) && same(yy[l], s[l].yy) && same(xy[l], s[l].xy) && same(zz[l], s[l].zz)));
+                continue;
+            }
+            ++edge;
+            CHECK(res.mode == MohrResult::Edge);
+            CHECK((same(xx[l], one.xx) && same(yy[l], one.yy) && same(xy[l], one.xy) && same(zz[l], one.zz)));
+            CHECK(same(d_gamma[l], res.d_gamma_p));
+            (t.sig_t < std::max(t.sig[1], t.sig[2]) ? past_tension : past_shear_only) += 1;
+            // FLAC's h chose the tension plane (p0 is sig3's tension plane; the set holds it)
+            const double lo = std::min(t.sig[0], t.sig[2]), hi = std::max(t.sig[1], t.sig[2]);
+            const double h = hi - t.sig_t + (std::sqrt(1 + t.np * t.np) + t.np) * (lo - (t.sig_t * t.np - t.two_c_sq));
+            tension_first += !(lo - hi * t.np + t.two_c_sq < 0 && (t.sig_t - hi >= 0 || !(h > 0)));
+        }
+    }
+    MESSAGE("lanes the closed form left " << tried << ": settled on an edge or the apex line " << edge << " (" << past_shear_only << " past the shear planes only, " << past_tension << " past the tension limit; " << tension_first << " from FLAC's tension return), left to the one-point code " << left);
+    CHECK(edge > 20000);  // the lanes settle most of them
+    CHECK(past_shear_only > 10000);  // edges of two shear planes
+    CHECK(past_tension > 10000);     // the apex line, the corner of tension and shear
+    CHECK(tension_first > 200);
+    CHECK(left > 1000);  // and leave the rest
+#else
+    MESSAGE("built without the AVX2 version (LPFDM_WIDE): nothing to compare");
+#endif
+}
+
 TEST_CASE("Jaumann, eq. 5f: a stressed point turned 360 degrees in small rigid steps keeps its invariants") {
     OnePoint op(Material::mohr(1, 5e7, 0.3, 1700, 30, 9800));
     Points& p = op.sim.points();
