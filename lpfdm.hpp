@@ -2357,8 +2357,10 @@ public:
     StrainIncrement strain_of_cell(int i, int j) const { return cell_strain(dux_.data(), duy_.data(), node(i, j), mx_ + 1, 0.5 * invL_); }
     // MAPPING SMOOTH: the strain increments of the part of a point's square in cell (i, j)
     // whose centre is (x, y) (bilinear_gradient there, its trace taken at the centroid of
-    // the cell's material, cell_centroid).
+    // the cell's material, cell_centroid: centroid_trace_, made once a step by
+    // centroid_traces for every cell holding material).
     StrainIncrement strain_of_part(int i, int j, double x, double y) const;
+    void centroid_traces(const Range& cells);
     void cell_centroid(std::size_t c, double& u, double& v) const {  // from the centre, in cells
         u = cvol_[c] > 0 ? smu_[c] / cvol_[c] : 0.0;
         v = cvol_[c] > 0 ? smv_[c] / cvol_[c] : 0.0;
@@ -2759,6 +2761,7 @@ private:
     // part's centre from the cell centre in cells, p = (sigma_xx + sigma_yy) / 2 (the forces'
     // share of the gradient's variation across the cell, and the centroid of its material)
     std::vector<double> shx_, shy_, smu_, smv_;
+    std::vector<double> centroid_trace_;  // MAPPING SMOOTH: per cell, the trace of the increments' gradient at the material's centroid
     // ADVECT POINTS only: per cell, sum m (d - E r) and sum m E of the points that landed in
     // it (r from the cell centre).
     // One record per cell, not six arrays: bench_elastic with ADVECT POINTS ran 400 steps
@@ -2884,7 +2887,7 @@ inline void Simulation::setup() {
     spans(mx_, cols_);
     spans(my_, rows_);
     if (sc_.hourglass > 0) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
-    if (sc_.mapping == Mapping::Smooth) for (auto* v : {&shx_, &shy_, &smu_, &smv_}) v->assign(cells, 0.0);
+    if (sc_.mapping == Mapping::Smooth) for (auto* v : {&shx_, &shy_, &smu_, &smv_, &centroid_trace_}) v->assign(cells, 0.0);
     if (sc_.advect == Advect::Points)
         carried_.assign(cells, Carried{});
     for (const auto& m : sc_.materials) consts_.push_back(constants_of(m));
@@ -3170,12 +3173,27 @@ inline StrainIncrement Simulation::strain_of_part(int i, int j, double x, double
     const int n1 = node(i, j), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
     const double ux[4] = {dux_[n1], dux_[n2], dux_[n3], dux_[n4]}, uy[4] = {duy_[n1], duy_[n2], duy_[n3], duy_[n4]};
     StrainIncrement e = bilinear_gradient(ux, uy, (x - i * L_) * invL_, (y - j * L_) * invL_, invL_);
-    double cu, cv;
-    cell_centroid(std::size_t(cell(i, j)), cu, cv);
-    const StrainIncrement c = bilinear_gradient(ux, uy, 0.5 + cu, 0.5 + cv, invL_);
-    const double half_change = 0.5 * ((c.xx + c.yy) - (e.xx + e.yy));
+    const double half_change = 0.5 * (centroid_trace_[std::size_t(cell(i, j))] - (e.xx + e.yy));
     e.xx += half_change; e.yy += half_change;
     return e;
+}
+
+// MAPPING SMOOTH, the B-bar part of strain_of_part: for each cell of `cells` that holds
+// material, the trace of the gradient of its bilinear increment field at the centroid of
+// that material (cell_centroid), the same for every part of a square in it. The points'
+// parts all lie in cells holding material: their own squares put it there.
+inline void Simulation::centroid_traces(const Range& cells) {
+    for (int j = cells.j0; j < cells.j1; ++j)
+        for (int i = cells.i0; i < cells.i1; ++i) {
+            const std::size_t c = std::size_t(cell(i, j));
+            if (!(cmass_[c] > 0)) continue;
+            const int n1 = node(i, j), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
+            const double ux[4] = {dux_[n1], dux_[n2], dux_[n3], dux_[n4]}, uy[4] = {duy_[n1], duy_[n2], duy_[n3], duy_[n4]};
+            double cu, cv;
+            cell_centroid(c, cu, cv);
+            const StrainIncrement g = bilinear_gradient(ux, uy, 0.5 + cu, 0.5 + cv, invL_);
+            centroid_trace_[c] = g.xx + g.yy;
+        }
 }
 
 // One point of MAPPING SMOOTH's pass: its strain, stress and volume, and where it goes.
@@ -3235,6 +3253,7 @@ inline void Simulation::smooth_map(Landing& t) {
 }
 
 inline void Simulation::reference_points_smooth() {
+    centroid_traces(Range{0, mx_, 0, my_});
     for (std::size_t k = 0; k < p_.size(); ++k) smooth_move(k);
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
     Landing t;
@@ -4262,6 +4281,7 @@ inline void Simulation::clear_row(int j, int lo, int hi) {
 // lattice phases.
 inline void Simulation::smooth_point_pass() {
     const long n = long(p_.size());
+    centroid_traces(strained_);  // the cells around those holding material (cell_strains)
 #if defined(_OPENMP)
     if (!serial()) {
         LPFDM_OMP(omp parallel for schedule(static) num_threads(team_))
