@@ -1516,8 +1516,9 @@ __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v
 }
 // The lanes mohr_return_lanes left (bits of `left`; their trials in xx .. zz): the first two
 // sets of mohr_coulomb_correct's search, with the same operations in the same order, four
-// lanes at a time. FLAC's closed form (shear, or tension on sig3) was not admissible there;
-// the search then pairs its plane p0 with first[0], then first[1], the pairs that end most
+// lanes at a time. Its closed-form shear return was not admissible there, or FLAC's h chose
+// tension, whose return is made here and, where admissible, left to the one-point code.
+// The search then pairs its plane p0 with first[0], then first[1], the pairs that end most
 // searches in a flowing collapse (an edge of two shear planes, the apex line of shear and
 // tension, the corner of tension and shear). Bit l of the result: lane l was returned by
 // one of them (xx .. zz its stress, d_gamma[l] its plastic shear, as the one-point code's

@@ -557,8 +557,10 @@ TEST_CASE("hard: ADVECT POINTS turns a rigid body through 90 degrees with its sh
     for (const Spin* r : {&a, &b, &bl}) {
         CHECK(r->ok);
         CHECK(r->mass);
-        // A turn short by d moves the corners, hypot(1, 0.5) m from the centre, by 1.12 d: the
-        // positions' bound below (2 % of a cell, 5 mm) allows 0.26 deg.
+        // A turn short by d moves the outermost points, a quarter cell inside the corners
+        // (1.035 m from the centre at L = 0.25, 1.076 m at 0.125), by that radius times d: the
+        // positions' bound below (2 % of a cell, 5 mm) allows 0.27-0.28 deg. The corners'
+        // radius hypot(1, 0.5) gives the bound for both, 0.26 deg.
         CHECK(std::fabs(std::fabs(r->angle) - 90) < 0.02 * 0.25 / std::hypot(1.0, 0.5) / kDeg);
         CHECK(r->pos_err < 0.02 * 0.25);                  // eq. 12: 0.093 m
         CHECK(r->dist_err < 0.01);                        // eq. 12: 28 %

@@ -30,7 +30,8 @@ TEST_CASE("square_overlap: fractions that sum to one, change continuously across
         const double left = a == 0 ? w[0] : 0.0;
         CHECK(w[0] + w[1] == approx(1.0).epsilon(1e-15));
         // A step of l/50 moves 1/100 of the square, to the rounding of x's steps (half an ulp
-        // of 0.25, 2.8e-17 m, 2e-16 of the square's width 2l).
+        // of 0.25, 2.8e-17 m, 2e-16 of the square's width 2l, a few of them over the 100 steps);
+        // 1e-12 is the same bound as the fraction's own check below.
         CHECK(std::fabs(left - prev) <= 1.0 / 100 + 1e-12);
         CHECK(left == approx(std::clamp((0.25 - (x - l)) / (2 * l), 0.0, 1.0)).epsilon(1e-12));
         prev = left;
