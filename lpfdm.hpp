@@ -1468,12 +1468,17 @@ __attribute__((target("avx2"))) inline int mohr_inside_lanes(const v4d& xx, cons
     mohr_circle_lanes(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
     return __builtin_ia32_movmskpd256(v4d(shear_ok & (hi <= 0) & (two_c_sq >= 0) & (np < inf)));
 }
+// What mohr_return_lanes found of each trial, for mohr_edge_lanes (mohr_coulomb_correct's
+// names): the circle's a, the principal values t0 <= t1 and t2 = sig_zz, the tension limit,
+// the tolerance, the tension plane's f at the largest, the order (A: t1 <= t2, C: t2 < t0,
+// else t0 <= t2 < t1) and FLAC's choice of shear.
+struct MohrLanes { v4d a, t0, t1, t2, sig_t, tol, ft; v4m A, C, shear_first; };
 // The rest of mohr_inside (the tension planes) and the closed-form shear return of
 // mohr_coulomb_correct (where FLAC's h chooses shear). Bit l of the result: lane l is
 // settled; bit 4 + l: it was returned by shear (its stress replaced, d_gamma[l] its plastic
 // shear increment). A lane left unsettled (tension, an edge, or a return the closed form
 // cannot make admissible) takes the one-point code. n_psi, tension, a1, a2: the material's (MaterialConstants).
-__attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, v4d& d_gamma) {
+__attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, v4d& d_gamma, MohrLanes& found) {
     constexpr double huge = std::numeric_limits<double>::infinity();
     const v4d inf = {huge, huge, huge, huge}, zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
     v4d a, t0, t1, hi;
@@ -1512,9 +1517,11 @@ __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v
     xy = shear ? rn * s2xy : xy;
     zz = shear ? s2 : zz;
     abs_of(-mu - mu * ns0, d_gamma);  // |e1 - e3|
+    found = MohrLanes{a, t0, t1, t2, sig_t, tol, ft, A, C, shear_first};
     return __builtin_ia32_movmskpd256(v4d(inside | shear)) | __builtin_ia32_movmskpd256(v4d(shear)) << 4;
 }
-// The lanes mohr_return_lanes left (bits of `left`; their trials in xx .. zz): the first two
+// The lanes mohr_return_lanes left (bits of `left`; their trials in xx .. zz, what it found of
+// them in m): the first two
 // sets of mohr_coulomb_correct's search, with the same operations in the same order, four
 // lanes at a time. Its closed-form shear return was not admissible there, or FLAC's h chose
 // tension, whose return is made here and, where admissible, left to the one-point code.
@@ -1524,15 +1531,11 @@ __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v
 // one of them (xx .. zz its stress, d_gamma[l] its plastic shear, as the one-point code's
 // mode Edge gives them); a lane left unsettled (a third set, an infinite or NaN value, an
 // admissible tension return) takes the one-point code, which tries the same two sets first.
-__attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, int left, v4d& d_gamma) {
+__attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double a1, double a2, const MohrLanes& m, int left, v4d& d_gamma) {
     constexpr double huge = std::numeric_limits<double>::infinity();
     const v4d inf = {huge, huge, huge, huge}, zero = {0, 0, 0, 0}, one = {1, 1, 1, 1}, two = {2, 2, 2, 2};
-    v4d a, t0, t1, hi;
-    v4m shear_ok;
-    mohr_circle_lanes(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
-    const v4d t2 = zz;
-    v4d sig_t = np > 1 ? two_c_sq / (np - 1) : inf;  // tension_limit
-    if (tension >= 0) sig_t = tension < sig_t ? v4d{tension, tension, tension, tension} : sig_t;
+    const v4d &a = m.a, &t0 = m.t0, &t1 = m.t1, &t2 = m.t2, &sig_t = m.sig_t, &tol = m.tol, &ft = m.ft;
+    const v4m &C = m.C, &shear_first = m.shear_first;
     v4d a0, a1v, a2v, at, ar, anp, ac;
     abs_of(t0, a0); abs_of(t1, a1v); abs_of(t2, a2v); abs_of(sig_t, at); abs_of(r, ar); abs_of(np, anp); abs_of(two_c_sq, ac);
     // Finite values only (then nine planes, and t0 <= t1): any other lane takes the one-point code.
@@ -1540,16 +1543,9 @@ __attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d
     const v4m lanes = {-std::int64_t(left & 1), -std::int64_t(left >> 1 & 1), -std::int64_t(left >> 2 & 1), -std::int64_t(left >> 3 & 1)};
     v4m todo = lanes & finite;
     if (!__builtin_ia32_movmskpd256(v4d(todo))) return 0;
-    const v4d tol = 1e-11 * (a0 + a1v + a2v + two_c_sq + sig_t);
     // i1, i2, i3: the order of the trial's principal values, as mohr_coulomb_correct sorts them
-    const v4m above = t1 > t2, below = t0 > t2;
-    const v4m A = ~above, C = above & below;  // (0 1 2), (2 0 1); else (0 2 1)
-    const v4d i1 = C ? two : zero, i2 = A ? one : (C ? zero : two), i3 = A ? two : one;
-    const v4d ti1 = C ? t2 : t0, ti3 = A ? t2 : t1;
-    const v4d fs = ti1 - ti3 * np + two_c_sq, ft = sig_t - ti3;
-    const v4d alpha_p = __builtin_ia32_sqrtpd256(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
-    const v4d h = ti3 - sig_t + alpha_p * (ti1 - sig_p);
-    const v4m shear_first = (fs < 0) & ((ft >= 0) | ~(h > 0));
+    // ((0 1 2) in A, (2 0 1) in C, else (0 2 1)); the finite lanes' tol is the one-point code's
+    const v4d i1 = C ? two : zero, i2 = m.A ? one : (C ? zero : two), i3 = m.A ? two : one;
     const v4d ns = np < n_psi ? np : v4d{n_psi, n_psi, n_psi, n_psi};  // st.n_psi
     {  // the tension return of the closed form, where FLAC's h chose it: admissible lanes are the one-point code's
         const v4d mu = -ft / a1;
@@ -4109,9 +4105,10 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     int settled = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
                     if (settled == 15) continue;  // all four inside: the trial stands
                     const detail::v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
-                    settled = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma);
+                    detail::MohrLanes found;
+                    settled = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
                     if ((settled & 15) != 15) {  // the search's first two sets (an edge, the apex line)
-                        const int edge = detail::mohr_edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, ~settled & 15, d_gamma);
+                        const int edge = detail::mohr_edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, ~settled & 15, d_gamma);
                         settled |= edge | edge << 4;
                     }
                     detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy); detail::store(pszz + q, zz);

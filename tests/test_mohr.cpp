@@ -340,7 +340,8 @@ TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as th
         }
         detail::v4d radius;
         const int first = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
-        const int bits = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma);
+        detail::MohrLanes found;
+        const int bits = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
         for (int l = 0; l < 4; ++l) {
             const double unset = -12345.5;  // mohr_inside sets t.sig_t unless it takes its first exit
             detail::MohrTrial t;
@@ -433,10 +434,11 @@ TEST_CASE("Mohr-Coulomb edges in AVX2 lanes: the search's first two sets, as the
             two_c_sq[l] = 2 * mc.c * (r.uniform() < 0.5 ? 0.5 : 1.0) * std::sqrt(np[l]);  // softened or intact
         }
         detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
-        const int bits = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma);
+        detail::MohrLanes found;
+        const int bits = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
         const int unsettled = ~bits & 15;
         if (!unsettled) continue;
-        const int got = detail::mohr_edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, unsettled, d_gamma);
+        const int got = detail::mohr_edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, unsettled, d_gamma);
         CHECK((got & ~unsettled) == 0);  // only the lanes it was given
         for (int l = 0; l < 4; ++l) {
             if (!(unsettled >> l & 1)) continue;
