@@ -1468,6 +1468,13 @@ __attribute__((target("avx2"))) inline int mohr_inside_lanes(const v4d& xx, cons
     mohr_circle_lanes(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
     return __builtin_ia32_movmskpd256(v4d(shear_ok & (hi <= 0) & (two_c_sq >= 0) & (np < inf)));
 }
+// std::min(std::min(a, b), c) and std::max(std::max(a, b), c) in each lane, with their
+// operations (std::min(a, b) is b < a ? b : a, std::max(a, b) a < b ? b : a).
+LPFDM_INLINE inline void extremes(const v4d& a, const v4d& b, const v4d& c, v4d& lo, v4d& hi) {
+    const v4d m = b < a ? b : a, M = a < b ? b : a;
+    lo = c < m ? c : m;
+    hi = M < c ? c : M;
+}
 // What mohr_return_lanes found of each trial, for mohr_edge_lanes (mohr_coulomb_correct's
 // names): the circle's a, the principal values t0 <= t1 and t2 = sig_zz, the tension limit,
 // the tolerance, the tension plane's f at the largest, the order (A: t1 <= t2, C: t2 < t0,
@@ -1501,8 +1508,8 @@ __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v
     const v4d d1 = a1 - a2 * ns0, d2 = a2 * (1 - ns0), d3 = a2 - a1 * ns0;
     const v4d mu = -fs / (d1 - np * d3);
     const v4d s0 = t0 + mu * (C ? d2 : d1), s1 = t1 + mu * (A ? d2 : d3), s2 = t2 + mu * (A ? d3 : B ? d2 : d1);
-    const v4d m01 = s1 < s0 ? s1 : s0, M01 = s0 < s1 ? s1 : s0;
-    const v4d lo_n = s2 < m01 ? s2 : m01, hi_n = M01 < s2 ? s2 : M01;
+    v4d lo_n, hi_n;
+    extremes(s0, s1, s2, lo_n, hi_n);
     // FLAC's h chooses shear where the tension plane is violated too (h_fn, the same
     // operations; a lane with ft >= 0 does not need it, as the one-point code skips it).
     const v4d alpha_p = __builtin_ia32_sqrtpd256(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
@@ -1551,8 +1558,8 @@ __attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d
         const v4d mu = -ft / a1;
         const v4d d_other = mu * a2, d_i3 = mu * a1;  // sg[i1] -= mu a2, sg[i2] -= mu a2, sg[i3] -= mu a1
         const v4d g0 = t0 - (i3 == zero ? d_i3 : d_other), g1 = t1 - (i3 == one ? d_i3 : d_other), g2 = t2 - (i3 == two ? d_i3 : d_other);
-        const v4d m01 = g1 < g0 ? g1 : g0, M01 = g0 < g1 ? g1 : g0;
-        const v4d lo = g2 < m01 ? g2 : m01, hi_t = M01 < g2 ? g2 : M01;
+        v4d lo, hi_t;
+        extremes(g0, g1, g2, lo, hi_t);
         const v4m admissible = (lo - np * hi_t + two_c_sq >= -tol) & (sig_t - hi_t >= -tol);
         todo &= shear_first | ~admissible;
     }
@@ -1624,14 +1631,14 @@ __attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d
         const v4d tiny = {1e-300, 1e-300, 1e-300, 1e-300};
         ok = ~(ap00 < tiny) & ~(aa11 < tiny) & ~(mu0 < mu_min) & ~(mu1 < mu_min);
         for (int t = 0; t < 3; ++t) { sg[t] = tr[t]; sg[t] += mu0 * dm[0][t]; sg[t] += mu1 * dm[1][t]; }
-        const v4d m01 = sg[1] < sg[0] ? sg[1] : sg[0], M01 = sg[0] < sg[1] ? sg[1] : sg[0];
-        const v4d lo = sg[2] < m01 ? sg[2] : m01, hi_n = M01 < sg[2] ? sg[2] : M01;
+        v4d lo, hi_n;
+        extremes(sg[0], sg[1], sg[2], lo, hi_n);
         ok &= ~(lo - np * hi_n + two_c_sq < -tol) & ~(sig_t - hi_n < -tol);
         // plastic strains d_eps^p = -sum mu_a m_a; d_gamma = max - min
         v4d ep[3];
         for (int t = 0; t < 3; ++t) { ep[t] = zero; ep[t] -= mu0 * u.m[t]; ep[t] -= mu1 * v.m[t]; }
-        const v4d e01 = ep[0] < ep[1] ? ep[1] : ep[0], e_max = e01 < ep[2] ? ep[2] : e01;
-        const v4d f01 = ep[1] < ep[0] ? ep[1] : ep[0], e_min = ep[2] < f01 ? ep[2] : f01;
+        v4d e_min, e_max;
+        extremes(ep[0], ep[1], ep[2], e_min, e_max);
         gamma = e_max - e_min;
     };
     v4d sg[3], best[3], gamma, best_gamma;

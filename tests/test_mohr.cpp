@@ -304,6 +304,30 @@ TEST_CASE("elastic test: leaving out the tension limit for a stress without tens
     CHECK(yielding > 20000);
 }
 
+#if LPFDM_WIDE
+namespace {
+// Values where comparisons and arithmetic behave oddly: zeros of both signs, subnormals, huge
+// values, infinities, NaN.
+const double kOdd[] = {0.0, -0.0, 1e-310, -1e-310, 1e300, -1e300, std::numeric_limits<double>::infinity(),
+                       -std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()};
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+// Lane l of (xx, yy, xy, zz) holds stress s, bit for bit.
+bool lane_holds(const detail::v4d& xx, const detail::v4d& yy, const detail::v4d& xy, const detail::v4d& zz, int l, const Stress& s) {
+    const double lane[4] = {xx[l], yy[l], xy[l], zz[l]}, one[4] = {s.xx, s.yy, s.xy, s.zz};
+    return std::memcmp(lane, one, sizeof lane) == 0;
+}
+// The one-point code's correction of trial s, which mohr_inside found outside (t), with the
+// strength strength_of gives a point of N_phi t.np.
+MohrResult one_point_correction(const MaterialConstants& mc, const detail::MohrTrial& t, Stress& s) {
+    MohrStrength st;
+    st.n_phi = t.np;
+    st.n_psi = std::min(mc.n_psi, t.np);
+    st.tension = mc.tension;
+    return detail::mohr_coulomb_correct(mc, st, t, s);
+}
+}  // namespace
+#endif
+
 TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as the one-point code does, bit for bit") {
     // The AVX2 point loop keeps four trials that detail::mohr_inside_lanes passes, else it
     // calls mohr_return_lanes; it keeps a lane that settles and sends any other through
@@ -316,13 +340,10 @@ TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as th
 #if LPFDM_WIDE
     if (!Simulation::have_wide()) return;
     Random r(29);
-    const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
-    const double odd[] = {0.0, -0.0, 1e-310, -1e-310, 1e300, -1e300, inf, -inf, nan};
     auto value = [&](double scale, double shift) {
         const int pick = int(r.uniform() * 100);
-        return pick < 9 ? odd[pick] : scale * (r.uniform() - shift);
+        return pick < 9 ? kOdd[pick] : scale * (r.uniform() - shift);
     };
-    auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
     long passed = 0, first_exits = 0, inside = 0, shear = 0, other = 0, past_tension = 0;
     for (int k = 0; k < 60000; ++k) {
         Material m = Material::mohr(1, 5e7, 0.1 + 0.35 * r.uniform(), 2000, 45 * r.uniform(), 1e4 * r.uniform());
@@ -361,19 +382,15 @@ TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as th
             if (settled && !returned) {
                 ++inside;
                 REQUIRE(in);
-                CHECK((same(xx[l], s[l].xx) && same(yy[l], s[l].yy) && same(xy[l], s[l].xy) && same(zz[l], s[l].zz)));
+                CHECK(lane_holds(xx, yy, xy, zz, l, s[l]));
             } else if (returned) {
                 ++shear;
                 REQUIRE(settled);
                 REQUIRE(!in);
-                MohrStrength st;
-                st.n_phi = t.np;
-                st.n_psi = std::min(mc.n_psi, t.np);
-                st.tension = mc.tension;
-                const MohrResult res = detail::mohr_coulomb_correct(mc, st, t, one);
+                const MohrResult res = one_point_correction(mc, t, one);
                 CHECK(res.mode == MohrResult::Shear);
-                CHECK((same(xx[l], one.xx) && same(yy[l], one.yy) && same(xy[l], one.xy) && same(zz[l], one.zz)));
-                CHECK(same(d_gamma[l], res.d_gamma_p));
+                CHECK(lane_holds(xx, yy, xy, zz, l, one));
+                CHECK(same_bits(d_gamma[l], res.d_gamma_p));
                 past_tension += t.sig_t - std::max(t.sig[1], t.sig[2]) < 0;  // FLAC's h chose shear
             } else {
                 ++other;
@@ -403,9 +420,6 @@ TEST_CASE("Mohr-Coulomb edges in AVX2 lanes: the search's first two sets, as the
 #if LPFDM_WIDE
     if (!Simulation::have_wide()) return;
     Random r(31);
-    const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
-    const double odd[] = {0.0, -0.0, 1e-310, -1e-310, 1e300, -1e300, inf, -inf, nan};
-    auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
     long tried = 0, edge = 0, left = 0, past_shear_only = 0, past_tension = 0, tension_first = 0;
     for (int k = 0; k < 60000; ++k) {
         // One trial in five is of a kind where the sort or the branch could slip: a circle of
@@ -421,7 +435,7 @@ TEST_CASE("Mohr-Coulomb edges in AVX2 lanes: the search's first two sets, as the
         Stress s[4];
         for (int l = 0; l < 4; ++l) {
             const double scale = k % 7 == 0 ? std::ldexp(1.0, int(r.uniform() * 40) - 20) * 1e3 : 2e4;
-            auto value = [&](double shift) { return k % 11 == 0 && r.uniform() < 0.1 ? odd[int(r.uniform() * 9)] : scale * (r.uniform() - shift); };
+            auto value = [&](double shift) { return k % 11 == 0 && r.uniform() < 0.1 ? kOdd[int(r.uniform() * 9)] : scale * (r.uniform() - shift); };
             s[l] = {value(0.8), value(0.8), value(0.5), value(0.8)};
             if (special == 5) { s[l].yy = s[l].xx; s[l].xy = 0; }
             if (special == 6) {  // as mohr_inside makes p and r
@@ -448,26 +462,19 @@ TEST_CASE("Mohr-Coulomb edges in AVX2 lanes: the search's first two sets, as the
             t.two_c_sq = two_c_sq[l];
             Stress one = s[l];
             REQUIRE(!detail::mohr_inside(t, mc.tension, one));
-            MohrStrength st;
-            st.n_phi = t.np;
-            st.n_psi = std::min(mc.n_psi, t.np);
-            st.tension = mc.tension;
-            const MohrResult res = detail::mohr_coulomb_correct(mc, st, t, one);
+            const MohrResult res = one_point_correction(mc, t, one);
             INFO("stress " << s[l].xx << " " << s[l].yy << " " << s[l].xy << " " << s[l].zz << ", N_phi " << np[l] << ", 2c sqrt(N_phi) " << two_c_sq[l] << ", tension " << mc.tension);
             if (!(got >> l & 1)) {  // left: the stress is still the trial
                 ++left;
-                CHECK((same(xx[l], s[l].xx) && same(yy[l], s[l].yy) && same(xy[l], s[l].xy) && same(zz[l], s[l].zz)));
+                CHECK(lane_holds(xx, yy, xy, zz, l, s[l]));
                 continue;
             }
             ++edge;
             CHECK(res.mode == MohrResult::Edge);
-            CHECK((same(xx[l], one.xx) && same(yy[l], one.yy) && same(xy[l], one.xy) && same(zz[l], one.zz)));
-            CHECK(same(d_gamma[l], res.d_gamma_p));
+            CHECK(lane_holds(xx, yy, xy, zz, l, one));
+            CHECK(same_bits(d_gamma[l], res.d_gamma_p));
             (t.sig_t < std::max(t.sig[1], t.sig[2]) ? past_tension : past_shear_only) += 1;
-            // FLAC's h chose the tension plane (p0 is sig3's tension plane; the set holds it)
-            const double lo = std::min(t.sig[0], t.sig[2]), hi = std::max(t.sig[1], t.sig[2]);
-            const double h = hi - t.sig_t + (std::sqrt(1 + t.np * t.np) + t.np) * (lo - (t.sig_t * t.np - t.two_c_sq));
-            tension_first += !(lo - hi * t.np + t.two_c_sq < 0 && (t.sig_t - hi >= 0 || !(h > 0)));
+            tension_first += !found.shear_first[l];  // FLAC's h chose the tension plane (p0 is sig3's)
         }
     }
     MESSAGE("lanes the closed form left " << tried << ": settled on an edge or the apex line " << edge << " (" << past_shear_only << " past the shear planes only, " << past_tension << " past the tension limit; " << tension_first << " from FLAC's tension return), left to the one-point code " << left);
