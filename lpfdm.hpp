@@ -143,10 +143,13 @@
 //     beyond the end nodes, so a wall ending a node above a fixed base still holds the row
 //     beside the base). SMOOTH walls (a row or a column of nodes) drive across their line
 //     only. A row or column of nodes with material on one side only (as the points were
-//     made, WallState::side_x, side_y) is a contact: a node whose own increment (eq. 13)
-//     would take it away from the wall into the material, or that has no mass, is left
-//     free, so the wall pushes and never pulls (bonded both ways, a retaining wall moved
-//     away from sand dragged it: 0.14-0.67 of Rankine's thrust). A wall inside a cluster
+//     made, WallState::side_x, side_y: those within a cell of it, or if none is that near,
+//     all along it; on the lattice's edge, the inner side) is a contact: a node whose own
+//     increment (eq. 13) would take it away from the wall into the material, or that has
+//     no mass, is left free, so the wall pushes and never pulls (bonded both ways, a
+//     retaining wall moved away from sand dragged it: 0.14-0.67 of Rankine's thrust; a
+//     wall made two cells from a free block pulled it back as hard as it had pushed it,
+//     and carried it at its own speed instead of letting it bounce off). A wall inside a cluster
 //     (material on both sides, the paper's cap) or a box of nodes stays bonded. A row or
 //     column of nodes inside a cluster drives the material line it started on instead,
 //     interpolated between the two lines of nodes either side (Simulation::drive_embedded):
@@ -5028,22 +5031,30 @@ inline void Simulation::hold_by_walls(double x0, double y0, double& x, double& y
 }
 
 // The side of a wall's line of nodes its material lies on (WallState::side_x, side_y), from
-// the points as made: those within a cell of the line, along its length.
+// the points as made, along the line's length: those within a cell of the line; if none
+// lies that near, all of them (a wall that meets the material later: bonded, it pulled a
+// free block it had pushed, and stuck to it); a line on the lattice's edge has only the
+// inner side. Material on both sides within a cell: the wall is embedded (the paper's
+// cap); on both sides only farther away: bonded.
 inline void Simulation::contact_side(WallState& ws) const {
     const Box& b = ws.face;
     const bool column = b.x0 == b.x1 && b.y1 > b.y0, row = b.y0 == b.y1 && b.x1 > b.x0;
     if (!column && !row) return;  // a box of nodes: bonded
-    long before = 0, after = 0;
+    long before = 0, after = 0, far_before = 0, far_after = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const double along = column ? p_.y[k] : p_.x[k], lo = column ? b.y0 : b.x0, hi = column ? b.y1 : b.x1;
         const double across = (column ? p_.x[k] : p_.y[k]) - (column ? b.x0 : b.y0);
-        if (along < lo || along > hi || std::fabs(across) >= L_) continue;
-        before += across < 0;
-        after += across > 0;
+        if (along < lo || along > hi) continue;
+        const bool near = std::fabs(across) < L_;
+        (near ? before : far_before) += across < 0;
+        (near ? after : far_after) += across > 0;
     }
-    const int side = before && !after ? -1 : after && !before ? 1 : 0;
-    (column ? ws.side_x : ws.side_y) = side;
     ws.embedded = before && after;
+    if (!before && !after) { before = far_before; after = far_after; }  // nothing near: the material farther along it
+    int side = before && !after ? -1 : after && !before ? 1 : 0;
+    const double at = column ? b.x0 : b.y0, edge = (column ? mx_ : my_) * L_;
+    if (!before && !after) side = at <= 0 ? 1 : at >= edge ? -1 : 0;  // no material along it: the lattice's edge
+    (column ? ws.side_x : ws.side_y) = side;
 }
 
 // A wall inside the material drives the material line it started on, wherever that line
