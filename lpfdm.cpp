@@ -421,24 +421,26 @@ int main(int argc, char** argv) {
         if (o.spec->kind == lpfdm::Output::History) return n % (every > 0 ? every : 1) == 0 || (every > steps && n == steps);  // (warned)
         return (every > 0 && n % every == 0) || n == steps;
     };
-    // Energy the cycle creates (energy_error < 0) is trouble the checks above do not stop:
-    // the account is read every steps / 200 steps of the run, at least 100 apart (a reading
+    // Energy the cycle creates (energy_error < 0) is trouble the checks above do not stop.
+    // The account is read every steps / 200 steps of the run, at least 100 apart (a reading
     // is a pass over the points, about half a step: read every other step, it slowed the
-    // 400-step benchmark by 35 %), counted from step 0 so that a continued run reads it at
-    // the same steps, and at the last (reading it changes no result), and a creation of more than kEnergyCreated of the energy in play is reported
-    // at the end on stderr (not in the tables: a run continued with --restart must write
-    // the same tables as the whole run, and it has not seen the steps before). The shipped
-    // decks create at most 5.4 % (freefall.deck's impact, 4 cells across the block; 2.7 %
-    // and 1.0 % at 8 and 16 cells: a first-order error in L), so the warning marks a
-    // creation twice the coarsest shipped impact's: a body too coarsely resolved for what
-    // it does, or a cycle gone wrong.
+    // 400-step benchmark by 35 %), counted from step 0 so that a run continued with the
+    // same --steps reads it at the same steps; also at the last step and at an interrupted
+    // one. Reading it changes no result. A creation of more than kEnergyCreated of the
+    // energy in play is reported at the end, on stderr only: a run continued with
+    // --restart must write the whole run's tables, and it has not seen the steps before.
+    // The shipped decks create at most 6.3 % (freefall.deck's impact on a block 4 cells
+    // across, for one step; 5.6 % over the impact; 2.7 % and 1.0 % at 8 and 16 cells
+    // across: a first-order error in L), so the warning marks a creation 1.6 times the
+    // coarsest shipped impact's: a body too coarsely resolved for what it does, or a cycle
+    // gone wrong.
     const long energy_every = std::max(100L, steps / 200);
     double created = 0, created_time = 0;
     long created_step = 0;
     for (long n = first; n <= steps; ++n) {
         particle_steps += double(sim.points().size());
         sim.step();
-        if (sim.healthy() && (n % energy_every == 0 || n == steps)) {
+        if (sim.healthy() && (n % energy_every == 0 || n == steps || g_interrupted)) {
             const double e = sim.energy().error;
             if (e < created) { created = e; created_step = n; created_time = sim.time(); }
         }
@@ -505,10 +507,10 @@ int main(int argc, char** argv) {
     if (progress) std::fputc('\n', stderr);
     if (status != kExitNumerical && created < -kEnergyCreated) {
         const std::string w = fmt::format(
-            "warning: the cycle created energy: energy_error reached {:.3g} at step {} (t = {:.6g} s), {:.0f} % of the energy in play; "
-            "such creation falls with the cell size (decks/freefall.deck's impact: 5.4, 2.7 and 1.0 % with 4, 8 and 16 cells across the block): "
-            "refine the lattice (--refine 2) and compare",
-            created, created_step, created_time, -100 * created);
+            "warning: the cycle created energy: energy_error reached {:.3g} at step {} (t = {:.6g} s; read every {} steps), "
+            "{:.1f} % of the energy in play; such creation falls with the cell size (decks/freefall.deck's impact: 5.6, 2.7 "
+            "and 1.0 % with 4, 8 and 16 cells across the block): refine the lattice (--refine 2) and compare",
+            created, created_step, created_time, energy_every, -100 * created);
         std::fprintf(stderr, "lpfdm: %s\n", w.c_str());
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -144,13 +144,14 @@
 //     beside the base). SMOOTH walls (a row or a column of nodes) drive across their line
 //     only. A row or column of nodes with material on one side only (as the points were
 //     made, WallState::side_x, side_y: those within a cell of it, or if none is that near,
-//     all along it; on the lattice's edge, the inner side) is a contact: a node whose own
+//     all along it; far on both sides, the side it is driven towards; with none along it,
+//     the inner side of the lattice's edge) is a contact: a node whose own
 //     increment (eq. 13) would take it away from the wall into the material, or that has
 //     no mass, is left free, so the wall pushes and never pulls (bonded both ways, a
 //     retaining wall moved away from sand dragged it: 0.14-0.67 of Rankine's thrust; a
 //     wall made two cells from a free block pulled it back as hard as it had pushed it,
-//     and carried it at its own speed instead of letting it bounce off). A wall inside a cluster
-//     (material on both sides, the paper's cap) or a box of nodes stays bonded. A row or
+//     and carried it at its own speed instead of letting it bounce off). A wall inside a
+//     cluster (material on both sides, the paper's cap) or a box of nodes stays bonded. A row or
 //     column of nodes inside a cluster drives the material line it started on instead,
 //     interpolated between the two lines of nodes either side (Simulation::drive_embedded):
 //     passed from line to line, the cap's cells between them unloaded at each pass and the
@@ -1401,10 +1402,13 @@ struct WallState {
                                       // (and the wall's face) from there to (dx, dy)
     bool normal_x = false, normal_y = false;  // a smooth wall: drives only x (a column of nodes) or y (a row)
     Box face;                                 // the box of its nodes at the start [m] (hold_by_walls)
-    // A line of nodes with material on one side only: the direction from the wall to it
-    // along the normal (+1 or -1 in x for a column, in y for a row). Such a wall only
-    // pushes: a node it would have to pull is left free. 0: material on both sides, or a
-    // box of nodes (bonded, as the paper's cap).
+    // A line of nodes with material on one side only (or, farther than a cell on both
+    // sides, on the side it is driven towards): the direction from the wall to it along the
+    // normal (+1 or -1 in x for a column, in y for a row). Such a wall only pushes: a node
+    // it would have to pull is left free. 0 (bonded): material on both sides within a cell
+    // (the paper's cap), a box of nodes, a line with no material along it inside the
+    // lattice, or with material far on both sides and not driven across itself
+    // (Simulation::contact_side).
     int side_x = 0, side_y = 0;
     bool embedded = false;  // a row or column of nodes with material on both sides (drive_embedded)
 };
@@ -2803,7 +2807,7 @@ private:
     // walls' faces (fixed_edges_ bit kEdgeWall), and each fixed node's FIX cards (x, y).
     std::vector<std::int32_t> wall_cells_;
     void mark_wall_cells();
-    void contact_side(WallState& ws) const;
+    void contact_side(WallState& ws, const Wall& spec) const;
     void support_work(std::size_t n, double b, double c, double f, double& w, double& h) const;
     void drive_embedded(WallState& ws, double ddx, double ddy, double& hw, Range& wall_nodes);
     bool empty_beyond(int i, int j, int di, int dj) const;
@@ -2951,7 +2955,7 @@ inline void Simulation::setup() {
     }
     create_points();
     setup_dynamics();
-    for (WallState& ws : walls_) contact_side(ws);
+    for (std::size_t w = 0; w < walls_.size(); ++w) contact_side(walls_[w], sc_.walls[w]);
     for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
     find_mohr_groups();
 #if defined(_OPENMP)
@@ -5033,10 +5037,12 @@ inline void Simulation::hold_by_walls(double x0, double y0, double& x, double& y
 // The side of a wall's line of nodes its material lies on (WallState::side_x, side_y), from
 // the points as made, along the line's length: those within a cell of the line; if none
 // lies that near, all of them (a wall that meets the material later: bonded, it pulled a
-// free block it had pushed, and stuck to it); a line on the lattice's edge has only the
-// inner side. Material on both sides within a cell: the wall is embedded (the paper's
-// cap); on both sides only farther away: bonded.
-inline void Simulation::contact_side(WallState& ws) const {
+// free block it had pushed, and stuck to it); with material on both sides only farther
+// than a cell, the side the wall is driven towards (bonded if it is not driven across
+// its line); with none along it, the inner side of the lattice's edge it lies on (bonded
+// inside the lattice). Material on both sides within a cell: the wall is embedded (the
+// paper's cap).
+inline void Simulation::contact_side(WallState& ws, const Wall& spec) const {
     const Box& b = ws.face;
     const bool column = b.x0 == b.x1 && b.y1 > b.y0, row = b.y0 == b.y1 && b.x1 > b.x0;
     if (!column && !row) return;  // a box of nodes: bonded
@@ -5052,6 +5058,10 @@ inline void Simulation::contact_side(WallState& ws) const {
     ws.embedded = before && after;
     if (!before && !after) { before = far_before; after = far_after; }  // nothing near: the material farther along it
     int side = before && !after ? -1 : after && !before ? 1 : 0;
+    if (before && after && !ws.embedded) {  // far on both sides: the side it is driven towards
+        const double v = column ? spec.vx : spec.vy;
+        side = v > 0 ? 1 : v < 0 ? -1 : 0;
+    }
     const double at = column ? b.x0 : b.y0, edge = (column ? mx_ : my_) * L_;
     if (!before && !after) side = at <= 0 ? 1 : at >= edge ? -1 : 0;  // no material along it: the lattice's edge
     (column ? ws.side_x : ws.side_y) = side;

@@ -156,13 +156,15 @@ TEST_CASE("MAPPING SMOOTH: without gravity the wall's force equals the base reac
 }
 
 // The same compression on a lattice twice as fine (L = 0.25 m, 16 cells across the
-// specimen, 2 560 points), the wall at 0.005 m/s (at 0.01 m/s the specimen's inertia
+// specimen, 2 304 points), the wall at 0.005 m/s (at 0.01 m/s the specimen's inertia
 // while the bands form leaves 3.6 %, see above). The cap's rows of points (two per cell)
 // cross lines of nodes after 0.78 % strain and every 1.56 % after that, where the
 // paper's mapping makes its spikes. The bound on wall against
 // base is the same 3 % as at L = 0.5 m; the peak is read from the wall itself (what Fig. 4
-// of the paper reads), within 3 % of q. Measured: at most 2.15 % (at 1.8 % strain), the
-// wall's peak 1.027 q, the base's 1.006 q. About 80 s.
+// of the paper reads), within 3 % of q, the bound the compression must meet; the wall's
+// overshoot is the specimen's inertia and damping, which fall with the wall's speed.
+// Measured: at most 2.15 % (at 1.8 % strain), the wall's peak 1.027 q (0.3 % inside the
+// bound), the base's 1.006 q. About 80 s.
 TEST_CASE("MAPPING SMOOTH at L = 0.25 m: the wall reads the base reaction within 3 % at every sample, and q within 3 % [slow]") {
     const double q = 2 * 15000 * std::tan((45 + 10) * 3.14159265358979323846 / 180);
     const Compression c = compress(Mapping::Smooth, 0.3, 2, 0.005);
@@ -286,19 +288,23 @@ namespace {
 // column of nodes two cells (K = 1) from the block, driven towards it at v = 0.5 m/s, meets
 // it at t = 1 s. The block leaves a rigid wall moving at v at (1 + e) v, e its restitution:
 // 2 v if elastic (its energy in the wall's frame kept), never above, and never less than
-// v. Made that far from the material, the wall used to be bonded: it pulled the block it
+// v. The upper bound is also a check that the impact creates no energy. Made that far
+// from the material, the wall used to be bonded: it pulled the block it
 // had pushed (up to 105 kN/m, as much as it pushed) and carried it along at its own speed
 // (0.99-1.00 v). Measured now: 1.80 / 1.70 v (rough / smooth) at 4 cells across the block,
-// 1.83 / 1.99 v at 8; the wall's force never below 0.
+// 1.83 / 1.99 v at 8; the wall's force never below 0. With a second block behind the
+// wall, two cells away (material on both sides, neither within a cell), the wall takes
+// the side it is driven towards: the same.
 struct WallMeeting {
     double v_after = 0;                 // the block's centroid velocity from t = 2 s to 3 s [m/s]
     double min_force = 0, max_force = 0;  // the wall's force on the material, every step [N/m]
 };
-WallMeeting meet_block(bool smooth, int K) {
+WallMeeting meet_block(bool smooth, int K, bool behind = false) {
     Scene s;
     s.mx = 24 * K; s.my = 8 * K; s.cell_m = 0.25 / K;
     s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
     s.clusters.push_back({1, {1.5, 0.5, 2.5, 1.5}, 2, {}});
+    if (behind) s.clusters.push_back({1, {0, 0.5, 0.5, 1.5}, 2, {}});  // a block behind the wall too, which it leaves
     Wall w;
     w.id = 1; w.box = {1, 0.25, 1, 1.75}; w.vx = 0.5; w.smooth = smooth;
     s.walls.push_back(w);
@@ -306,10 +312,12 @@ WallMeeting meet_block(bool smooth, int K) {
     REQUIRE(validate(s).empty());
     Simulation sim(s);
     const Points& p = sim.points();
-    auto centre_x = [&] {  // the points' mean x (one material: equal masses)
+    auto centre_x = [&] {  // the mean x of the block ahead (one material: equal masses)
         double x = 0;
-        for (std::size_t k = 0; k < p.size(); ++k) x += p.x[k];
-        return x / double(p.size());
+        long n = 0;
+        for (std::size_t k = 0; k < p.size(); ++k)
+            if (p.x[k] > 1) { x += p.x[k]; ++n; }
+        return x / double(n);
     };
     WallMeeting r;
     double x2 = 0;
@@ -326,17 +334,18 @@ WallMeeting meet_block(bool smooth, int K) {
 
 }  // namespace
 
-TEST_CASE("a wall that meets a free block from a distance pushes it off and never pulls [slow]") {
+TEST_CASE("a wall that meets a free block from a distance pushes it off and never pulls") {
     const double v = 0.5;
-    for (int K : {1, 2})
+    for (int K : {1, 2, 0})  // 0: K = 1 with a second block behind the wall
         for (bool smooth : {false, true}) {
-            const WallMeeting r = meet_block(smooth, K);
-            MESSAGE(std::string(smooth ? "smooth" : "rough") << " wall, " << 4 * K << " cells across the block: it leaves at " << r.v_after / v
+            const WallMeeting r = meet_block(smooth, K ? K : 1, K == 0);
+            MESSAGE(std::string(smooth ? "smooth" : "rough") << " wall, " << 4 * (K ? K : 1) << " cells across the block"
+                    << std::string(K ? "" : ", another behind the wall") << ": it leaves at " << r.v_after / v
                                                  << " v; the wall's force from " << r.min_force << " to " << r.max_force << " N/m");
             CHECK(r.max_force > 0);        // it pushed ...
             CHECK(r.min_force >= 0);       // ... and never pulled
             CHECK(r.v_after > 1.5 * v);    // the block bounced off (a bonded wall carries it at v)
-            CHECK(r.v_after <= 2 * v);     // no faster than an elastic bounce
+            CHECK(r.v_after <= 2 * v);     // no faster than an elastic bounce (faster: energy created)
         }
 }
 
