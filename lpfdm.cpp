@@ -435,14 +435,14 @@ int main(int argc, char** argv) {
     // coarsest shipped impact's: a body too coarsely resolved for what it does, or a cycle
     // gone wrong.
     const long energy_every = std::max(100L, steps / 200);
-    double created = 0, created_time = 0;
+    double created = 0;  // the lowest energy_error read, and its step
     long created_step = 0;
     for (long n = first; n <= steps; ++n) {
         particle_steps += double(sim.points().size());
         sim.step();
         if (sim.healthy() && (n % energy_every == 0 || n == steps || g_interrupted)) {
             const double e = sim.energy().error;
-            if (e < created) { created = e; created_step = n; created_time = sim.time(); }
+            if (e < created) { created = e; created_step = n; }
         }
         if (!sim.healthy()) {
             const long k = sim.first_nonfinite_point();
@@ -510,7 +510,7 @@ int main(int argc, char** argv) {
             "warning: the cycle created energy: energy_error reached {:.3g} at step {} (t = {:.6g} s; read every {} steps), "
             "{:.1f} % of the energy in play; such creation falls with the cell size (decks/freefall.deck's impact: 5.6, 2.7 "
             "and 1.0 % with 4, 8 and 16 cells across the block): refine the lattice (--refine 2) and compare",
-            created, created_step, created_time, energy_every, -100 * created);
+            created, created_step, double(created_step) * sim.scene().dt_s, energy_every, -100 * created);
         std::fprintf(stderr, "lpfdm: %s\n", w.c_str());
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -145,14 +145,14 @@
 //     only. A row or column of nodes with material on one side only (as the points were
 //     made, WallState::side_x, side_y: those within a cell of it, or if none is that near,
 //     all along it; far on both sides, the side it is driven towards; with none along it,
-//     the inner side of the lattice's edge) is a contact: a node whose own
-//     increment (eq. 13) would take it away from the wall into the material, or that has
-//     no mass, is left free, so the wall pushes and never pulls (bonded both ways, a
-//     retaining wall moved away from sand dragged it: 0.14-0.67 of Rankine's thrust; a
-//     wall made two cells from a free block pulled it back as hard as it had pushed it,
-//     and carried it at its own speed instead of letting it bounce off). A wall inside a
-//     cluster (material on both sides, the paper's cap) or a box of nodes stays bonded. A row or
-//     column of nodes inside a cluster drives the material line it started on instead,
+//     the inner side of the lattice's edge) is a contact: a node whose own increment
+//     (eq. 13) would take it away from the wall into the material, or that has no mass, is
+//     left free, so the wall pushes and never pulls (bonded both ways, a retaining wall
+//     moved away from sand dragged it: 0.14-0.67 of Rankine's thrust; a wall made two cells
+//     from a free block pulled it back as hard as it had pushed it, and carried it at its
+//     own speed instead of letting it bounce off). A wall inside a cluster (material on
+//     both sides, the paper's cap) or a box of nodes stays bonded. A row or column of
+//     nodes inside a cluster drives the material line it started on instead,
 //     interpolated between the two lines of nodes either side (Simulation::drive_embedded):
 //     passed from line to line, the cap's cells between them unloaded at each pass and the
 //     wall's force jumped by up to 59 %. The reported force is what the driven nodes exert

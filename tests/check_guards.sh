@@ -184,8 +184,7 @@ trouble "non-finite force" "$tmp/inf.deck" "non-finite"
 # An undamped elastic block 4 cells across dropped 0.5 m onto a fixed floor, its increments
 # carried by the points (ADVECT POINTS): its bounces create 21 % of the energy in play
 # (energy_error -0.207 at t = 0.95 s; read every 100 steps, -0.195 at step 2400), above the
-# 10 % the program warns at. 16 cells across
-# the same drop creates 0.26 %: no warning.
+# 10 % the program warns at. 16 cells across the same drop creates 0.26 %: no warning.
 cat >"$tmp/coarse_drop.deck" <<'EOF'
 TITLE elastic block dropped, 4 cells across
 GRID 40 24 0.25

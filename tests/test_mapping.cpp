@@ -159,8 +159,8 @@ TEST_CASE("MAPPING SMOOTH: without gravity the wall's force equals the base reac
 // specimen, 2 304 points), the wall at 0.005 m/s (at 0.01 m/s the specimen's inertia
 // while the bands form leaves 3.6 %, see above). The cap's rows of points (two per cell)
 // cross lines of nodes after 0.78 % strain and every 1.56 % after that, where the
-// paper's mapping makes its spikes. The bound on wall against
-// base is the same 3 % as at L = 0.5 m; the peak is read from the wall itself (what Fig. 4
+// paper's mapping makes its spikes. The bound on wall against base is the same 3 % as at
+// L = 0.5 m; the peak is read from the wall itself (what Fig. 4
 // of the paper reads), within 3 % of q, the bound the compression must meet; the wall's
 // overshoot is the specimen's inertia and damping, which fall with the wall's speed.
 // Measured: at most 2.15 % (at 1.8 % strain), the wall's peak 1.027 q (0.3 % inside the
@@ -289,9 +289,8 @@ namespace {
 // it at t = 1 s. The block leaves a rigid wall moving at v at (1 + e) v, e its restitution:
 // 2 v if elastic (its energy in the wall's frame kept), never above, and never less than
 // v. The upper bound is also a check that the impact creates no energy. Made that far
-// from the material, the wall used to be bonded: it pulled the block it
-// had pushed (up to 105 kN/m, as much as it pushed) and carried it along at its own speed
-// (0.99-1.00 v). Measured now: 1.80 / 1.70 v (rough / smooth) at 4 cells across the block,
+// from the material, the wall used to be bonded: it pulled the block it had pushed (up to
+// 105 kN/m, as much as it pushed) and carried it along at its own speed (0.99-1.00 v). Measured now: 1.80 / 1.70 v (rough / smooth) at 4 cells across the block,
 // 1.83 / 1.99 v at 8; the wall's force never below 0. With a second block behind the
 // wall, two cells away (material on both sides, neither within a cell), the wall takes
 // the side it is driven towards: the same.
@@ -336,12 +335,13 @@ WallMeeting meet_block(bool smooth, int K, bool behind = false) {
 
 TEST_CASE("a wall that meets a free block from a distance pushes it off and never pulls") {
     const double v = 0.5;
-    for (int K : {1, 2, 0})  // 0: K = 1 with a second block behind the wall
+    struct Case { int K; bool behind; };
+    for (const Case c : {Case{1, false}, Case{2, false}, Case{1, true}})
         for (bool smooth : {false, true}) {
-            const WallMeeting r = meet_block(smooth, K ? K : 1, K == 0);
-            MESSAGE(std::string(smooth ? "smooth" : "rough") << " wall, " << 4 * (K ? K : 1) << " cells across the block"
-                    << std::string(K ? "" : ", another behind the wall") << ": it leaves at " << r.v_after / v
-                                                 << " v; the wall's force from " << r.min_force << " to " << r.max_force << " N/m");
+            const WallMeeting r = meet_block(smooth, c.K, c.behind);
+            MESSAGE(std::string(smooth ? "smooth" : "rough") << " wall, " << 4 * c.K << " cells across the block"
+                    << std::string(c.behind ? ", another behind the wall" : "") << ": it leaves at " << r.v_after / v
+                    << " v; the wall's force from " << r.min_force << " to " << r.max_force << " N/m");
             CHECK(r.max_force > 0);        // it pushed ...
             CHECK(r.min_force >= 0);       // ... and never pulled
             CHECK(r.v_after > 1.5 * v);    // the block bounced off (a bonded wall carries it at v)
