@@ -4138,7 +4138,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                         gamma = m ? gamma + d_gamma : gamma;
                         pw = m ? pw + vk * work : pw;
                         detail::store(pshear + q, gamma); detail::store(pwork + q, pw);
-                        for (int l = 0; l < 4; ++l) if (sh >> l & 1) pyielded[q + l] = 1;  // softening from the next consult
+                        for (int l = 0; l < 4; ++l) pyielded[q + l] |= std::uint8_t(sh >> l & 1);  // softening from the next consult (no branch: lanes yield at random)
                     }
                     if ((settled & 15) == 15) continue;
                     for (int l = 0; l < 4; ++l)  // the lanes left: the one-point code
@@ -4683,7 +4683,8 @@ inline void Simulation::integrate() {
                 detail::load(nm + n, m); detail::load(ux_n + n, ux); detail::load(uy_n + n, uy);
                 const auto full = m != 0;
                 const v4d e = 0.5 * m * (ux * ux + uy * uy);
-                for (int l = 0; l < 4; ++l) if (full[l]) row_ke += e[l];
+                const v4d ef = full ? e : v4d{};  // +0 for a node without mass: the sum is unchanged, and no branch
+                for (int l = 0; l < 4; ++l) row_ke += ef[l];
                 detail::abs_of(ux, ax); detail::abs_of(uy, ay);
                 const v4d a = ax < ay ? ay : ax;  // std::max(ax, ay), lane by lane
                 big = full && big < a ? a : big;
