@@ -4259,12 +4259,21 @@ inline void Simulation::reorder_points() {
     }
     // Every array of a point's state in the new order (the scratch arrays hold nothing
     // between steps).
+    // Each thread moves its own range of the new order (the same bytes with any team): this
+    // permutation is nearly 90 % of the sort's time (1.2 ms for the elastic bench's 65 536
+    // points, 3.4 % of its one-thread run at a sort every 50 steps), and what one thread
+    // does alone is a larger share of a two-thread step.
     unsigned char* buf = sort_buf_.data();
+    const std::int32_t* order = sorted_.data();
+    [[maybe_unused]] const bool threads = !serial();
     p_.each_array([&](const char*, auto& v, Points::Use, bool state) {
         if (!state || v.empty()) return;
         using T = typename std::decay_t<decltype(v)>::value_type;
-        for (std::size_t k = 0; k < n; ++k) std::memcpy(buf + k * sizeof(T), &v[std::size_t(sorted_[k])], sizeof(T));
-        std::memcpy(v.data(), buf, n * sizeof(T));
+        T* a = v.data();
+        LPFDM_OMP(omp parallel for schedule(static) num_threads(team_) if (threads))
+        for (long k = 0; k < long(n); ++k) std::memcpy(buf + std::size_t(k) * sizeof(T), a + order[k], sizeof(T));
+        LPFDM_OMP(omp parallel for schedule(static) num_threads(team_) if (threads))
+        for (long k = 0; k < long(n); ++k) std::memcpy(a + k, buf + std::size_t(k) * sizeof(T), sizeof(T));
     });
     parts_known_ = false;  // advance_parted's chunks were ranges of the old order
 }
