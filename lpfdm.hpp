@@ -4138,7 +4138,10 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                         gamma = m ? gamma + d_gamma : gamma;
                         pw = m ? pw + vk * work : pw;
                         detail::store(pshear + q, gamma); detail::store(pwork + q, pw);
-                        for (int l = 0; l < 4; ++l) pyielded[q + l] |= std::uint8_t(sh >> l & 1);  // softening from the next consult (no branch: lanes yield at random)
+                        for (int l = 0; l < 4; ++l) {  // softening from the next consult: 1 where lane l yielded (no branch: lanes yield at random)
+                            const unsigned was = pyielded[q + l], set = 0u - unsigned(sh >> l & 1);
+                            pyielded[q + l] = std::uint8_t(was ^ ((was ^ 1u) & set));
+                        }
                     }
                     if ((settled & 15) == 15) continue;
                     for (int l = 0; l < 4; ++l)  // the lanes left: the one-point code
@@ -4260,9 +4263,8 @@ inline void Simulation::reorder_points() {
     // Every array of a point's state in the new order (the scratch arrays hold nothing
     // between steps).
     // Each thread moves its own range of the new order (the same bytes with any team): this
-    // permutation is nearly 90 % of the sort's time (1.2 ms for the elastic bench's 65 536
-    // points, 3.4 % of its one-thread run at a sort every 50 steps), and what one thread
-    // does alone is a larger share of a two-thread step.
+    // permutation is nearly 90 % of the sort's time, and what one thread does alone is a
+    // larger share of a two-thread step.
     unsigned char* buf = sort_buf_.data();
     const std::int32_t* order = sorted_.data();
     [[maybe_unused]] const bool threads = !serial();
