@@ -4261,10 +4261,9 @@ inline void Simulation::reorder_points() {
         sorted_[b] = k;
     }
     // Every array of a point's state in the new order (the scratch arrays hold nothing
-    // between steps).
-    // Each thread moves its own range of the new order (the same bytes with any team): this
-    // permutation is nearly 90 % of the sort's time, and what one thread does alone is a
-    // larger share of a two-thread step.
+    // between steps), each thread moving its own range of it (the same bytes with any
+    // team): this permutation is nearly 90 % of the sort's time, and what one thread does
+    // alone is a larger share of a two-thread step.
     unsigned char* buf = sort_buf_.data();
     const std::int32_t* order = sorted_.data();
     [[maybe_unused]] const bool threads = !serial();

@@ -160,9 +160,9 @@ TEST_CASE("MAPPING SMOOTH: without gravity the wall's force equals the base reac
 // while the bands form leaves 3.6 %, see above). The cap's rows of points (two per cell)
 // cross lines of nodes after 0.78 % strain and every 1.56 % after that, where the
 // paper's mapping makes its spikes. The bound on wall against base is the same 3 % as at
-// L = 0.5 m; the peak is read from the wall itself (what Fig. 4
-// of the paper reads), within 3 % of q, the bound the compression must meet; the wall's
-// overshoot is the specimen's inertia and damping, which fall with the wall's speed.
+// L = 0.5 m; the peak is read from the wall itself (what Fig. 4 of the paper reads),
+// within 3 % of q, the bound the compression must meet; the wall's overshoot is the
+// specimen's inertia and damping, which fall with the wall's speed.
 // Measured: at most 2.15 % (at 1.8 % strain), the wall's peak 1.027 q (0.3 % inside the
 // bound), the base's 1.006 q. About 80 s.
 TEST_CASE("MAPPING SMOOTH at L = 0.25 m: the wall reads the base reaction within 3 % at every sample, and q within 3 % [slow]") {
@@ -290,10 +290,11 @@ namespace {
 // 2 v if elastic (its energy in the wall's frame kept), never above, and never less than
 // v. The upper bound is also a check that the impact creates no energy. Made that far
 // from the material, the wall used to be bonded: it pulled the block it had pushed (up to
-// 105 kN/m, as much as it pushed) and carried it along at its own speed (0.99-1.00 v). Measured now: 1.80 / 1.70 v (rough / smooth) at 4 cells across the block,
-// 1.83 / 1.99 v at 8; the wall's force never below 0. With a second block behind the
-// wall, two cells away (material on both sides, neither within a cell), the wall takes
-// the side it is driven towards: the same.
+// 105 kN/m, as much as it pushed) and carried it along at its own speed (0.99-1.00 v).
+// Measured now: 1.80 / 1.70 v (rough / smooth) at 4 cells across the block, 1.83 / 1.99 v
+// at 8; the wall's force never below 0. With a second block behind the wall, two cells
+// away (material on both sides, neither within a cell), the wall takes the side it is
+// driven towards: the same.
 struct WallMeeting {
     double v_after = 0;                 // the block's centroid velocity from t = 2 s to 3 s [m/s]
     double min_force = 0, max_force = 0;  // the wall's force on the material, every step [N/m]
