@@ -6403,7 +6403,7 @@ inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uin
     // Twice through the items: first every check, then (apply) the copy.
     Points& p = sim.points();
     const std::size_t made = p.size();  // the points at step 0: no more can be left
-    std::size_t at = head, n = 0, cell_at = 0, group_at = 0;
+    std::size_t at = head, n = 0, cell_at = 0, group_at = 0, yielded_at = 0;  // 0: no yielded flags
     std::string problem;
     auto next = [&](const char* name, auto& m, std::size_t want, bool apply) {
         if (!problem.empty()) return;
@@ -6447,6 +6447,7 @@ inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uin
             const std::string item = "point_" + std::string(name);
             if (item == "point_cell") cell_at = at + 10 + item.size();
             if (item == "point_group") group_at = at + 10 + item.size();
+            if (item == "point_yielded" && !v.empty()) yielded_at = at + 10 + item.size();
             next(item.c_str(), v, v.empty() ? 0 : n, apply);
         });
         if (problem.empty() && at != total - 8) problem = "it holds more than this scene's state";
@@ -6455,6 +6456,9 @@ inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uin
             std::uint16_t g;
             get(cell_at + 4 * k, c); get(group_at + 2 * k, g);
             if (c < 0 || c >= sim.mx() * sim.my() || g >= sim.groups().size()) problem = "a point lies outside the lattice";
+            // A yielded flag is 0 or 1 (the kernels set it to 1, and the state holds what they set).
+            if (problem.empty() && yielded_at && std::uint8_t(b[yielded_at + k]) > 1)
+                problem = fmt::format("point {} of the file has yielded flag {}, not 0 or 1", k, unsigned(std::uint8_t(b[yielded_at + k])));
         }
         if (!problem.empty()) return error("the state file does not fit this scene: " + problem);
     }

@@ -1304,3 +1304,52 @@ TEST_CASE("provenance: the '# run:' lines record version, deck digest, options, 
     std::istringstream lines(text);
     for (std::string line; std::getline(lines, line);) CHECK(line.rfind("# run: ", 0) == 0);
 }
+
+TEST_CASE("restart: a state file whose yielded flags are not 0 or 1 is refused, checksum and all") {
+    // A soft Mohr-Coulomb block under gravity: points yield within the first steps.
+    const std::string deck =
+        "GRID 8 8 0.5\n"
+        "MATERIAL 1 MOHR E=2E7 NU=0.25 RHO=2000 PHI=30 C=10\n"
+        "CLUSTER 1 0 0 4 2\n"
+        "FIX XY 0 0 4 0\n"
+        "GRAVITY 0 -9.81\n"
+        "STEP 1E-3 200\n";
+    Scene s = read_ok(deck);
+    lpfdm::Simulation sim(s);
+    for (int n = 0; n < 200; ++n) sim.step();
+    std::size_t yielded = 0;
+    for (std::uint8_t y : sim.points().yielded) yielded += y;
+    REQUIRE(yielded > 0);
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / "lpfdm_test_state";
+    std::filesystem::create_directories(dir);
+    const std::string good = (dir / "good.state").string(), bad = (dir / "bad.state").string();
+    std::FILE* f = std::fopen(good.c_str(), "wb");
+    REQUIRE(f);
+    REQUIRE(lpfdm::write_state(f, sim, 42));
+    std::fclose(f);
+    std::ifstream in(good, std::ios::binary);
+    std::string b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    // The item "point_yielded": u8 length, the name, u8 bytes per value, u64 count, the bytes.
+    const std::string name = "point_yielded";
+    const std::size_t at = b.find(char(name.size()) + name);
+    REQUIRE(at != std::string::npos);
+    const std::size_t first = at + 1 + name.size() + 1 + 8;
+    std::size_t k = 0;
+    while (b[first + k] != 1) ++k;  // a point that yielded: its flag becomes 2
+    b[first + k] = 2;
+    const std::uint64_t sum = lpfdm::detail::fnv1a(b.data(), b.size() - 8);
+    std::memcpy(&b[b.size() - 8], &sum, 8);
+    std::ofstream(bad, std::ios::binary) << b;
+    {
+        lpfdm::Simulation fresh(s);
+        CHECK(lpfdm::read_state(good, fresh, 42).empty());  // the file as written is read
+    }
+    lpfdm::Simulation fresh(s);
+    const Diagnostics d = lpfdm::read_state(bad, fresh, 42);
+    REQUIRE(d.size() == 1);
+    INFO(listing(d));
+    CHECK(has(d[0].str(), "does not fit this scene"));
+    CHECK(has(d[0].str(), "yielded flag 2, not 0 or 1"));
+    CHECK(fresh.step_count() == 0);  // left as it was
+    std::filesystem::remove_all(dir);
+}
