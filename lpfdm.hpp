@@ -2365,6 +2365,12 @@ public:
     }
 
     // Strain increments of cell (i, j) from the nodal increments, eq. 5a-5d.
+    // The cell that holds (x, y) as the cycle bins a point (eq. 7: the half-open lattice
+    // box, the cell floor(x / L), floor(y / L)); -1 outside the lattice or not finite.
+    int cell_holding(double x, double y) const {
+        if (!(x >= 0 && x < mx_ * L_ && y >= 0 && y < my_ * L_)) return -1;
+        return cell(std::min(mx_ - 1, int(x * invL_)), std::min(my_ - 1, int(y * invL_)));
+    }
     StrainIncrement strain_of_cell(int i, int j) const { return cell_strain(dux_.data(), duy_.data(), node(i, j), mx_ + 1, 0.5 * invL_); }
     // MAPPING SMOOTH: the strain increments of the part of a point's square in cell (i, j)
     // whose centre is (x, y) (bilinear_gradient there, its trace taken at the centroid of
@@ -6403,7 +6409,7 @@ inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uin
     // Twice through the items: first every check, then (apply) the copy.
     Points& p = sim.points();
     const std::size_t made = p.size();  // the points at step 0: no more can be left
-    std::size_t at = head, n = 0, cell_at = 0, group_at = 0, yielded_at = 0;  // 0: no yielded flags
+    std::size_t at = head, n = 0, x_at = 0, y_at = 0, cell_at = 0, group_at = 0, yielded_at = 0;  // 0: no yielded flags
     std::string problem;
     auto next = [&](const char* name, auto& m, std::size_t want, bool apply) {
         if (!problem.empty()) return;
@@ -6445,6 +6451,8 @@ inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uin
         p.each_array([&](const char* name, auto& v, Points::Use, bool state) {
             if (!state) return;
             const std::string item = "point_" + std::string(name);
+            if (item == "point_x") x_at = at + 10 + item.size();
+            if (item == "point_y") y_at = at + 10 + item.size();
             if (item == "point_cell") cell_at = at + 10 + item.size();
             if (item == "point_group") group_at = at + 10 + item.size();
             if (item == "point_yielded" && !v.empty()) yielded_at = at + 10 + item.size();
@@ -6456,6 +6464,11 @@ inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uin
             std::uint16_t g;
             get(cell_at + 4 * k, c); get(group_at + 2 * k, g);
             if (c < 0 || c >= sim.mx() * sim.my() || g >= sim.groups().size()) problem = "a point lies outside the lattice";
+            // Every kernel takes a point's cell to be the one holding its x, y (as each step leaves it).
+            double x, y;
+            get(x_at + 8 * k, x); get(y_at + 8 * k, y);
+            if (problem.empty() && sim.cell_holding(x, y) != c)
+                problem = fmt::format("point {} of the file lies at x = {:.17g} m, y = {:.17g} m, not in its cell ({}, {})", k, x, y, c % sim.mx(), c / sim.mx());
             // A yielded flag is 0 or 1 (the kernels set it to 1, and the state holds what they set).
             if (problem.empty() && yielded_at && std::uint8_t(b[yielded_at + k]) > 1)
                 problem = fmt::format("point {} of the file has yielded flag {}, not 0 or 1", k, unsigned(std::uint8_t(b[yielded_at + k])));

@@ -5,11 +5,13 @@
 
 #include "../lpfdm.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <sstream>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
 
 namespace {
@@ -1305,7 +1307,7 @@ TEST_CASE("provenance: the '# run:' lines record version, deck digest, options, 
     for (std::string line; std::getline(lines, line);) CHECK(line.rfind("# run: ", 0) == 0);
 }
 
-TEST_CASE("restart: a state file whose yielded flags are not 0 or 1 is refused, checksum and all") {
+TEST_CASE("restart: a state file whose points do not fit the scene is refused, checksum and all") {
     // A soft Mohr-Coulomb block under gravity: points yield within the first steps.
     const std::string deck =
         "GRID 8 8 0.5\n"
@@ -1328,28 +1330,49 @@ TEST_CASE("restart: a state file whose yielded flags are not 0 or 1 is refused, 
     REQUIRE(lpfdm::write_state(f, sim, 42));
     std::fclose(f);
     std::ifstream in(good, std::ios::binary);
-    std::string b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    // The item "point_yielded": u8 length, the name, u8 bytes per value, u64 count, the bytes.
-    const std::string name = "point_yielded";
-    const std::size_t at = b.find(char(name.size()) + name);
-    REQUIRE(at != std::string::npos);
-    const std::size_t first = at + 1 + name.size() + 1 + 8;
-    std::size_t k = 0;
-    while (b[first + k] != 1) ++k;  // a point that yielded: its flag becomes 2
-    b[first + k] = 2;
-    const std::uint64_t sum = lpfdm::detail::fnv1a(b.data(), b.size() - 8);
-    std::memcpy(&b[b.size() - 8], &sum, 8);
-    std::ofstream(bad, std::ios::binary) << b;
+    const std::string written((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     {
         lpfdm::Simulation fresh(s);
         CHECK(lpfdm::read_state(good, fresh, 42).empty());  // the file as written is read
     }
-    lpfdm::Simulation fresh(s);
-    const Diagnostics d = lpfdm::read_state(bad, fresh, 42);
-    REQUIRE(d.size() == 1);
-    INFO(listing(d));
-    CHECK(has(d[0].str(), "does not fit this scene"));
-    CHECK(has(d[0].str(), "yielded flag 2, not 0 or 1"));
-    CHECK(fresh.step_count() == 0);  // left as it was
+    // The first value of item `name` ("point_x"...): after u8 length, the name, u8 bytes per value, u64 count.
+    auto first_value = [&](const std::string& name) {
+        const std::size_t at = written.find(char(name.size()) + name);
+        REQUIRE(at != std::string::npos);
+        return at + 1 + name.size() + 1 + 8;
+    };
+    // The file edited by `edit`, its checksum mended, is refused with `phrase`; the simulation is left as it was.
+    auto refused = [&](const std::function<void(std::string&)>& edit, const std::string& phrase) {
+        std::string b = written;
+        edit(b);
+        const std::uint64_t sum = lpfdm::detail::fnv1a(b.data(), b.size() - 8);
+        std::memcpy(&b[b.size() - 8], &sum, 8);
+        std::ofstream(bad, std::ios::binary) << b;
+        lpfdm::Simulation fresh(s);
+        const Diagnostics d = lpfdm::read_state(bad, fresh, 42);
+        REQUIRE(d.size() == 1);
+        INFO(listing(d));
+        CHECK(has(d[0].str(), "does not fit this scene"));
+        CHECK(has(d[0].str(), phrase));
+        CHECK(fresh.step_count() == 0);
+    };
+    refused([&](std::string& b) {  // a point that yielded: its flag becomes 2
+        const std::size_t first = first_value("point_yielded");
+        std::size_t k = 0;
+        while (b[first + k] != 1) ++k;
+        b[first + k] = 2;
+    }, "yielded flag 2, not 0 or 1");
+    refused([&](std::string& b) {  // point 0 moved one cell to the right of the cell it is listed in
+        const std::size_t at = first_value("point_x");
+        double x;
+        std::memcpy(&x, &b[at], 8);
+        x += 0.5;
+        std::memcpy(&b[at], &x, 8);
+    }, "not in its cell");
+    refused([&](std::string& b) {  // point 0 at x = NaN
+        const std::size_t at = first_value("point_x");
+        const double x = std::nan("");
+        std::memcpy(&b[at], &x, 8);
+    }, "not in its cell");
     std::filesystem::remove_all(dir);
 }
