@@ -2364,13 +2364,14 @@ public:
         }
     }
 
-    // Strain increments of cell (i, j) from the nodal increments, eq. 5a-5d.
-    // The cell that holds (x, y) as the cycle bins a point (eq. 7: the half-open lattice
-    // box, the cell floor(x / L), floor(y / L)); -1 outside the lattice or not finite.
+    // The cell a point at (x, y) belongs to (eq. 7: the half-open lattice box, the cell
+    // floor(x / L), floor(y / L)); -1 outside the lattice or not finite. The reference cycle
+    // bins by it; the fast kernel's landing makes the same test in its registers.
     int cell_holding(double x, double y) const {
         if (!(x >= 0 && x < mx_ * L_ && y >= 0 && y < my_ * L_)) return -1;
         return cell(std::min(mx_ - 1, int(x * invL_)), std::min(my_ - 1, int(y * invL_)));
     }
+    // Strain increments of cell (i, j) from the nodal increments, eq. 5a-5d.
     StrainIncrement strain_of_cell(int i, int j) const { return cell_strain(dux_.data(), duy_.data(), node(i, j), mx_ + 1, 0.5 * invL_); }
     // MAPPING SMOOTH: the strain increments of the part of a point's square in cell (i, j)
     // whose centre is (x, y) (bilinear_gradient there, its trace taken at the centroid of
@@ -3148,7 +3149,6 @@ inline void Simulation::reference_points() {
     if (sc_.mapping == Mapping::Smooth) { reference_points_smooth(); return; }
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) std::fill(v->begin(), v->end(), 0.0);
     std::fill(carried_.begin(), carried_.end(), Carried{});
-    const double X = mx_ * L_, Y = my_ * L_;
     double mass = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const int c = p_.cell[k], ci = c % mx_, cj = c / mx_;
@@ -3167,9 +3167,10 @@ inline void Simulation::reference_points() {
         stop_at_edges(c, x0, y0, x, y);
         p_.x[k] = x; p_.y[k] = y;
 
-        if (!(x >= 0 && x < X && y >= 0 && y < Y)) { p_.cell[k] = -1; continue; }  // left the lattice
-        const int ni = std::min(mx_ - 1, int(x * invL_)), nj = std::min(my_ - 1, int(y * invL_)), cn = cell(ni, nj);
+        const int cn = cell_holding(x, y);
         p_.cell[k] = cn;
+        if (cn < 0) continue;  // left the lattice
+        const int ni = cn % mx_, nj = cn / mx_;
         if (!carried_.empty()) carry_to(cn, ni, nj, g.mass, x, y, dx, dy, e);  // ADVECT POINTS
         add_to_cell(std::size_t(cn), g.mass, std::min(p_.vol[k], g.vol0), s.xx, s.yy, s.xy);  // eq. 7, 8
         mass += g.mass;
@@ -3255,12 +3256,10 @@ inline void Simulation::smooth_move(std::size_t k) {
 // sums cleared before; a point that left the lattice leaves the cycle. t: the cells
 // touched, the mass inside.
 inline void Simulation::smooth_map(Landing& t) {
-    const double X = mx_ * L_, Y = my_ * L_;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const double x = p_.x[k], y = p_.y[k];
-        if (!(x >= 0 && x < X && y >= 0 && y < Y)) { p_.cell[k] = -1; ++t.departed; continue; }  // left the lattice
-        const int i = std::min(mx_ - 1, int(x * invL_)), j = std::min(my_ - 1, int(y * invL_));
-        p_.cell[k] = cell(i, j);
+        p_.cell[k] = cell_holding(x, y);
+        if (p_.cell[k] < 0) { ++t.departed; continue; }  // left the lattice
         const Group& g = groups_[p_.group[k]];
         smear_point(k, x, y, g.mass, std::min(p_.vol[k], g.vol0), p_.sxx[k], p_.syy[k], p_.sxy[k], t);  // eq. 7, 8
         t.mass += g.mass;
@@ -4002,7 +4001,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     const double u = x * invL, v = y * invL;
                     int ni = ci, nj = cj, cn = c;
                     if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
-                        if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite)
+                        if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite): cell_holding's test
                             pcell[q] = -1;
                             ++t.departed;
                             return;
