@@ -108,6 +108,10 @@ stopped_and_continued "$tmp/rs.deck" "smooth: "
 # REORDER 7: the state keeps the points' storage order (sorted at step 56, not at 60)
 sed 's/^END/REORDER 7\nEND/' "$tmp/r.deck" >"$tmp/rr.deck"
 stopped_and_continued "$tmp/rr.deck" "reorder: "
+# ADVECT FLIP (MAPPING SMOOTH, which takes no wall yet): each point's own increment is
+# state; the reference cycle runs it whichever kernel is asked for
+sed '/^WALL/d; s/^END/MAPPING SMOOTH\nADVECT FLIP\nEND/' "$tmp/r.deck" >"$tmp/rf.deck"
+stopped_and_continued "$tmp/rf.deck" "flip: "
 
 # SHAKE and ABSORB: the ground's motion (replayed on restart), the base released at START
 # (step 30) keeping its reactions (in the state), local damping switched to SHAKE's
@@ -160,7 +164,7 @@ cp "$good" "$tmp/corrupt.state"
 printf '\x55' | dd of="$tmp/corrupt.state" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
 cmp -s "$good" "$tmp/corrupt.state" && printf '\xaa' | dd of="$tmp/corrupt.state" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
 cp "$good" "$tmp/version.state"
-printf '\x02' | dd of="$tmp/version.state" bs=1 seek=12 conv=notrunc 2>/dev/null
+printf '\x03' | dd of="$tmp/version.state" bs=1 seek=12 conv=notrunc 2>/dev/null
 echo "x y sxx" >"$tmp/text.state"
 sed 's/^SEED 7/SEED 8/' "$tmp/r.deck" >"$tmp/other.deck"
 mkdir -p "$tmp/dir.state"
@@ -178,7 +182,7 @@ refused() {
 refused "truncated" "truncated" "$tmp/truncated.state" "$tmp/r.deck"
 refused "shorter than a header" "truncated" "$tmp/short.state" "$tmp/r.deck"
 refused "corrupt" "checksum" "$tmp/corrupt.state" "$tmp/r.deck"
-refused "other format version" "version 2" "$tmp/version.state" "$tmp/r.deck"
+refused "other format version" "version 3" "$tmp/version.state" "$tmp/r.deck"
 refused "not a state file" "not an lpfdm state file" "$tmp/text.state" "$tmp/r.deck"
 refused "a directory" "directory" "$tmp/dir.state" "$tmp/r.deck"
 refused "missing" "cannot open" "$tmp/none.state" "$tmp/r.deck"

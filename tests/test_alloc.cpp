@@ -87,6 +87,10 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
     s.mapping = Mapping::Smooth;  // points as squares, over every cell they overlap
     CHECK(news_in_steps(s, 200) == 0);
     CHECK(news_in_steps(s, 50, false, Kernel::Reference) == 0);
+    s.advect = Advect::Flip;  // the points keep their increments (the reference cycle's)
+    CHECK(news_in_steps(s, 100) == 0);
+    CHECK(news_in_steps(s, 20, true) == 0);
+    s.advect = Advect::Eq12;
     s.mapping = Mapping::Paper;
     s.reorder = 3;  // the points' storage sorted by cell every third step
     CHECK(news_in_steps(s, 200) == 0);

@@ -123,3 +123,84 @@ TEST_CASE("energy: in plane-strain compression the wall's work goes into plastic
     CHECK(e1.w_walls - w0 == approx(-0.5 * (f0 + sim.walls()[0].fy) * travel).epsilon(0.05));
     CHECK(e1.d_plastic - d0 == approx(e1.w_walls - w0).epsilon(0.05));
 }
+
+// ------------------------------------------------- ADVECT FLIP: the drop ---
+
+namespace {
+
+struct FlipDrop {
+    double worst = 0;    // largest |energy_error| over the samples
+    double rebound = 0;  // highest centroid after the first contact, over the drop (centroid heights above rest)
+    double drift = 0;    // largest sideways move of the centroid [m]
+    double peak_kinetic = 0;
+    bool held = true;    // no point left the lattice or passed the floor
+};
+
+// An undamped elastic block 1 m x 1 m (n x n cells, 2 x 2 points each; E = 10 MPa,
+// nu = 0.3) dropped 0.5 m onto a smooth floor (FIX Y) of a lattice 3 m x 2.5 m, with
+// MAPPING SMOOTH and ADVECT FLIP, dt = frac of the stable limit, for 1.2 s (two bounces);
+// its energy account read every 25 steps.
+FlipDrop flip_drop(int n, double frac) {
+    Scene s;
+    s.mx = 3 * n; s.my = 5 * n / 2; s.cell_m = 1.0 / n;
+    s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
+    s.clusters.push_back({1, {1, 0.5, 2, 1.5}, 2, {}});
+    s.fixes.push_back({kFixY, {0, 0, 3, 0}, {}});
+    s.gravity_y = -9.81;
+    s.damping = 0;
+    s.mapping = Mapping::Smooth;
+    s.advect = Advect::Flip;
+    s.dt_s = frac * stable_dt(s);
+    s.steps = long(1.2 / s.dt_s);
+    REQUIRE(validate(s).empty());
+    Simulation sim(s);
+    CHECK(sim.kernel() == Kernel::Reference);  // FLIP is the reference cycle's
+    const Points& p = sim.points();
+    FlipDrop d;
+    bool contact = false;
+    for (long k = 1; k <= s.steps; ++k) {
+        sim.step();
+        double m = 0, cx = 0, cy = 0, ymin = 1e300;
+        for (std::size_t q = 0; q < p.size(); ++q) {
+            m += sim.point_mass(q); cx += sim.point_mass(q) * p.x[q]; cy += sim.point_mass(q) * p.y[q];
+            ymin = std::min(ymin, p.y[q]);
+        }
+        cx /= m; cy /= m;
+        d.drift = std::max(d.drift, std::fabs(cx - 1.5));
+        d.held = d.held && ymin > 0;
+        contact = contact || ymin < s.cell_m;
+        if (contact) d.rebound = std::max(d.rebound, (cy - 0.5) / (1.0 - 0.5));
+        if (k % 25 == 0) d.worst = std::max(d.worst, std::fabs(sim.energy().error));
+    }
+    d.held = d.held && sim.mass_outflow() == 0 && p.size() == std::size_t(4 * n * n);
+    d.peak_kinetic = sim.energy().kinetic;
+    MESSAGE("ADVECT FLIP drop, " << n << " cells across, dt " << frac << " of the limit: largest |energy_error| " << d.worst
+                                 << ", rebound " << d.rebound << " of the drop, drift " << d.drift << " m");
+    return d;
+}
+
+void check_flip_drop(const FlipDrop& d) {
+    CHECK(d.held);
+    // The issue's bound: the account closes within 1 % at every sample (the scheme's own
+    // error, measured: 0.01-0.11 %, growing with n as more of the block rings).
+    CHECK(d.worst < 0.01);
+    CHECK(d.rebound > 0.5);   // it bounces ...
+    CHECK(d.rebound <= 1.0);  // ... and gains no height
+    CHECK(d.drift < 1e-3);    // a mirror-symmetric scene stays symmetric (round-off: 1e-14 m)
+}
+
+}  // namespace
+
+// Eq. 12 loses or makes 10-57 % of this drop's energy (tests/README.md); ADVECT FLIP
+// carries the increments on the points and keeps it.
+TEST_CASE("energy: ADVECT FLIP keeps a dropped elastic block's energy within 1 % at every sample, 4 and 8 cells across") {
+    for (const int n : {4, 8}) check_flip_drop(flip_drop(n, 0.49));
+}
+
+TEST_CASE("energy: ADVECT FLIP keeps a dropped elastic block's energy within 1 % at every sample, 4 to 32 cells across, two steps [slow]") {
+    for (const int n : {4, 8, 16, 32})
+        for (const double frac : {0.16, 0.49}) {
+            if (frac == 0.49 && n <= 8) continue;  // the case above
+            check_flip_drop(flip_drop(n, frac));
+        }
+}
