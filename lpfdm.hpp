@@ -2404,7 +2404,7 @@ public:
     // whose centre is (x, y) (bilinear_gradient there, its trace taken at the centroid of
     // the cell's material, cell_centroid: centroid_trace_, made once a step by
     // centroid_traces for every cell holding material).
-    StrainIncrement strain_of_part(int i, int j, double x, double y) const;
+    LPFDM_INLINE StrainIncrement strain_of_part(int i, int j, double x, double y) const;
     void centroid_traces(const Range& cells);
     void cell_centroid(std::size_t c, double& u, double& v) const {  // from the centre, in cells
         u = cvol_[c] > 0 ? smu_[c] / cvol_[c] : 0.0;
@@ -3309,15 +3309,19 @@ inline void Simulation::smooth_stress(std::size_t k, const StrainIncrement& e) {
 // sums cleared before; a point that left the lattice leaves the cycle. t: the cells
 // touched, the mass inside.
 inline void Simulation::smooth_map(Landing& t) {
+    const bool flip = sc_.advect == Advect::Flip;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const double x = p_.x[k], y = p_.y[k];
         p_.cell[k] = cell_holding(x, y);
         if (p_.cell[k] < 0) { ++t.departed; continue; }  // left the lattice
         const Group& g = groups_[p_.group[k]];
         const double v = std::min(p_.vol[k], g.vol0);
-        // ADVECT FLIP: V sigma on V0 (flip_transfer), the centroids still weighted by v
-        const double r = sc_.advect == Advect::Flip && v > 0 ? g.vol0 / v : 1.0;
-        smear_point(k, x, y, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], t);  // eq. 7, 8
+        if (flip && v > 0) {  // ADVECT FLIP: V sigma on V0 (flip_transfer), the centroids still weighted by v
+            const double r = g.vol0 / v;
+            smear_point(k, x, y, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], t);  // eq. 7, 8
+        } else {
+            smear_point(k, x, y, g.mass, v, p_.sxx[k], p_.syy[k], p_.sxy[k], t);  // eq. 7, 8
+        }
         t.mass += g.mass;
     }
     if (t.departed) remove_departed();
