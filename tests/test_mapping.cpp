@@ -393,14 +393,14 @@ namespace {
 
 // Run-outs to the left and right of a granular column (c = 0, phi = 30 deg, a = 2) standing
 // in the middle of a lattice, after it collapsed.
-void runouts(Mapping mapping, Motion motion, double& left, double& right) {
+void runouts(Mapping mapping, Motion motion, double& left, double& right, Advect advect = Advect::Eq12) {
     Scene s;
     s.mx = 64; s.my = 20; s.cell_m = 0.25;
     s.materials.push_back(Material::mohr(1, 1e7, 0.3, 2000, 30, 0));
     s.clusters.push_back({1, {7, 0, 9, 4}, 2, {}});
     s.fixes.push_back({kFixX | kFixY, {0, 0, 16, 0}, {}});
     s.gravity_y = -9.81; s.damping = 0.1; s.dt_s = 5e-4; s.steps = 1;
-    s.mapping = mapping; s.motion = motion;
+    s.mapping = mapping; s.motion = motion; s.advect = advect;
     Simulation sim(s);
     for (int n = 0; n < 3000; ++n) sim.step();
     const Points& p = sim.points();
@@ -422,6 +422,14 @@ TEST_CASE("a symmetric column collapses symmetrically with MOTION CENTRE, and wi
         CHECK(left > 3);  // it did collapse (the column is 1 m either side)
         CHECK(right == approx(left).epsilon(0.01));
     }
+}
+
+TEST_CASE("a symmetric column collapses symmetrically with ADVECT FLIP") {
+    double left = 0, right = 0;
+    runouts(Mapping::Smooth, Motion::Bilinear, left, right, Advect::Flip);
+    MESSAGE("ADVECT FLIP: left " << left << " m, right " << right << " m");
+    CHECK(left > 3);
+    CHECK(right == approx(left).epsilon(0.01));
 }
 
 namespace {
