@@ -520,12 +520,13 @@ int main(int argc, char** argv) {
         getrusage(RUSAGE_SELF, &ru);
         double total = 0;
         for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
-        const char* lanes = sim.kernel() == lpfdm::Kernel::Reference ? "the reference cycle, one thread"
+        const bool ref = sim.kernel() == lpfdm::Kernel::Reference;  // asked for, or ADVECT FLIP's
+        const char* lanes = ref ? (opt.kernel == lpfdm::Kernel::Reference ? "the reference cycle" : "the reference cycle (ADVECT FLIP's only kernel)")
                             : !sim.wide() ? "points, cells and nodes one at a time"
                             : sim.scene().motion == lpfdm::Motion::Centre && sim.scene().advect == lpfdm::Advect::Eq12 && sim.scene().mapping == lpfdm::Mapping::Paper
                                 ? "points, cells and nodes four per AVX2 register"
                                 : "cells and nodes four per AVX2 register, points one at a time";
-        std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, %s\n", nthreads,
+        std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, %s\n", ref ? 1 : nthreads,
                     double(ru.ru_maxrss) / 1024.0, sim.bytes_per_point(), lanes);
         for (int k = 0; k < lpfdm::Simulation::kPhases; ++k)
             std::printf("profile: %-15s %8.3f s  %5.1f %%\n", lpfdm::Simulation::phase_name(k), sim.phase_seconds()[k],
