@@ -2747,7 +2747,7 @@ private:
     void smooth_stress(std::size_t k, const StrainIncrement& e);
     // ADVECT FLIP's scratch: the nodes' masses by the points' weights, eq. 13's change of
     // each node and the points' change brought back; the points' kinetic energy (leapfrog).
-    std::vector<double> flip_mass_, flip_ax_, flip_ay_, flip_sx_, flip_sy_, flip_hx_, flip_hy_;
+    std::vector<double> flip_mass_, flip_ax_, flip_ay_, flip_sx_, flip_sy_;
     double flip_kinetic_ = 0;
     // eq. 6 for point k in a cell of strain increment e and rotation (rc, rs).
     void consult_model(std::size_t k, const MaterialConstants& mc, const StrainIncrement& e, double rc, double rs, Stress& s);
@@ -2938,7 +2938,7 @@ inline void Simulation::setup() {
     const std::size_t nodes = std::size_t(mx_ + 1) * (my_ + 1), cells = std::size_t(mx_) * my_;
     for (auto* v : {&dux_, &duy_, &fx_, &fy_, &nmass_, &nmass_prev_, &dux_old_, &duy_old_}) v->assign(nodes, 0.0);
     if (sc_.advect == Advect::Flip)
-        for (auto* v : {&flip_mass_, &flip_ax_, &flip_ay_, &flip_sx_, &flip_sy_, &flip_hx_, &flip_hy_}) v->assign(nodes, 0.0);
+        for (auto* v : {&flip_mass_, &flip_ax_, &flip_ay_, &flip_sx_, &flip_sy_}) v->assign(nodes, 0.0);
     fixed_.assign(nodes, 0);
     driven_.assign(nodes, 0);
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) v->assign(cells, 0.0);
@@ -3650,8 +3650,8 @@ inline void Simulation::flip_changes() {
             double cx, cy;
             damped_increment(dux_[n], fx_[n] + sc_.gravity_x * (M - nmass_[n]), M, dt2, sc_.damping, cx);  // eq. 13, 14
             damped_increment(duy_[n], fy_[n] + sc_.gravity_y * (M - nmass_[n]), M, dt2, sc_.damping, cy);
-            if (!(fixed_[n] & kFixX)) ax = cx - dux_[n];
-            if (!(fixed_[n] & kFixY)) ay = cy - duy_[n];
+            ax = cx - dux_[n];  // a held direction's is replaced in flip_return
+            ay = cy - duy_[n];
         }
         flip_ax_[n] = ax; flip_ay_[n] = ay;
         dux_[n] = M > 0 ? dux_[n] + ax : 0.0;
@@ -3667,7 +3667,6 @@ inline void Simulation::flip_changes() {
 inline void Simulation::flip_return() {
     const double dt2 = sc_.dt_s * sc_.dt_s;
     for (std::size_t n = 0; n < dux_.size(); ++n) {
-        flip_hx_[n] = dux_[n]; flip_hy_[n] = duy_[n];  // the supports' increments
         const std::uint8_t held = std::uint8_t(fixed_[n] | driven_[n]);
         if ((held & kFixX) && flip_mass_[n] > 0) flip_ax_[n] = dux_[n] - dux_old_[n];
         if ((held & kFixY) && flip_mass_[n] > 0) flip_ay_[n] = duy_[n] - duy_old_[n];
@@ -3687,8 +3686,8 @@ inline void Simulation::flip_return() {
     for (std::size_t n = 0; n < dux_.size(); ++n) {
         const double M = flip_mass_[n];
         const std::uint8_t held = std::uint8_t(fixed_[n] | driven_[n]);
-        dux_[n] = (held & kFixX) ? flip_hx_[n] : M > 0 ? dux_old_[n] + flip_sx_[n] / M : 0.0;
-        duy_[n] = (held & kFixY) ? flip_hy_[n] : M > 0 ? duy_old_[n] + flip_sy_[n] / M : 0.0;
+        if (!(held & kFixX)) dux_[n] = M > 0 ? dux_old_[n] + flip_sx_[n] / M : 0.0;  // a held direction keeps its support's
+        if (!(held & kFixY)) duy_[n] = M > 0 ? duy_old_[n] + flip_sy_[n] / M : 0.0;
     }
 }
 

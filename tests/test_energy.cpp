@@ -132,7 +132,6 @@ struct FlipDrop {
     double worst = 0;    // largest |energy_error| over the samples
     double rebound = 0;  // highest centroid after the first contact, over the drop (centroid heights above rest)
     double drift = 0;    // largest sideways move of the centroid [m]
-    double peak_kinetic = 0;
     bool held = true;    // no point left the lattice or passed the floor
 };
 
@@ -173,7 +172,6 @@ FlipDrop flip_drop(int n, double frac) {
         if (k % 25 == 0) d.worst = std::max(d.worst, std::fabs(sim.energy().error));
     }
     d.held = d.held && sim.mass_outflow() == 0 && p.size() == std::size_t(4 * n * n);
-    d.peak_kinetic = sim.energy().kinetic;
     MESSAGE("ADVECT FLIP drop, " << n << " cells across, dt " << frac << " of the limit: largest |energy_error| " << d.worst
                                  << ", rebound " << d.rebound << " of the drop, drift " << d.drift << " m");
     return d;
