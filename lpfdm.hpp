@@ -2404,6 +2404,21 @@ public:
     // the cell's material, cell_centroid: centroid_trace_, made once a step by
     // centroid_traces for every cell holding material).
     LPFDM_INLINE StrainIncrement strain_of_part(int i, int j, double x, double y) const;
+    // MAPPING SMOOTH: f(i, j, x, y, w) for each part of the square of half-width l about
+    // (x0, y0) (square_overlap along each axis): the cell (i, j) it lies in, the part's
+    // centre (x, y) and its share w > 0 of the square, in row order.
+    template <class F> LPFDM_INLINE void each_part(double x0, double y0, double l, F&& f) const {
+        int a, b;
+        double wx[2], wy[2], cx[2], cy[2];
+        square_overlap(x0, l, L_, mx_, a, wx, cx);
+        square_overlap(y0, l, L_, my_, b, wy, cy);
+        for (int q = 0; q < 2; ++q)
+            for (int r = 0; r < 2; ++r) {
+                const double w = wx[r] * wy[q];
+                if (!(w > 0)) continue;
+                f(a + r, b + q, cx[r], cy[q], w);
+            }
+    }
     void centroid_traces(const Range& cells);
     void cell_centroid(std::size_t c, double& u, double& v) const {  // from the centre, in cells
         u = cvol_[c] > 0 ? smu_[c] / cvol_[c] : 0.0;
@@ -3275,26 +3290,17 @@ inline void Simulation::centroid_traces(const Range& cells) {
 inline void Simulation::smooth_move(std::size_t k) {
     const Group& g = groups_[p_.group[k]];
     const double x0 = p_.x[k], y0 = p_.y[k];
-    int a, b;
-    double wx[2], wy[2], cx[2], cy[2];
-    square_overlap(x0, g.half, L_, mx_, a, wx, cx);
-    square_overlap(y0, g.half, L_, my_, b, wy, cy);
     StrainIncrement e;  // eq. 5 as the point sees it
     double dx = 0, dy = 0;
-    for (int q = 0; q < 2; ++q)
-        for (int r = 0; r < 2; ++r) {
-            const double w = wx[r] * wy[q];
-            if (w == 0) continue;
-            const int ci = a + r, cj = b + q;
-            const double px = cx[r], py = cy[q];
-            const StrainIncrement ep = strain_of_part(ci, cj, px, py);
-            e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
-            // This cell's motion (eq. 7a/7b or the MOTION rule) at the centre of its part.
-            const CellStrain& ce = strain_[std::size_t(cell(ci, cj))];
-            double x = 0, y = 0, ddx = 0, ddy = 0;
-            move_with_cell(ci, cj, {ce.xx, ce.yy, ce.xy, ce.yx}, px, py, x, y, ddx, ddy);
-            dx += w * (x - px); dy += w * (y - py);
-        }
+    each_part(x0, y0, g.half, [&](int ci, int cj, double px, double py, double w) {
+        const StrainIncrement ep = strain_of_part(ci, cj, px, py);
+        e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
+        // This cell's motion (eq. 7a/7b or the MOTION rule) at the centre of its part.
+        const CellStrain& ce = strain_[std::size_t(cell(ci, cj))];
+        double x = 0, y = 0, ddx = 0, ddy = 0;
+        move_with_cell(ci, cj, {ce.xx, ce.yy, ce.xy, ce.yx}, px, py, x, y, ddx, ddy);
+        dx += w * (x - px); dy += w * (y - py);
+    });
     if (sc_.advect == Advect::Flip) { e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5; }  // the first half (flip_second_half)
     smooth_stress(k, e);
     double x = x0 + dx, y = y0 + dy;
@@ -3348,27 +3354,19 @@ inline void Simulation::reference_points_smooth() {
 // eq. 7 and 8 for point k at (x, y), MAPPING SMOOTH: its mass m and V sigma shared out
 // among the cells its square overlaps, and the moments of both about each cell's centre.
 inline void Simulation::smear_point(std::size_t k, double x, double y, double m, double v, double sxx, double syy, double sxy, Landing& t) {
-    int a, b;
-    double wx[2], wy[2], cx[2], cy[2];
-    const double l = groups_[p_.group[k]].half;
-    square_overlap(x, l, L_, mx_, a, wx, cx);
-    square_overlap(y, l, L_, my_, b, wy, cy);
     const double p = 0.5 * (sxx + syy);
-    for (int q = 0; q < 2; ++q)
-        for (int r = 0; r < 2; ++r) {
-            const double w = wx[r] * wy[q];
-            if (!(w > 0)) continue;
-            const std::size_t c = std::size_t(cell(a + r, b + q));
-            t.cmin = std::min(t.cmin, int(c)); t.cmax = std::max(t.cmax, int(c));
-            t.imin = std::min(t.imin, a + r); t.imax = std::max(t.imax, a + r);
-            add_to_cell(c, w * m, w * v, sxx, syy, sxy);
-            const double ru = (cx[r] - (a + r) * L_) * invL_ - 0.5, rv = (cy[q] - (b + q) * L_) * invL_ - 0.5;
-            const double wv = w * v;
-            shx_[c] += wv * ((sxx - p) * rv + sxy * ru);
-            shy_[c] += wv * (sxy * rv + (syy - p) * ru);
-            smu_[c] += wv * ru;
-            smv_[c] += wv * rv;
-        }
+    each_part(x, y, groups_[p_.group[k]].half, [&](int ci, int cj, double px, double py, double w) {
+        const std::size_t c = std::size_t(cell(ci, cj));
+        t.cmin = std::min(t.cmin, int(c)); t.cmax = std::max(t.cmax, int(c));
+        t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
+        add_to_cell(c, w * m, w * v, sxx, syy, sxy);
+        const double ru = (px - ci * L_) * invL_ - 0.5, rv = (py - cj * L_) * invL_ - 0.5;
+        const double wv = w * v;
+        shx_[c] += wv * ((sxx - p) * rv + sxy * ru);
+        shy_[c] += wv * (sxy * rv + (syy - p) * ru);
+        smu_[c] += wv * ru;
+        smv_[c] += wv * rv;
+    });
 }
 
 // 3. Nodal forces: eq. 8 smears each cell's sum V sigma; each node gathers the force of
@@ -3597,22 +3595,14 @@ inline void Simulation::reference_integrate() {
 
 // f(n, w_np) for the four nodes of each cell point k's square overlaps.
 template <class F> void Simulation::flip_weights(std::size_t k, const F& f) const {
-    const Group& g = groups_[p_.group[k]];
-    int a, b;
-    double wx[2], wy[2], cx[2], cy[2];
-    square_overlap(p_.x[k], g.half, L_, mx_, a, wx, cx);
-    square_overlap(p_.y[k], g.half, L_, my_, b, wy, cy);
-    for (int q = 0; q < 2; ++q)
-        for (int r = 0; r < 2; ++r) {
-            const double w = wx[r] * wy[q];  // the share of the square in cell (a + r, b + q)
-            if (!(w > 0)) continue;
-            const int ci = a + r, cj = b + q, n = node(ci, cj);
-            const double u = (cx[r] - ci * L_) * invL_, v = (cy[q] - cj * L_) * invL_;  // its part's centre in the cell
-            f(std::size_t(n), w * (1 - u) * (1 - v));
-            f(std::size_t(n + 1), w * u * (1 - v));
-            f(std::size_t(n + mx_ + 1), w * (1 - u) * v);
-            f(std::size_t(n + mx_ + 2), w * u * v);
-        }
+    each_part(p_.x[k], p_.y[k], groups_[p_.group[k]].half, [&](int ci, int cj, double px, double py, double w) {
+        const int n = node(ci, cj);
+        const double u = (px - ci * L_) * invL_, v = (py - cj * L_) * invL_;  // the part's centre in the cell
+        f(std::size_t(n), w * (1 - u) * (1 - v));
+        f(std::size_t(n + 1), w * u * (1 - v));
+        f(std::size_t(n + mx_ + 1), w * (1 - u) * v);
+        f(std::size_t(n + mx_ + 2), w * u * v);
+    });
 }
 
 // 2: b_n and M_n from the points' increments where they are now.
@@ -3653,19 +3643,11 @@ inline void Simulation::flip_second_half() {
     flip_transfer();
     centroid_traces(Range{0, mx_, 0, my_});
     for (std::size_t k = 0; k < p_.size(); ++k) {
-        const Group& g = groups_[p_.group[k]];
-        int a, b;
-        double wx[2], wy[2], cx[2], cy[2];
-        square_overlap(p_.x[k], g.half, L_, mx_, a, wx, cx);
-        square_overlap(p_.y[k], g.half, L_, my_, b, wy, cy);
-        StrainIncrement e;
-        for (int q = 0; q < 2; ++q)
-            for (int r = 0; r < 2; ++r) {
-                const double w = wx[r] * wy[q];
-                if (w == 0) continue;
-                const StrainIncrement ep = strain_of_part(a + r, b + q, cx[r], cy[q]);
-                e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
-            }
+        StrainIncrement e;  // as smooth_move's
+        each_part(p_.x[k], p_.y[k], groups_[p_.group[k]].half, [&](int ci, int cj, double px, double py, double w) {
+            const StrainIncrement ep = strain_of_part(ci, cj, px, py);
+            e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
+        });
         e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5;
         smooth_stress(k, e);
     }
