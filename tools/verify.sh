@@ -25,6 +25,8 @@
 #   VERIFY_MAPPING=SMOOTH  run each deck with MAPPING SMOOTH (a copy of the deck with the
 #                    card added); the rows' cases end in _smooth (make verify runs the
 #                    column, PSC and footing both ways, for the work-precision diagram)
+#   VERIFY_ADVECT=FLIP  and with ADVECT FLIP (needs VERIFY_MAPPING=SMOOTH); the rows'
+#                    cases end in _smooth_flip (make verify runs those three cases so too)
 # A run is timed from the program's own summary line (the time of the steps and of the
 # output written during them, without start-up); the cut's time is the sum of its
 # bisection runs, each timed once; the hopper's the sum of its four slot widths.
@@ -40,7 +42,8 @@ here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
 decks=$root/decks
 mapping=${VERIFY_MAPPING:-PAPER}
-suffix=$([ "$mapping" = PAPER ] || echo "_$(tr 'A-Z' 'a-z' <<<"$mapping")")
+advect=${VERIFY_ADVECT:-EQ12}
+suffix=$([ "$mapping" = PAPER ] || echo "_$(tr 'A-Z' 'a-z' <<<"$mapping")")$([ "$advect" = EQ12 ] || echo "_$(tr 'A-Z' 'a-z' <<<"$advect")")
 ladders=$out/verify
 work=$out/verify$suffix
 mkdir -p "$work" "$ladders"
@@ -62,8 +65,8 @@ run() {
     local dir=$1 deck=$2; shift 2
     local line walls=() cpus=() k n times=${RUN_TIMES:-$repeat} TIMEFORMAT='%U %S'
     mkdir -p "$dir"
-    if [ "$mapping" != PAPER ]; then  # the deck with a MAPPING card (before END, if any)
-        awk -v m="MAPPING $mapping" '/^[ \t]*[Ee][Nn][Dd]([ \t!]|$)/ && !done { print m; done = 1 } { print } END { if (!done) print m }' "$deck" >"$dir/$(basename "$deck")"
+    if [ "$mapping" != PAPER ] || [ "$advect" != EQ12 ]; then  # the deck with MAPPING and ADVECT cards (before END, if any)
+        awk -v m="MAPPING $mapping" -v a="ADVECT $advect" '/^[ \t]*[Ee][Nn][Dd]([ \t!]|$)/ && !done { print m; print a; done = 1 } { print } END { if (!done) { print m; print a } }' "$deck" >"$dir/$(basename "$deck")"
         deck=$dir/$(basename "$deck")
     fi
     for ((k = 0; k < times; k++)); do
