@@ -2765,12 +2765,14 @@ private:
     template <class F> void flip_weights(std::size_t k, const F& f) const;
     void smooth_stress(std::size_t k, const StrainIncrement& e);
     // ADVECT FLIP's scratch: the nodes' masses by the points' weights, eq. 13's change of
-    // each node and the points' change brought back; the points' kinetic energy (leapfrog).
+    // each node and the points' change brought back (flip_sx_, flip_sy_ hold the walls'
+    // last increments in flip_transfer before that); the points' kinetic energy (leapfrog).
     std::vector<double> flip_mass_, flip_ax_, flip_ay_, flip_sx_, flip_sy_;
     double flip_kinetic_ = 0;
     // The node masses eq. 13 moves with: eq. 10's, or with ADVECT FLIP the transfer's M_n
-    // (flip_changes). The supports, walls and dashpots read the same masses, and the same
-    // force F (with FLIP reference_integrate adds gravity's share of M_n - m_n to it).
+    // (flip_changes). The fixed directions and the walls read the same masses, and the same
+    // force F (with FLIP reference_integrate adds gravity's share of M_n - m_n to it);
+    // SHAKE and ABSORB, which FLIP does not take (validate), read eq. 10's.
     const std::vector<double>& inertia() const { return sc_.advect == Advect::Flip ? flip_mass_ : nmass_; }
     // eq. 6 for point k in a cell of strain increment e and rotation (rc, rs).
     void consult_model(std::size_t k, const MaterialConstants& mc, const StrainIncrement& e, double rc, double rs, Stress& s);
@@ -3554,8 +3556,8 @@ inline void Simulation::reference_integrate() {
 //   1. the points take half of their strain from the last lattice increment c where they
 //      are (smooth_move), move by c and are mapped (eq. 7, 8);
 //   2. the transfer, in eq. 12's place: b_n = sum_p w_np m_p d_p / M_n, M_n = sum_p w_np m_p
-//      (0 in a fixed direction); the points take the other half of their strain from b
-//      where they are now and are mapped again (flip_second_half);
+//      (a held direction: its support's last increment); the points take the other half
+//      of their strain from b where they are now and are mapped again (flip_second_half);
 //   3. eq. 8's forces F (eq. 10's masses m_n), then eq. 13-14 on the transfer's masses:
 //      a_n = eq13(b_n, F_n + g (M_n - m_n), M_n) - b_n (flip_changes); the supports see
 //      b_n + a_n as eq. 13's increment, and a direction they hold (fixed, or driven by a
@@ -4998,9 +5000,8 @@ inline Range Simulation::impose_supports() {
     const bool shake_x = ground_[0].spec && !ground_[0].spec->compliant, shake_y = ground_[1].spec && !ground_[1].spec->compliant;
     const double dt2 = sc_.dt_s * sc_.dt_s;
     double hg = 0;
-    const std::vector<double>& mass = inertia();
     auto shaken = [&](std::size_t u, double& du, double b, double f, double g, double& r, double& rf) {
-        const double m = mass[u];
+        const double m = nmass_[u];
         du = m > 0 ? g : 0.0;
         const double S = m > 0 ? m * (du - b) / dt2 - f : -f;
         r += S; rf += S;
@@ -5022,6 +5023,7 @@ inline Range Simulation::impose_supports() {
     es_.h_fixes = hf;
     es_.h_ground = hg;
     const bool flip = sc_.advect == Advect::Flip;
+    const std::vector<double>& mass = inertia();
     for (const std::int32_t n : driven_nodes_) driven_[std::size_t(n)] = 0;
     driven_nodes_.clear();  // capacity reserved at set-up: no allocation
     Range wall_nodes{};
@@ -5187,7 +5189,6 @@ inline void Simulation::dynamics_begin() {
     if (!sc_.shakes.empty() && sc_.shakes.front().damping >= 0) sc_.damping = sc_.shakes.front().damping;  // the cards agree (validate)
     const bool release = step_ == shake_step_;
     const double vx = ground_[0].v_now, vy = ground_[1].v_now;
-    const std::vector<double>& mass = inertia();
     for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) {
         const std::size_t n = std::size_t(absorb_nodes_[q]);
         if (release && released_[q]) {  // the force the support exerted: it cancelled F
@@ -5205,7 +5206,7 @@ inline void Simulation::dynamics_begin() {
     }
     for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) {
         const std::size_t n = std::size_t(absorb_nodes_[q]);
-        if (mass[n] == 0) continue;
+        if (nmass_[n] == 0) continue;
         fx_[n] += hold_fx_[q] + input_fx_[q];
         fy_[n] += hold_fy_[q] + input_fy_[q];
     }
@@ -5223,11 +5224,10 @@ inline void Simulation::dynamics_begin() {
 inline void Simulation::absorb_increments() {
     if (step_ < shake_step_) return;
     const double dt = sc_.dt_s;
-    const std::vector<double>& mass = inertia();
     double ha = 0, hi = 0, hh = 0;
     auto one = [&](std::size_t n, const Ground& g, double C, double fin, double hold, double b, double& c) {
         const bool rigid = g.spec && !g.spec->compliant;
-        const double bg = rigid ? g.du_before : 0.0, cg = rigid ? g.du : 0.0, beta = C * dt / (2 * mass[n]);
+        const double bg = rigid ? g.du_before : 0.0, cg = rigid ? g.du : 0.0, beta = C * dt / (2 * nmass_[n]);
         c = (c - beta * (b - bg - cg)) / (1 + beta);
         const double s = b + c, sg = bg + cg, f = -C * (s - sg) / (2 * dt);  // the dashpot's force on the node
         es_.d_absorb -= 0.5 * f * (s - sg); ha -= 0.5 * f * (c - cg);
@@ -5236,7 +5236,7 @@ inline void Simulation::absorb_increments() {
     };
     for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) {
         const std::size_t n = std::size_t(absorb_nodes_[q]);
-        if (mass[n] == 0) continue;
+        if (nmass_[n] == 0) continue;
         const std::uint8_t held = fixed_[n];
         if (!(held & kFixX)) one(n, ground_[0], absorb_cx_[q], input_fx_[q], hold_fx_[q], dux_old_[n], dux_[n]);
         if (!(held & kFixY)) one(n, ground_[1], absorb_cy_[q], input_fy_[q], hold_fy_[q], duy_old_[n], duy_[n]);
