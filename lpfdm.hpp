@@ -816,6 +816,7 @@ private:
 struct MaterialConstants {
     Model model = Model::Elastic;
     double a1 = 0, a2 = 0, G = 0;   // K + 4G/3, K - 2G/3, G
+    double inv_K = 0, inv_2G = 0;   // 1 / K, K = (a1 + 2 a2) / 3, and 1 / (2G): compliance_product's
     double rho = 0;
     // Mohr-Coulomb (means; per-point values replace c and n_phi when scattered)
     double c = 0, n_phi = 1, n_psi = 1, tension = -1, soften = 0;
@@ -829,6 +830,7 @@ inline MaterialConstants constants_of(const Material& m) {
     k.model = m.model;
     const double K = m.bulk(), G = m.shear();
     k.a1 = K + 4 * G / 3; k.a2 = K - 2 * G / 3; k.G = G; k.rho = m.rho;
+    k.inv_K = 1 / ((k.a1 + 2 * k.a2) / 3); k.inv_2G = 1 / (2 * G);
     if (m.model == Model::MohrCoulomb) {
         k.c = m.c; k.n_phi = detail::flow_number(m.phi_deg); k.n_psi = detail::flow_number(m.psi_deg);
         k.sqrt_n_phi = std::sqrt(k.n_phi);
@@ -853,14 +855,17 @@ inline void elastic_increment(const MaterialConstants& k, const StrainIncrement&
 // deviator. Half of it with a = b is the elastic energy per unit volume; with a the
 // corrected stress and b the correction a Mohr-Coulomb return removed it is the plastic
 // work per unit volume of that step (a : d_eps^p, d_eps^p = C^-1 b).
-// T: one value, or the lanes of a vector (the AVX2 point loop's record_yield).
+// T: one value, or the lanes of a vector (the AVX2 point loop's record_yield). Products
+// with 1/3, 1/K and 1/(2G) (taken once per material), not quotients: a plastic return
+// records it at every yielding point, and four divisions cost more there than the return's
+// own arithmetic.
 template <class T>
 LPFDM_INLINE inline void compliance_product(const MaterialConstants& k, const T& axx, const T& ayy, const T& axy, const T& azz,
                                             const T& bxx, const T& byy, const T& bxy, const T& bzz, T& out) {
-    const double K = (k.a1 + 2 * k.a2) / 3, G = k.G;
-    const T pa = (axx + ayy + azz) / 3, pb = (bxx + byy + bzz) / 3;
+    constexpr double third = 1.0 / 3;
+    const T pa = (axx + ayy + azz) * third, pb = (bxx + byy + bzz) * third;
     const T dev = (axx - pa) * (bxx - pb) + (ayy - pa) * (byy - pb) + (azz - pa) * (bzz - pb) + 2 * axy * bxy;
-    out = pa * pb / K + dev / (2 * G);
+    out = pa * pb * k.inv_K + dev * k.inv_2G;
 }
 inline double compliance_product(const MaterialConstants& k, const Stress& a, const Stress& b) {
     double out;
@@ -1150,7 +1155,7 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     const double tol = 1e-11 * (std::fabs(trial[0]) + std::fabs(trial[1]) + std::fabs(trial[2]) + two_c_sq + (std::isfinite(sig_t) ? sig_t : 0));
     auto to_xy = [&](const double sg[3]) {  // same principal direction, new principal values
         const double pn = 0.5 * (sg[1] + sg[0]), rn = 0.5 * (sg[1] - sg[0]);
-        const double c2 = r > 0 ? a / r : 1.0, s2 = r > 0 ? s.xy / r : 0.0;
+        const double inv_r = 1 / r, c2 = r > 0 ? a * inv_r : 1.0, s2 = r > 0 ? s.xy * inv_r : 0.0;  // one division
         s.xx = pn + rn * c2; s.yy = pn - rn * c2; s.xy = rn * s2; s.zz = sg[2];
     };
     // FLAC's closed form: shear on (sig1, sig3) or tension on sig3, chosen by h. Most
@@ -1464,8 +1469,8 @@ LPFDM_INLINE inline void add_four(v4d& acc, const v4d& vol, const v4d& sxx, cons
 // and mohr_coulomb_correct's closed-form shear return, with the same operations in the
 // same order as those compute them one stress at a time (std::min(a, b) is b < a ? b : a,
 // std::max(a, b) a < b ? b : a), so the lanes they settle get the same numbers bit for bit.
-// Built for AVX2 (the square root's builtin needs the target); the compiler inlines the
-// elastic test into the AVX2 point loop, and calls the return, which most chunks skip.
+// Built for AVX2 (the square root's builtin needs the target); the AVX2 point loop
+// (Simulation::consult_lanes) inlines the elastic test and the return, and calls the edges.
 //
 // Mohr's circle of (xx, yy) with its radius r given: t.a, t.sig and mohr_inside's lo, hi
 // and shear test.
@@ -1505,7 +1510,9 @@ struct MohrLanes { v4d a, t0, t1, t2, sig_t, tol, ft; v4m A, C, shear_first; };
 // settled; bit 4 + l: it was returned by shear (its stress replaced, d_gamma[l] its plastic
 // shear increment). A lane left unsettled (tension, an edge, or a return the closed form
 // cannot make admissible) takes the one-point code. n_psi, tension, a1, a2: the material's (MaterialConstants).
-__attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, v4d& d_gamma, MohrLanes& found) {
+// return_lanes is inlined where it is called (its caller must be built for AVX2);
+// mohr_return_lanes is the same as a function of its own (the tests call it).
+__attribute__((target("avx2"), always_inline)) inline int return_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, v4d& d_gamma, MohrLanes& found) {
     constexpr double huge = std::numeric_limits<double>::infinity();
     const v4d inf = {huge, huge, huge, huge}, zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
     v4d a, t0, t1, hi;
@@ -1531,14 +1538,18 @@ __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v
     v4d lo_n, hi_n;
     extremes(s0, s1, s2, lo_n, hi_n);
     // FLAC's h chooses shear where the tension plane is violated too (h_fn, the same
-    // operations; a lane with ft >= 0 does not need it, as the one-point code skips it).
-    const v4d alpha_p = __builtin_ia32_sqrtpd256(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
-    const v4d h = ti3 - sig_t + alpha_p * (ti1 - sig_p);
-    const v4m shear_first = (fs < 0) & ((ft >= 0) | ~(h > 0));
+    // operations; a lane with ft >= 0 does not need it, as the one-point code skips it, and
+    // most groups of four hold no lane that does: their square root is not taken).
+    v4m shear_first = (fs < 0) & (ft >= 0);
+    if (const v4m both = (fs < 0) & ~(ft >= 0); __builtin_ia32_movmskpd256(v4d(both))) {
+        const v4d alpha_p = __builtin_ia32_sqrtpd256(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
+        const v4d h = ti3 - sig_t + alpha_p * (ti1 - sig_p);
+        shear_first |= both & ~(h > 0);
+    }
     const v4m shear = ~inside & shear_first & (lo_n - np * hi_n + two_c_sq >= -tol) & (sig_t - hi_n >= -tol);
     // to_xy: the same principal direction, the new principal values
     const v4d pn = 0.5 * (s1 + s0), rn = 0.5 * (s1 - s0);
-    const v4d c2 = r > 0 ? a / r : one, s2xy = r > 0 ? xy / r : zero;
+    const v4d inv_r = one / r, c2 = r > 0 ? a * inv_r : one, s2xy = r > 0 ? xy * inv_r : zero;
     xx = shear ? pn + rn * c2 : xx;
     yy = shear ? pn - rn * c2 : yy;
     xy = shear ? rn * s2xy : xy;
@@ -1546,6 +1557,9 @@ __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v
     abs_of(-mu - mu * ns0, d_gamma);  // |e1 - e3|
     found = MohrLanes{a, t0, t1, t2, sig_t, tol, ft, A, C, shear_first};
     return __builtin_ia32_movmskpd256(v4d(inside | shear)) | __builtin_ia32_movmskpd256(v4d(shear)) << 4;
+}
+__attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, v4d& d_gamma, MohrLanes& found) {
+    return return_lanes(xx, yy, xy, zz, r, np, two_c_sq, n_psi, tension, a1, a2, d_gamma, found);
 }
 // The lanes mohr_return_lanes left (bits of `left`; their trials in xx .. zz, what it found of
 // them in m): the first two
@@ -1676,7 +1690,7 @@ __attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d
     }
     // to_xy: the same principal direction, the new principal values
     const v4d pn = 0.5 * (best[1] + best[0]), rn = 0.5 * (best[1] - best[0]);
-    const v4d c2 = r > 0 ? a / r : one, s2xy = r > 0 ? xy / r : zero;
+    const v4d inv_r = one / r, c2 = r > 0 ? a * inv_r : one, s2xy = r > 0 ? xy * inv_r : zero;
     xx = done ? pn + rn * c2 : xx;
     yy = done ? pn - rn * c2 : yy;
     xy = done ? rn * s2xy : xy;
@@ -2597,6 +2611,7 @@ private:
     template <Motion M, bool Carry, bool Wide> LPFDM_INLINE void run_points(long k0, long k1, Part& part, Landing& t);
 #if LPFDM_WIDE
     __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Part& part, Landing& t);
+    template <bool Own> __attribute__((target("avx2"))) void consult_lanes(const MaterialConstants& mc, long q, long qend);
 #endif
     // Row j of a lattice phase: f(j, std::false_type), or f(j, std::true_type) built for
     // AVX2 (f inlined into row_wide) when the AVX2 version is on, so that f may work
@@ -3973,6 +3988,123 @@ template <Motion M, bool Carry>
 inline void Simulation::advance_run(long k0, long k1, Part& part, Landing& landing) { run_points<M, Carry, false>(k0, k1, part, landing); }
 #if LPFDM_WIDE
 __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Part& part, Landing& landing) { run_points<Motion::Centre, false, true>(k0, k1, part, landing); }
+
+// eq. 6's Mohr-Coulomb consult of points q .. qend-1 of material mc, which hold their elastic
+// trials (the AVX2 point loop's, consult_block), four points per register: the elastic test,
+// the closed-form shear return and the search's first two sets (an edge, the apex line)
+// (detail::mohr_inside_lanes, mohr_return_lanes, mohr_edge_lanes), then the one-point test
+// and return (mohr_consult) for a lane those do not settle and the last one to three points.
+// Own: each point's own strength (scatter). A point's consult reads and writes that point
+// only, so the lanes the closed form leaves go in a second pass over the groups that hold
+// them (most groups end in the first, whose loop is then straight code the processor
+// overlaps from group to group); each lane's operations are those of the one-point code.
+template <bool Own>
+__attribute__((target("avx2"))) inline void Simulation::consult_lanes(const MaterialConstants& mc, long q, const long qend) {
+    using detail::v4d;
+    using detail::v4m;
+    double* __restrict psxx = p_.sxx.data();
+    double* __restrict psyy = p_.syy.data();
+    double* __restrict psxy = p_.sxy.data();
+    double* __restrict pszz = p_.szz.data();
+    const double* __restrict pvol = p_.vol.data();
+    const std::uint16_t* __restrict pgroup = p_.group.data();
+    const double *pc0 = p_.c0.data(), *pnphi = p_.n_phi.data(), *psqrt = p_.sqrt_n_phi.data();
+    std::uint8_t* __restrict pyielded = p_.yielded.data();
+    double* __restrict pshear = p_.plastic_shear.data();
+    double* __restrict pwork = p_.plastic_work.data();
+    // strength_of, four points at once: the same operations in each lane
+    auto strength = [&](long r, v4d& np, v4d& two_c_sq) __attribute__((always_inline)) {
+        v4d c0, sq;
+        if constexpr (Own) {
+            detail::load(pc0 + r, c0); detail::load(pnphi + r, np); detail::load(psqrt + r, sq);
+        } else {
+            c0 = v4d{mc.c, mc.c, mc.c, mc.c}; np = v4d{mc.n_phi, mc.n_phi, mc.n_phi, mc.n_phi};
+            sq = v4d{mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi};
+        }
+        const v4m soft = {-std::int64_t(pyielded[r] != 0), -std::int64_t(pyielded[r + 1] != 0), -std::int64_t(pyielded[r + 2] != 0), -std::int64_t(pyielded[r + 3] != 0)};
+        const double keep = 1 - mc.soften;
+        const v4d c = soft ? c0 * keep : c0;
+        two_c_sq = 2 * c * sq;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
+    };
+    // record_yield of lanes `lanes` (bits), returned from the trials t_* to xx .. zz with
+    // plastic shear d_gamma: the same operations
+    auto record = [&](long r, int lanes, const v4d& xx, const v4d& yy, const v4d& xy, const v4d& zz, const v4d& t_xx, const v4d& t_yy, const v4d& t_xy, const v4d& t_zz, const v4d& d_gamma) __attribute__((always_inline)) {
+        v4d work;  // compliance_product(mc, s, trial - s)
+        compliance_product(mc, xx, yy, xy, zz, v4d(t_xx - xx), v4d(t_yy - yy), v4d(t_xy - xy), v4d(t_zz - zz), work);
+        const v4d v0 = {groups_[pgroup[r]].vol0, groups_[pgroup[r + 1]].vol0, groups_[pgroup[r + 2]].vol0, groups_[pgroup[r + 3]].vol0};
+        const v4m m = {-std::int64_t(lanes & 1), -std::int64_t(lanes >> 1 & 1), -std::int64_t(lanes >> 2 & 1), -std::int64_t(lanes >> 3 & 1)};
+        v4d gamma, pw, vol;
+        detail::load(pshear + r, gamma); detail::load(pwork + r, pw); detail::load(pvol + r, vol);
+        const v4d vk = v0 < vol ? v0 : vol;  // std::min(vol, vol0)
+        gamma = m ? gamma + d_gamma : gamma;
+        pw = m ? pw + vk * work : pw;
+        detail::store(pshear + r, gamma); detail::store(pwork + r, pw);
+        // softening from the next consult: 1 where a lane yielded (one word, no branch: lanes yield at random)
+        static constexpr std::uint32_t kLaneBytes[16] = {0x0u, 0xffu, 0xff00u, 0xffffu, 0xff0000u, 0xff00ffu, 0xffff00u, 0xffffffu,
+                                                         0xff000000u, 0xff0000ffu, 0xff00ff00u, 0xff00ffffu, 0xffff0000u, 0xffff00ffu, 0xffffff00u, 0xffffffffu};
+        std::uint32_t w;
+        std::memcpy(&w, pyielded + r, 4);  // pyielded[r + l] in byte l (x86 is little-endian)
+        const std::uint32_t set = kLaneBytes[lanes & 15];
+        w = (w & ~set) | (0x01010101u & set);
+        std::memcpy(pyielded + r, &w, 4);
+    };
+    // The groups the first pass leaves lanes of (first: the group's point; bits: the lanes).
+    constexpr int kLeft = 64;
+    long left_at[kLeft];
+    int left_bits[kLeft], nleft = 0;
+    auto second_pass = [&]() __attribute__((always_inline)) {
+        for (int u = 0; u < nleft; ++u) {
+            const long r = left_at[u];
+            const int left = left_bits[u];
+            v4d xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;  // the left lanes' trials (the first pass kept them)
+            detail::load(psxx + r, xx); detail::load(psyy + r, yy); detail::load(psxy + r, xy); detail::load(pszz + r, zz);
+            strength(r, np, two_c_sq);  // the left lanes' yielded flags are as the first pass read them
+            detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
+            const v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
+            detail::MohrLanes found;
+            detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
+            xx = t_xx; yy = t_yy; xy = t_xy; zz = t_zz;  // (its settled lanes are not these)
+            const int edge = detail::mohr_edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, left, d_gamma);
+            if (edge) {
+                const v4m done = {-std::int64_t(edge & 1), -std::int64_t(edge >> 1 & 1), -std::int64_t(edge >> 2 & 1), -std::int64_t(edge >> 3 & 1)};
+                v4d sxx, syy, sxy, szz;
+                detail::load(psxx + r, sxx); detail::load(psyy + r, syy); detail::load(psxy + r, sxy); detail::load(pszz + r, szz);
+                detail::store(psxx + r, done ? xx : sxx); detail::store(psyy + r, done ? yy : syy);
+                detail::store(psxy + r, done ? xy : sxy); detail::store(pszz + r, done ? zz : szz);
+                record(r, edge, xx, yy, xy, zz, t_xx, t_yy, t_xy, t_zz, d_gamma);
+            }
+            for (int l = 0; l < 4; ++l)  // the lanes still left: the one-point code, on the trial
+                if ((left & ~edge) >> l & 1) {
+                    Stress s{t_xx[l], t_yy[l], t_xy[l], t_zz[l]};
+                    mohr_consult<Own>(mc, std::size_t(r + l), s);
+                    psxx[r + l] = s.xx; psyy[r + l] = s.yy; psxy[r + l] = s.xy; pszz[r + l] = s.zz;
+                }
+        }
+        nleft = 0;
+    };
+    for (; q + 4 <= qend; q += 4) {
+        v4d xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;
+        detail::load(psxx + q, xx); detail::load(psyy + q, yy); detail::load(psxy + q, xy); detail::load(pszz + q, zz);
+        strength(q, np, two_c_sq);
+        int settled = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
+        if (settled == 15) continue;  // all four inside: the trial stands
+        const v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
+        detail::MohrLanes found;
+        settled = detail::return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
+        detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy); detail::store(pszz + q, zz);
+        if (const int sh = settled >> 4) record(q, sh, xx, yy, xy, zz, t_xx, t_yy, t_xy, t_zz, d_gamma);
+        if ((settled & 15) != 15) {
+            left_at[nleft] = q; left_bits[nleft] = ~settled & 15;
+            if (++nleft == kLeft) second_pass();
+        }
+    }
+    second_pass();
+    for (; q < qend; ++q) {  // the last one to three points
+        Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+        mohr_consult<Own>(mc, std::size_t(q), s);
+        psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+    }
+}
 #endif
 
 template <Motion M, bool Carry, bool Wide>
@@ -4339,73 +4471,17 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
     };
 #if LPFDM_WIDE
     if constexpr (Wide) {
-        // The Mohr-Coulomb points of b0 .. b1-1, holding their elastic trials: the elastic
-        // test, the closed-form shear return and the search's first two sets (an edge, the
-        // apex line) four points per register (detail::mohr_inside_lanes, mohr_return_lanes,
-        // mohr_edge_lanes). A point they do not settle, and the last one to three points of
-        // a material's span, take the one-point test and return on the trial.
+        // The Mohr-Coulomb points of b0 .. b1-1, holding their elastic trials, by spans of
+        // one material (consult_lanes).
         long consulted = 0;  // Mohr-Coulomb points consulted (profiling)
-        const double *pc0 = p_.c0.data(), *pnphi = p_.n_phi.data(), *psqrt = p_.sqrt_n_phi.data();
-        std::uint8_t* pyielded = p_.yielded.data();
-        double *pshear = p_.plastic_shear.data(), *pwork = p_.plastic_work.data();
         auto consult_block = [&](long b0, long b1) LPFDM_INLINE {
-            auto consult = [&](long q, const long qend, const MaterialConstants& mc, auto own) LPFDM_INLINE {
-                for (; q + 4 <= qend; q += 4) {
-                    detail::v4d xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;
-                    detail::load(psxx + q, xx); detail::load(psyy + q, yy); detail::load(psxy + q, xy); detail::load(pszz + q, zz);
-                    {  // strength_of, four points at once: the same operations in each lane
-                        detail::v4d c0, sq;
-                        if constexpr (decltype(own)::value) {
-                            detail::load(pc0 + q, c0); detail::load(pnphi + q, np); detail::load(psqrt + q, sq);
-                        } else {
-                            c0 = detail::v4d{mc.c, mc.c, mc.c, mc.c}; np = detail::v4d{mc.n_phi, mc.n_phi, mc.n_phi, mc.n_phi};
-                            sq = detail::v4d{mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi};
-                        }
-                        const detail::v4m soft = {-std::int64_t(pyielded[q] != 0), -std::int64_t(pyielded[q + 1] != 0), -std::int64_t(pyielded[q + 2] != 0), -std::int64_t(pyielded[q + 3] != 0)};
-                        const double keep = 1 - mc.soften;
-                        const detail::v4d c = soft ? c0 * keep : c0;
-                        two_c_sq = 2 * c * sq;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
-                    }
-                    int settled = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
-                    if (settled == 15) continue;  // all four inside: the trial stands
-                    const detail::v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
-                    detail::MohrLanes found;
-                    settled = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
-                    if ((settled & 15) != 15) {  // the search's first two sets (an edge, the apex line)
-                        const int edge = detail::mohr_edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, ~settled & 15, d_gamma);
-                        settled |= edge | edge << 4;
-                    }
-                    detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy); detail::store(pszz + q, zz);
-                    if (const int sh = settled >> 4) {  // record_yield of the lanes returned by shear: the same operations
-                        using detail::v4d;
-                        v4d work;  // compliance_product(mc, s, trial - s)
-                        compliance_product(mc, xx, yy, xy, zz, v4d(t_xx - xx), v4d(t_yy - yy), v4d(t_xy - xy), v4d(t_zz - zz), work);
-                        const v4d v0 = {groups_[pgroup[q]].vol0, groups_[pgroup[q + 1]].vol0, groups_[pgroup[q + 2]].vol0, groups_[pgroup[q + 3]].vol0};
-                        const detail::v4m m = {-std::int64_t(sh & 1), -std::int64_t(sh >> 1 & 1), -std::int64_t(sh >> 2 & 1), -std::int64_t(sh >> 3 & 1)};
-                        v4d gamma, pw, vol;
-                        detail::load(pshear + q, gamma); detail::load(pwork + q, pw); detail::load(pvol + q, vol);
-                        const v4d vk = v0 < vol ? v0 : vol;  // std::min(vol, vol0)
-                        gamma = m ? gamma + d_gamma : gamma;
-                        pw = m ? pw + vk * work : pw;
-                        detail::store(pshear + q, gamma); detail::store(pwork + q, pw);
-                        for (int l = 0; l < 4; ++l) {  // softening from the next consult: 1 where lane l yielded (no branch: lanes yield at random)
-                            const unsigned was = pyielded[q + l], set = 0u - unsigned(sh >> l & 1);
-                            pyielded[q + l] = std::uint8_t(was ^ ((was ^ 1u) & set));
-                        }
-                    }
-                    if ((settled & 15) == 15) continue;
-                    for (int l = 0; l < 4; ++l)  // the lanes left: the one-point code
-                        if (!(settled >> l & 1)) consult_point(mc, q + l, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]}, own);
-                }
-                for (; q < qend; ++q) consult_point(mc, q, Stress{psxx[q], psyy[q], psxy[q], pszz[q]}, own);
-            };
             for (long q = b0; q < b1;) {  // spans of points of one material
                 const MaterialConstants& mc = *group_consts_[std::size_t(pgroup[q])];
                 long qend = single ? b1 : q + 1;
                 while (qend < b1 && group_consts_[std::size_t(pgroup[qend])] == &mc) ++qend;
                 if (mc.model == Model::MohrCoulomb) {
-                    if (!p_.c0.empty()) consult(q, qend, mc, std::true_type{});  // scatter: each point's own strength
-                    else consult(q, qend, mc, std::false_type{});
+                    if (!p_.c0.empty()) consult_lanes<true>(mc, q, qend);  // scatter: each point's own strength
+                    else consult_lanes<false>(mc, q, qend);
                     consulted += qend - q;
                 }
                 q = qend;
