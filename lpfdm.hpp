@@ -1281,14 +1281,19 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // each of the other planes, the most frequent first (for shear (i1, i3): the edge with
     // shear (i1, i2), the apex line with sig_i1's tension plane, the edge with (i2, i3); for
     // sig_i3's tension plane: the two shear planes of i3 and the other in-plane stress, or
-    // of i3 and i1 when i3 is sig_zz); then the single planes, the
-    // other pairs, the triples holding p0, the other triples, each in index order. In a
-    // flowing collapse (decks/bench_flow.deck) 4 % of the point-updates search, and 94 % of
-    // the searches end at the first or second set, instead of after the 9 single planes and
-    // up to 36 pairs of the index order (about 240 ns per search). With psi = phi the
+    // of i3 and i1 when i3 is sig_zz); then the triples holding p0 (the apex, where all
+    // nine planes meet when the tension limit is the apex), p0's other partners in the same
+    // order; then the single planes, the other pairs and the other triples, each in index
+    // order: every set holding FLAC's own plane before any set without it. In a flowing
+    // collapse (decks/bench_flow.deck) 4 % of the point-updates search, and 94 % of the
+    // searches end at the first or second set, instead of after the 9 single planes and up
+    // to 36 pairs of the index order (about 240 ns per search); a return to the apex ends
+    // among the first of p0's 28 triples, where the single planes and the other pairs before
+    // them took it some fifty sets in. With psi = phi the
     // admissible sets give one stress (tests/test_mohr.cpp), and the order changes only its
     // round-off where two sets meet (the apex line lies on a shear and a tension plane);
-    // with psi < phi they rarely (8 of 4.5 million searches in that collapse) give two
+    // with psi < phi they rarely (8 of 4.5 million searches in that collapse; 3 of 473 210
+    // between the apex-first order and the one before it) give two
     // different returns, of which the one beside FLAC's own plane is taken. The AVX2 point
     // loop makes those first two sets four points at a time (detail::mohr_edge_lanes, the
     // same operations): a change to the search's order or arithmetic is a change there.
@@ -1300,34 +1305,47 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
         const int o = i3 == 2 ? i1 : 1 - i3;
         first[0] = shear_plane(o, i3); first[1] = shear_plane(i3, o);
     }
+    // The planes to join p0 in a set, in the order tried: first[], then the others.
+    int partner[8], npartner = 0;
+    if (p0 < npl) {
+        for (int u = 0; u < 3; ++u)
+            if (first[u] >= 0 && first[u] < npl && first[u] != p0) partner[npartner++] = first[u];
+        for (int q = 0; q < npl; ++q)
+            if (q != p0 && q != first[0] && q != first[1] && q != first[2]) partner[npartner++] = q;
+    }
     for (int pass = 0; pass < 2 && !found; ++pass) {
         if (pass == 1) { ns = np; made = 0; }  // the associated flow rule: the planes made again
         using One = std::integral_constant<int, 1>;
         using Two = std::integral_constant<int, 2>;
         using Three = std::integral_constant<int, 3>;
         int act[3];
-        auto try_pair = [&](int q) {  // p0 and plane q
-            if (q < 0 || q >= npl || q == p0 || p0 >= npl) return;
-            act[0] = std::min(p0, q); act[1] = std::max(p0, q);
-            if ((found = try_set(act, Two{}))) res.mode = MohrResult::Edge;
-        };
-        for (int u = 0; u < 3 && !found; ++u) try_pair(first[u]);
-        for (int q = 0; q < npl && !found; ++q)
-            if (q != first[0] && q != first[1] && q != first[2]) try_pair(q);
+        // The sets holding p0: pairs, then triples (the apex), their planes in index order.
+        for (int u = 0; u < npartner && !found; ++u) {
+            act[0] = std::min(p0, partner[u]); act[1] = std::max(p0, partner[u]);
+            found = try_set(act, Two{});
+        }
+        for (int u = 0; u < npartner && !found; ++u)
+            for (int v = u + 1; v < npartner && !found; ++v) {
+                int x = p0, y = partner[u], z = partner[v];  // sorted: x < y < z
+                if (x > y) std::swap(x, y);
+                if (y > z) std::swap(y, z);
+                if (x > y) std::swap(x, y);
+                act[0] = x; act[1] = y; act[2] = z;
+                found = try_set(act, Three{});
+            }
+        if (found) { res.mode = MohrResult::Edge; break; }
+        // The others: single planes, pairs, triples, each in index order.
         for (act[0] = 0; act[0] < npl && !found; ++act[0]) {
             if (found = try_set(act, One{}), found) { res.mode = act[0] < 6 ? MohrResult::Shear : MohrResult::Tension; break; }
         }
         for (int na = 2; na <= 3 && !found; ++na) {
-            for (int with_p0 = na - 2; with_p0 >= 0 && !found; --with_p0)  // pairs: the others; triples: those holding p0 first
-                for (act[0] = 0; act[0] < npl && !found; ++act[0])
-                    for (act[1] = act[0] + 1; act[1] < npl && !found; ++act[1]) {
-                        if (na == 2) {
-                            if (act[0] != p0 && act[1] != p0) found = try_set(act, Two{});
-                            continue;
-                        }
-                        for (act[2] = act[1] + 1; act[2] < npl && !found; ++act[2])
-                            if ((act[0] == p0 || act[1] == p0 || act[2] == p0) == bool(with_p0)) found = try_set(act, Three{});
-                    }
+            for (act[0] = 0; act[0] < npl && !found; ++act[0])
+                for (act[1] = act[0] + 1; act[1] < npl && !found; ++act[1]) {
+                    if (act[0] == p0 || act[1] == p0) continue;
+                    if (na == 2) { found = try_set(act, Two{}); continue; }
+                    for (act[2] = act[1] + 1; act[2] < npl && !found; ++act[2])
+                        if (act[2] != p0) found = try_set(act, Three{});
+                }
             if (found) res.mode = MohrResult::Edge;
         }
     }
