@@ -1488,7 +1488,7 @@ LPFDM_INLINE inline void add_four(v4d& acc, const v4d& vol, const v4d& sxx, cons
 // same order as those compute them one stress at a time (std::min(a, b) is b < a ? b : a,
 // std::max(a, b) a < b ? b : a), so the lanes they settle get the same numbers bit for bit.
 // Built for AVX2 (the square root's builtin needs the target); the AVX2 point loop
-// (Simulation::consult_lanes) inlines the elastic test and the return, and calls the edges.
+// (Simulation::consult_lanes) inlines them all (return_lanes, edge_lanes).
 //
 // Mohr's circle of (xx, yy) with its radius r given: t.a, t.sig and mohr_inside's lo, hi
 // and shear test.
@@ -1590,7 +1590,7 @@ __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v
 // one of them (xx .. zz its stress, d_gamma[l] its plastic shear, as the one-point code's
 // mode Edge gives them); a lane left unsettled (a third set, an infinite or NaN value, an
 // admissible tension return) takes the one-point code, which tries the same two sets first.
-__attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double a1, double a2, const MohrLanes& m, int left, v4d& d_gamma) {
+__attribute__((target("avx2"), always_inline)) inline int edge_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double a1, double a2, const MohrLanes& m, int left, v4d& d_gamma) {
     constexpr double huge = std::numeric_limits<double>::infinity();
     const v4d inf = {huge, huge, huge, huge}, zero = {0, 0, 0, 0}, one = {1, 1, 1, 1}, two = {2, 2, 2, 2};
     const v4d &a = m.a, &t0 = m.t0, &t1 = m.t1, &t2 = m.t2, &sig_t = m.sig_t, &tol = m.tol, &ft = m.ft;
@@ -1715,6 +1715,11 @@ __attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d
     zz = done ? best[2] : zz;
     d_gamma = done ? best_gamma : d_gamma;
     return __builtin_ia32_movmskpd256(v4d(done));
+}
+// edge_lanes is inlined where it is called (the caller built for AVX2); mohr_edge_lanes is
+// the same as a function of its own (the tests call it).
+__attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double a1, double a2, const MohrLanes& m, int left, v4d& d_gamma) {
+    return edge_lanes(xx, yy, xy, zz, r, np, two_c_sq, n_psi, a1, a2, m, left, d_gamma);
 }
 #endif
 // f(i, Tag<T>) for i = i0 .. i1 - 1: with Wide (std::true_type, inside a function built for
@@ -4010,7 +4015,7 @@ __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0
 // eq. 6's Mohr-Coulomb consult of points q .. qend-1 of material mc, which hold their elastic
 // trials (the AVX2 point loop's, consult_block), four points per register: the elastic test,
 // the closed-form shear return and the search's first two sets (an edge, the apex line)
-// (detail::mohr_inside_lanes, mohr_return_lanes, mohr_edge_lanes), then the one-point test
+// (detail::mohr_inside_lanes, return_lanes, edge_lanes, all inlined), then the one-point test
 // and return (mohr_consult) for a lane those do not settle and the last one to three points.
 // Own: each point's own strength (scatter). A point's consult reads and writes that point
 // only, so the lanes the closed form leaves go in a second pass over the groups that hold
@@ -4031,7 +4036,7 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
     double* __restrict pshear = p_.plastic_shear.data();
     double* __restrict pwork = p_.plastic_work.data();
     // strength_of, four points at once: the same operations in each lane
-    auto strength = [&](long r, v4d& np, v4d& two_c_sq) __attribute__((always_inline)) {
+    auto strength = [&](long r, v4d& np, v4d& two_c_sq) __attribute__((always_inline, target("avx2"))) {
         v4d c0, sq;
         if constexpr (Own) {
             detail::load(pc0 + r, c0); detail::load(pnphi + r, np); detail::load(psqrt + r, sq);
@@ -4046,7 +4051,7 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
     };
     // record_yield of lanes `lanes` (bits), returned from the trials t_* to xx .. zz with
     // plastic shear d_gamma: the same operations
-    auto record = [&](long r, int lanes, const v4d& xx, const v4d& yy, const v4d& xy, const v4d& zz, const v4d& t_xx, const v4d& t_yy, const v4d& t_xy, const v4d& t_zz, const v4d& d_gamma) __attribute__((always_inline)) {
+    auto record = [&](long r, int lanes, const v4d& xx, const v4d& yy, const v4d& xy, const v4d& zz, const v4d& t_xx, const v4d& t_yy, const v4d& t_xy, const v4d& t_zz, const v4d& d_gamma) __attribute__((always_inline, target("avx2"))) {
         v4d work;  // compliance_product(mc, s, trial - s)
         compliance_product(mc, xx, yy, xy, zz, v4d(t_xx - xx), v4d(t_yy - yy), v4d(t_xy - xy), v4d(t_zz - zz), work);
         const v4d v0 = {groups_[pgroup[r]].vol0, groups_[pgroup[r + 1]].vol0, groups_[pgroup[r + 2]].vol0, groups_[pgroup[r + 3]].vol0};
@@ -4070,7 +4075,7 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
     constexpr int kLeft = 64;
     long left_at[kLeft];
     int left_bits[kLeft], nleft = 0;
-    auto second_pass = [&]() __attribute__((always_inline)) {
+    auto second_pass = [&]() __attribute__((always_inline, target("avx2"))) {
         for (int u = 0; u < nleft; ++u) {
             const long r = left_at[u];
             const int left = left_bits[u];
@@ -4080,9 +4085,9 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
             detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
             const v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
             detail::MohrLanes found;
-            detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
+            detail::return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
             xx = t_xx; yy = t_yy; xy = t_xy; zz = t_zz;  // (its settled lanes are not these)
-            const int edge = detail::mohr_edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, left, d_gamma);
+            const int edge = detail::edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, left, d_gamma);
             if (edge) {
                 const v4m done = {-std::int64_t(edge & 1), -std::int64_t(edge >> 1 & 1), -std::int64_t(edge >> 2 & 1), -std::int64_t(edge >> 3 & 1)};
                 v4d sxx, syy, sxy, szz;
