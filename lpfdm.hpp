@@ -1319,7 +1319,7 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
         using Two = std::integral_constant<int, 2>;
         using Three = std::integral_constant<int, 3>;
         int act[3];
-        // The sets holding p0: pairs, then triples (the apex), their planes in index order.
+        // The sets holding p0: pairs, then triples (the apex), each set's planes sorted by index.
         for (int u = 0; u < npartner && !found; ++u) {
             act[0] = std::min(p0, partner[u]); act[1] = std::max(p0, partner[u]);
             found = try_set(act, Two{});
@@ -2634,7 +2634,9 @@ private:
     template <Motion M, bool Carry, bool Wide> LPFDM_INLINE void run_points(long k0, long k1, Part& part, Landing& t);
 #if LPFDM_WIDE
     __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Part& part, Landing& t);
-    template <bool Own> __attribute__((target("avx2"))) void consult_lanes(const MaterialConstants& mc, long q, long qend);
+    // The point loop's arrays of the stress, volume and group (run_points' own pointers).
+    struct PointArrays { double *sxx, *syy, *sxy, *szz; const double* vol; const std::uint16_t* group; };
+    template <bool Own> __attribute__((target("avx2"))) void consult_lanes(const MaterialConstants& mc, long q, long qend, const PointArrays& a);
 #endif
     // Row j of a lattice phase: f(j, std::false_type), or f(j, std::true_type) built for
     // AVX2 (f inlined into row_wide) when the AVX2 version is on, so that f may work
@@ -2716,7 +2718,7 @@ private:
     // Point q was returned from the trial stress to s with plastic shear increment
     // d_gamma_p: its plastic shear, its yielded flag and the work its return dissipated,
     // V s : C^-1 (trial - s), V = energy_volume: min(V, V0) as in eq. 8 (this step's volume:
-    // every kernel changes V before the consult). The AVX2 point loop (run_points) does the
+    // every kernel changes V before the consult). The AVX2 point loop (consult_lanes) does the
     // same four points at a time (never with ADVECT FLIP, which the reference cycle runs):
     // a change here is a change there.
     void record_yield(const MaterialConstants& mc, std::size_t q, double d_gamma_p, const Stress& trial, const Stress& s) {
@@ -4022,19 +4024,17 @@ __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0
 // them (most groups end in the first, whose loop is then straight code the processor
 // overlaps from group to group); each lane's operations are those of the one-point code.
 template <bool Own>
-__attribute__((target("avx2"))) inline void Simulation::consult_lanes(const MaterialConstants& mc, long q, const long qend) {
+__attribute__((target("avx2"))) inline void Simulation::consult_lanes(const MaterialConstants& mc, long q, const long qend, const PointArrays& a) {
     using detail::v4d;
     using detail::v4m;
-    double* __restrict psxx = p_.sxx.data();
-    double* __restrict psyy = p_.syy.data();
-    double* __restrict psxy = p_.sxy.data();
-    double* __restrict pszz = p_.szz.data();
-    const double* __restrict pvol = p_.vol.data();
-    const std::uint16_t* __restrict pgroup = p_.group.data();
+    // The stresses through the caller's (restrict) pointers; the plastic state through plain
+    // ones, as mohr_consult (record_yield) writes it too.
+    double *psxx = a.sxx, *psyy = a.syy, *psxy = a.sxy, *pszz = a.szz;
+    const double* pvol = a.vol;
+    const std::uint16_t* pgroup = a.group;
     const double *pc0 = p_.c0.data(), *pnphi = p_.n_phi.data(), *psqrt = p_.sqrt_n_phi.data();
-    std::uint8_t* __restrict pyielded = p_.yielded.data();
-    double* __restrict pshear = p_.plastic_shear.data();
-    double* __restrict pwork = p_.plastic_work.data();
+    std::uint8_t* pyielded = p_.yielded.data();
+    double *pshear = p_.plastic_shear.data(), *pwork = p_.plastic_work.data();
     // strength_of, four points at once: the same operations in each lane
     auto strength = [&](long r, v4d& np, v4d& two_c_sq) __attribute__((always_inline, target("avx2"))) {
         v4d c0, sq;
@@ -4497,14 +4497,15 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
         // The Mohr-Coulomb points of b0 .. b1-1, holding their elastic trials, by spans of
         // one material (consult_lanes).
         long consulted = 0;  // Mohr-Coulomb points consulted (profiling)
+        const PointArrays arrays{psxx, psyy, psxy, pszz, pvol, pgroup};
         auto consult_block = [&](long b0, long b1) LPFDM_INLINE {
             for (long q = b0; q < b1;) {  // spans of points of one material
                 const MaterialConstants& mc = *group_consts_[std::size_t(pgroup[q])];
                 long qend = single ? b1 : q + 1;
                 while (qend < b1 && group_consts_[std::size_t(pgroup[qend])] == &mc) ++qend;
                 if (mc.model == Model::MohrCoulomb) {
-                    if (!p_.c0.empty()) consult_lanes<true>(mc, q, qend);  // scatter: each point's own strength
-                    else consult_lanes<false>(mc, q, qend);
+                    if (!p_.c0.empty()) consult_lanes<true>(mc, q, qend, arrays);  // scatter: each point's own strength
+                    else consult_lanes<false>(mc, q, qend, arrays);
                     consulted += qend - q;
                 }
                 q = qend;
