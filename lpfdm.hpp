@@ -4021,8 +4021,8 @@ __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0
 // and return (mohr_consult) for a lane those do not settle and the last one to three points.
 // Own: each point's own strength (scatter). A point's consult reads and writes that point
 // only, so the lanes the closed form leaves go in a second pass over the groups that hold
-// them (most groups end in the first, whose loop is then straight code the processor
-// overlaps from group to group); each lane's operations are those of the one-point code.
+// them (most groups end in the first, whose loop then holds no call and no search); each
+// lane's operations are those of the one-point code.
 template <bool Own>
 __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const MaterialConstants& mc, long q, const long qend, const PointArrays& a) {
     using detail::v4d;
@@ -4071,6 +4071,11 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
         w = (w & ~set) | (0x01010101u & set);
         std::memcpy(pyielded + r, &w, 4);
     };
+    // Point r with its elastic trial s: the one-point test and return, the stress stored.
+    auto one_point = [&](long r, Stress s) {
+        mohr_consult<Own>(mc, std::size_t(r), s);
+        psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
+    };
     // The groups the first pass leaves lanes of (first: the group's point; bits: the lanes).
     constexpr int kLeft = 64;
     long left_at[kLeft];
@@ -4097,11 +4102,7 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
                 record(r, edge, xx, yy, xy, zz, t_xx, t_yy, t_xy, t_zz, d_gamma);
             }
             for (int l = 0; l < 4; ++l)  // the lanes still left: the one-point code, on the trial
-                if ((left & ~edge) >> l & 1) {
-                    Stress s{t_xx[l], t_yy[l], t_xy[l], t_zz[l]};
-                    mohr_consult<Own>(mc, std::size_t(r + l), s);
-                    psxx[r + l] = s.xx; psyy[r + l] = s.yy; psxy[r + l] = s.xy; pszz[r + l] = s.zz;
-                }
+                if ((left & ~edge) >> l & 1) one_point(r + l, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]});
         }
         nleft = 0;
     };
@@ -4122,11 +4123,7 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
         }
     }
     second_pass();
-    for (; q < qend; ++q) {  // the last one to three points
-        Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
-        mohr_consult<Own>(mc, std::size_t(q), s);
-        psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
-    }
+    for (; q < qend; ++q) one_point(q, Stress{psxx[q], psyy[q], psxy[q], pszz[q]});  // the last one to three points
 }
 #endif
 
