@@ -840,9 +840,19 @@ inline MaterialConstants constants_of(const Material& m) {
 }
 
 // Hooke's law for plane strain, eq. 6 for an elastic point: d_sig = D d_eps, d_sig_zz
-// from the in-plane volume change.
+// from the in-plane volume change. T: one value, or the lanes of a vector (four points of
+// four cells; the same operations in every lane).
+template <class T>
+LPFDM_INLINE inline void elastic_change(const MaterialConstants& k, const T& xx, const T& yy, const T& xy, const T& yx, T& dxx, T& dyy, T& dxy, T& dzz) {
+    dxx = k.a1 * xx + k.a2 * yy;
+    dyy = k.a2 * xx + k.a1 * yy;
+    dxy = k.G * (xy + yx);  // G gamma, eq. 5e
+    dzz = k.a2 * (xx + yy);
+}
 inline Stress elastic_change(const MaterialConstants& k, const StrainIncrement& d) {
-    return {k.a1 * d.xx + k.a2 * d.yy, k.a2 * d.xx + k.a1 * d.yy, k.G * d.gamma(), k.a2 * (d.xx + d.yy)};
+    Stress ds;
+    elastic_change(k, d.xx, d.yy, d.xy, d.yx, ds.xx, ds.yy, ds.xy, ds.zz);
+    return ds;
 }
 inline void elastic_increment(const MaterialConstants& k, const StrainIncrement& d, Stress& s) {
     const Stress ds = elastic_change(k, d);
@@ -944,8 +954,8 @@ LPFDM_INLINE inline void checkerboard_mode(const double* ux, const double* uy, i
 
 // Rotates the in-plane stress with the material (Jaumann); invariants are kept exactly.
 // T: one value, or the lanes of a vector (the same operations in every lane).
-template <class T>
-LPFDM_INLINE inline void rotate_stress(T& xx, T& yy, T& xy, double c2, double s2) {
+template <class T, class C>
+LPFDM_INLINE inline void rotate_stress(T& xx, T& yy, T& xy, const C& c2, const C& s2) {
     const T pm = 0.5 * (xx + yy), a = 0.5 * (xx - yy), b = xy;
     const T ar = a * c2 - b * s2, br = a * s2 + b * c2;
     xx = pm + ar; yy = pm - ar; xy = br;
@@ -967,8 +977,10 @@ LPFDM_INLINE inline void move_point_paper(const T& x0, const T& y0, const Strain
 }
 // MOTION CENTRE: the map of eq. 7a/7b about the cell centre, moved by the mean (umx, umy)
 // of the four nodal increments (mirror-symmetric). d: the point's own increment.
-template <class T>
-LPFDM_INLINE inline void move_point_centre(const T& x0, const T& y0, const StrainIncrement& e, double xi, double yj, double L, double umx, double umy, T& x, T& y, T& dx_out, T& dy_out) {
+// E: a StrainIncrement, or its four components in the lanes of vectors (four points of four
+// cells, with C their cells' xi, yj, umx, umy in lanes too).
+template <class T, class E, class C>
+LPFDM_INLINE inline void move_point_centre(const T& x0, const T& y0, const E& e, const C& xi, const C& yj, double L, const C& umx, const C& umy, T& x, T& y, T& dx_out, T& dy_out) {
     const T cx = (x0 - xi) - 0.5 * L, cy = (y0 - yj) - 0.5 * L;
     x = x0 + e.xx * cx + e.xy * cy + umx;
     y = y0 + e.yy * cy + e.yx * cx + umy;
@@ -1483,6 +1495,8 @@ LPFDM_INLINE inline void add_four(v4d& acc, const v4d& vol, const v4d& sxx, cons
     acc += LPFDM_SHUFFLE(t0, t2, 2, 3, 6, 7);  // point 2
     acc += LPFDM_SHUFFLE(t1, t3, 2, 3, 6, 7);  // point 3
 }
+// The strain increments of eq. 5a-5d of four cells (four points' cells) in the lanes.
+struct StrainLanes { v4d xx, yy, xy, yx; };
 // The Mohr-Coulomb consult of four elastic trials in the lanes of a vector: mohr_inside,
 // and mohr_coulomb_correct's closed-form shear return, with the same operations in the
 // same order as those compute them one stress at a time (std::min(a, b) is b < a ? b : a,
@@ -4508,6 +4522,146 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 q = qend;
             }
         };
+        // A block of points of a scene of one material, none of them in a cell with a fixed
+        // edge (or near a wall), taken four points at a time whatever cells they lie in:
+        // their cells' strain records, positions and nodes gathered into the lanes. A
+        // flowing scene leaves runs of one or two points in a cell, and a loop per run then
+        // mispredicted about one branch per point (its length); this one has none. The same
+        // operations on the same values as the runs below, point by point, and each point
+        // added to the sums of its cell (eq. 7, 8) in point order, as there.
+        [[maybe_unused]] const double inv_mx = 1.0 / mx;
+        typedef int v4i __attribute__((vector_size(16)));
+        typedef float v4f __attribute__((vector_size(16)));
+        // The column and row of the cells c in the lanes: c / mx as the truncated double
+        // (c + 0.5) / mx, exact for any lattice below 2^45 cells (the quotient lies at least
+        // 0.5 / mx from an integer).
+        [[maybe_unused]] auto columns_rows = [&](const v4i& c, v4i& ci, v4i& cj) LPFDM_INLINE {
+            cj = __builtin_convertvector((__builtin_convertvector(c, detail::v4d) + 0.5) * inv_mx, v4i);
+            ci = c - cj * mx;
+        };
+        // The strain records of the cells of points q .. q+3 in lanes, and their rotations.
+        [[maybe_unused]] auto strain_lanes = [&](long q) LPFDM_INLINE {
+            const CellStrain* sc = strain_.data();
+            const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
+            return detail::StrainLanes{{s0.xx, s1.xx, s2.xx, s3.xx}, {s0.yy, s1.yy, s2.yy, s3.yy}, {s0.xy, s1.xy, s2.xy, s3.xy}, {s0.yx, s1.yx, s2.yx, s3.yx}};
+        };
+        [[maybe_unused]] auto rotation_lanes = [&](long q, detail::v4d& rc, detail::v4d& rs) LPFDM_INLINE {
+            const CellStrain* sc = strain_.data();
+            const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
+            rc = detail::v4d{s0.rc, s1.rc, s2.rc, s3.rc}; rs = detail::v4d{s0.rs, s1.rs, s2.rs, s3.rs};
+        };
+        // eq. 6 (the elastic trial) and the volume change of points b0 .. b1-1 of material mc.
+        [[maybe_unused]] auto trial_block = [&](const MaterialConstants& mc, long b0, const long b1) LPFDM_INLINE {
+            auto trial = [&](auto& xx, auto& yy, auto& xy, auto& zz, auto& vol, const auto& e, const auto& rc, const auto& rs) LPFDM_INLINE {
+                std::remove_reference_t<decltype(xx)> dxx, dyy, dxy, dzz;
+                elastic_change(mc, e.xx, e.yy, e.xy, e.yx, dxx, dyy, dxy, dzz);  // eq. 6
+                rotate_stress(xx, yy, xy, rc, rs);  // Jaumann, as elastic_trial
+                xx += dxx; yy += dyy; xy += dxy; zz += dzz;
+                vol *= 1.0 + e.xx + e.yy;
+            };
+            for (; b0 + 4 <= b1; b0 += 4) {
+                const detail::StrainLanes e = strain_lanes(b0);
+                detail::v4d rc, rs, xx, yy, xy, zz, vol;
+                rotation_lanes(b0, rc, rs);
+                detail::load(psxx + b0, xx); detail::load(psyy + b0, yy); detail::load(psxy + b0, xy);
+                detail::load(pszz + b0, zz); detail::load(pvol + b0, vol);
+                trial(xx, yy, xy, zz, vol, e, rc, rs);
+                detail::store(psxx + b0, xx); detail::store(psyy + b0, yy); detail::store(psxy + b0, xy);
+                detail::store(pszz + b0, zz); detail::store(pvol + b0, vol);
+            }
+            for (; b0 < b1; ++b0) {  // the last one to three points of the chunk
+                const CellStrain& ce = strain_[std::size_t(pcell[b0])];
+                trial(psxx[b0], psyy[b0], psxy[b0], pszz[b0], pvol[b0], ce, ce.rc, ce.rs);
+            }
+        };
+        // eq. 7a/7b (MOTION CENTRE) and the landing of points b0 .. b1-1 of the one group.
+        [[maybe_unused]] auto motion_block = [&](long b0, const long b1) LPFDM_INLINE {
+            const double gm = groups_[0].mass, gv0 = groups_[0].vol0;
+            const double* ux = dux_.data();
+            const double* uy = duy_.data();
+            // Point q lands in cell cn (column ni): eq. 7 and 8, as land() above.
+            auto deposit = [&](long q, int cn, int ni) LPFDM_INLINE {
+                pcell[q] = cn;
+                if (owned(cn)) add_to_cell(std::size_t(cn), gm, std::min(pvol[q], gv0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
+                else p_.listed[std::size_t(pt.list_at + pt.listed++)] = std::int32_t(q);  // another chunk's cell
+                t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
+                t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
+                t.mass += gm;
+            };
+            auto land_one = [&](long q, double x, double y) LPFDM_INLINE {
+                if (!(x >= 0 && x < X && y >= 0 && y < Y)) { pcell[q] = -1; ++t.departed; return; }  // as land()
+                const int ni = std::min(mx - 1, int(x * invL)), nj = std::min(my - 1, int(y * invL));
+                deposit(q, cell(ni, nj), ni);
+            };
+            for (; b0 + 4 <= b1; b0 += 4) {
+                using detail::v4d;
+                v4i c, ci, cj;
+                std::memcpy(&c, pcell + b0, sizeof c);
+                columns_rows(c, ci, cj);
+                const v4i n1 = cj * (mx + 1) + ci, n3 = n1 + (mx + 1);  // node(ci, cj); n2 = n1 + 1, n4 = n3 + 1
+                const v4d ux1 = {ux[n1[0]], ux[n1[1]], ux[n1[2]], ux[n1[3]]}, ux2 = {ux[n1[0] + 1], ux[n1[1] + 1], ux[n1[2] + 1], ux[n1[3] + 1]};
+                const v4d ux3 = {ux[n3[0]], ux[n3[1]], ux[n3[2]], ux[n3[3]]}, ux4 = {ux[n3[0] + 1], ux[n3[1] + 1], ux[n3[2] + 1], ux[n3[3] + 1]};
+                const v4d uy1 = {uy[n1[0]], uy[n1[1]], uy[n1[2]], uy[n1[3]]}, uy2 = {uy[n1[0] + 1], uy[n1[1] + 1], uy[n1[2] + 1], uy[n1[3] + 1]};
+                const v4d uy3 = {uy[n3[0]], uy[n3[1]], uy[n3[2]], uy[n3[3]]}, uy4 = {uy[n3[0] + 1], uy[n3[1] + 1], uy[n3[2] + 1], uy[n3[3] + 1]};
+                const v4d umx = 0.25 * (ux1 + ux2 + ux3 + ux4), umy = 0.25 * (uy1 + uy2 + uy3 + uy4);
+                const v4d xi = __builtin_convertvector(ci, v4d) * L, yj = __builtin_convertvector(cj, v4d) * L;  // ci L, cj L
+                const detail::StrainLanes e = strain_lanes(b0);
+                v4d x0, y0, x, y, ddx, ddy;
+                detail::load(px + b0, x0); detail::load(py + b0, y0);
+                move_point_centre(x0, y0, e, xi, yj, L, umx, umy, x, y, ddx, ddy);  // eq. 7a/7b
+                if (fixed[c[0]] | fixed[c[1]] | fixed[c[2]] | fixed[c[3]]) {  // a cell with a fixed edge, or near a wall
+                    for (int l = 0; l < 4; ++l) {
+                        if (!fixed[c[l]]) continue;
+                        double xl = x[l], yl = y[l];
+                        stop_at_edges(c[l], x0[l], y0[l], xl, yl);
+                        x[l] = xl; y[l] = yl;
+                    }
+                }
+                detail::store(px + b0, x); detail::store(py + b0, y);
+                if (!detail::all_lanes((x >= 0) & (x < X) & (y >= 0) & (y < Y))) {  // a point left the lattice
+                    for (int l = 0; l < 4; ++l) land_one(b0 + l, x[l], y[l]);
+                    continue;
+                }
+                const v4i mx1 = {mx - 1, mx - 1, mx - 1, mx - 1}, my1 = {my - 1, my - 1, my - 1, my - 1};
+                v4i ni = __builtin_convertvector(x * invL, v4i), nj = __builtin_convertvector(y * invL, v4i);
+                ni = ni < mx1 ? ni : mx1; nj = nj < my1 ? nj : my1;  // std::min(m - 1, int(x / L))
+                const v4i cn = nj * mx + ni;  // cell(ni, nj)
+                if (__builtin_ia32_movmskps(v4f(cn == cn[0])) == 15 && owned(cn[0])) {
+                    // all four in one cell (the usual case while runs are long): its sums in
+                    // registers, the four added in point order as deposit() adds them
+                    std::memcpy(pcell + b0, &cn, sizeof cn);
+                    v4d vol, sxx, syy, sxy;
+                    detail::load(pvol + b0, vol); detail::load(psxx + b0, sxx); detail::load(psyy + b0, syy); detail::load(psxy + b0, sxy);
+                    CellSums sums = cell_sums(std::size_t(cn[0]));
+                    sums.add_four(gm, gv0, vol, sxx, syy, sxy, t.mass);  // eq. 7, 8
+                    store_sums(std::size_t(cn[0]), sums);
+                    t.cmin = std::min(t.cmin, cn[0]); t.cmax = std::max(t.cmax, cn[0]);
+                    t.imin = std::min(t.imin, ni[0]); t.imax = std::max(t.imax, ni[0]);
+                    continue;
+                }
+                for (int l = 0; l < 4; ++l) deposit(b0 + l, cn[l], ni[l]);
+            }
+            for (; b0 < b1; ++b0) {  // the last one to three points of the chunk
+                const int c = pcell[b0], ci = c % mx, cj = c / mx, n1 = node(ci, cj), n3 = n1 + mx + 1;
+                const double umx = 0.25 * (ux[n1] + ux[n1 + 1] + ux[n3] + ux[n3 + 1]), umy = 0.25 * (uy[n1] + uy[n1 + 1] + uy[n3] + uy[n3 + 1]);
+                double x, y, ddx, ddy;
+                move_point_centre(px[b0], py[b0], strain_[std::size_t(c)], ci * L, cj * L, L, umx, umy, x, y, ddx, ddy);  // eq. 7a/7b
+                if (fixed[c]) stop_at_edges(c, px[b0], py[b0], x, y);
+                px[b0] = x; py[b0] = y;
+                land_one(b0, x, y);
+            }
+        };
+        auto consult_timed = [&](long b0, long b1) LPFDM_INLINE {
+            if (profiling_) {  // two clock reads a block of about 256 points
+                const auto c0 = std::chrono::steady_clock::now();
+                consulted = 0;
+                consult_block(b0, b1);
+                pt.return_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+                pt.returned += consulted;
+            } else {
+                consult_block(b0, b1);
+            }
+        };
         if (mohr_groups_) {
             // With a Mohr-Coulomb material, the points go in blocks of about kConsultBlock,
             // each ending where a run ends: the elastic trial of the block's runs, then the
@@ -4519,18 +4673,20 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             // the whole step of each run: the output is the same bit for bit.
             for (long b0 = k0; b0 < k1;) {
                 long b1 = std::min(k1, b0 + kConsultBlock);
+                if constexpr (M == Motion::Centre && !Carry) {
+                    if (single) {  // four points at a time across runs
+                        const MaterialConstants& mc = *group_consts_[0];
+                        trial_block(mc, b0, b1);
+                        consult_timed(b0, b1);
+                        motion_block(b0, b1);
+                        b0 = b1;  // the next block may start inside a run: a run split in two adds the same sums
+                        continue;
+                    }
+                }
                 while (b1 < k1 && pcell[b1] == pcell[b1 - 1]) ++b1;
                 nrun = irun = 0;
                 runs(b0, b1, std::integral_constant<int, kTrial>{});
-                if (profiling_) {  // two clock reads a block of about 256 points
-                    const auto c0 = std::chrono::steady_clock::now();
-                    consulted = 0;
-                    consult_block(b0, b1);
-                    pt.return_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
-                    pt.returned += consulted;
-                } else {
-                    consult_block(b0, b1);
-                }
+                consult_timed(b0, b1);
                 runs(b0, b1, std::integral_constant<int, kMotion>{});
                 b0 = b1;
             }
