@@ -2865,9 +2865,14 @@ private:
     std::vector<Group> groups_;
     std::vector<const MaterialConstants*> group_consts_;  // per group, for the point loop
     bool mohr_groups_ = false;  // some group is Mohr-Coulomb (set where a model is set): the point loop's blocks
+    bool no_user_groups_ = true;  // no group has a user's model: the blocks go four points at a time across cells
     void find_mohr_groups() {
         mohr_groups_ = false;
-        for (const MaterialConstants* mc : group_consts_) mohr_groups_ = mohr_groups_ || mc->model == Model::MohrCoulomb;
+        no_user_groups_ = true;
+        for (const MaterialConstants* mc : group_consts_) {
+            mohr_groups_ = mohr_groups_ || mc->model == Model::MohrCoulomb;
+            no_user_groups_ = no_user_groups_ && mc->model != Model::User;
+        }
     }
     std::vector<double> row_ke_, row_du_;               // per node row: kinetic energy (a fixed-order sum), largest increment
     std::vector<std::uint8_t> row_gained_;              // per node row: a node gained mass this step; made with the
@@ -4522,19 +4527,23 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 q = qend;
             }
         };
-        // A block of points of a scene of one material, none of them in a cell with a fixed
-        // edge (or near a wall), taken four points at a time whatever cells they lie in:
-        // their cells' strain records, positions and nodes gathered into the lanes. A
-        // flowing scene leaves runs of one or two points in a cell, and a loop per run then
-        // mispredicted about one branch per point (its length); this one has none. The same
-        // operations on the same values as the runs below, point by point, and each point
-        // added to the sums of its cell (eq. 7, 8) in point order, as there.
+        // A block of points of elastic and Mohr-Coulomb materials, taken four points at a
+        // time whatever cells they lie in: their cells' strain records, and their nodes'
+        // increments, gathered into the lanes (read once when the four share a cell). A
+        // flowing scene leaves runs of one or two points in a cell, and the loop per run
+        // below then mispredicts about one branch per point (where a run ends: 0.99 a
+        // point-update in the last 100 steps of decks/bench_flow.deck, against 0.11 in its
+        // first); this one branches on what is rare (a cell with a fixed edge or near a
+        // wall, whose points stop_at_edges holds one by one; a point leaving the lattice;
+        // four points of two materials) and on whether the four share a cell. The same
+        // functions on the same values as the runs, point by point, and each point added to
+        // the sums of the cell it lands in (eq. 7, 8) in point order, as there: the same bits.
         [[maybe_unused]] const double inv_mx = 1.0 / mx;
         typedef int v4i __attribute__((vector_size(16)));
         typedef float v4f __attribute__((vector_size(16)));
         // The column and row of the cells c in the lanes: c / mx as the truncated double
-        // (c + 0.5) / mx, exact for any lattice below 2^45 cells (the quotient lies at least
-        // 0.5 / mx from an integer).
+        // (c + 0.5) / mx, exact for every int c (the quotient lies at least 0.5 / mx from an
+        // integer, its rounding error below c / mx 2^-52).
         [[maybe_unused]] auto columns_rows = [&](const v4i& c, v4i& ci, v4i& cj) LPFDM_INLINE {
             cj = __builtin_convertvector((__builtin_convertvector(c, detail::v4d) + 0.5) * inv_mx, v4i);
             ci = c - cj * mx;
@@ -4545,48 +4554,75 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
             return detail::StrainLanes{{s0.xx, s1.xx, s2.xx, s3.xx}, {s0.yy, s1.yy, s2.yy, s3.yy}, {s0.xy, s1.xy, s2.xy, s3.xy}, {s0.yx, s1.yx, s2.yx, s3.yx}};
         };
+        // The strain record of cell c in every lane.
+        [[maybe_unused]] auto strain_lane = [&](int c) LPFDM_INLINE {
+            const CellStrain& ce = strain_[std::size_t(c)];
+            return detail::StrainLanes{{ce.xx, ce.xx, ce.xx, ce.xx}, {ce.yy, ce.yy, ce.yy, ce.yy}, {ce.xy, ce.xy, ce.xy, ce.xy}, {ce.yx, ce.yx, ce.yx, ce.yx}};
+        };
         [[maybe_unused]] auto rotation_lanes = [&](long q, detail::v4d& rc, detail::v4d& rs) LPFDM_INLINE {
             const CellStrain* sc = strain_.data();
             const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
             rc = detail::v4d{s0.rc, s1.rc, s2.rc, s3.rc}; rs = detail::v4d{s0.rs, s1.rs, s2.rs, s3.rs};
         };
-        // eq. 6 (the elastic trial) and the volume change of points b0 .. b1-1 of material mc.
-        [[maybe_unused]] auto trial_block = [&](const MaterialConstants& mc, long b0, const long b1) LPFDM_INLINE {
-            auto trial = [&](auto& xx, auto& yy, auto& xy, auto& zz, auto& vol, const auto& e, const auto& rc, const auto& rs) LPFDM_INLINE {
+        // Four points q .. q+3 of one group g (read into g): their groups as one 64-bit word.
+        [[maybe_unused]] auto one_group_of_four = [&](long q, int& g) LPFDM_INLINE {
+            g = pgroup[q];
+            if (single) return true;
+            std::uint64_t gw;
+            std::memcpy(&gw, pgroup + q, sizeof gw);
+            return gw == std::uint64_t(g) * 0x0001000100010001ULL;
+        };
+        // eq. 6 (the elastic trial) and the volume change of points b0 .. b1-1 (Hooke's law
+        // for an elastic or a Mohr-Coulomb point; the latter is consulted afterwards).
+        [[maybe_unused]] auto trial_block = [&](long b0, const long b1) LPFDM_INLINE {
+            auto trial = [&](const MaterialConstants& mc, auto& xx, auto& yy, auto& xy, auto& zz, auto& vol, const auto& e, const auto& rc, const auto& rs) LPFDM_INLINE {
                 std::remove_reference_t<decltype(xx)> dxx, dyy, dxy, dzz;
                 elastic_change(mc, e.xx, e.yy, e.xy, e.yx, dxx, dyy, dxy, dzz);  // eq. 6
                 rotate_stress(xx, yy, xy, rc, rs);  // Jaumann, as elastic_trial
                 xx += dxx; yy += dyy; xy += dxy; zz += dzz;
                 vol *= 1.0 + e.xx + e.yy;
             };
+            auto trial_one = [&](long q) LPFDM_INLINE {
+                const CellStrain& ce = strain_[std::size_t(pcell[q])];
+                trial(*gconsts[pgroup[q]], psxx[q], psyy[q], psxy[q], pszz[q], pvol[q], ce, ce.rc, ce.rs);
+            };
             for (; b0 + 4 <= b1; b0 += 4) {
-                const detail::StrainLanes e = strain_lanes(b0);
+                int g;
+                if (!one_group_of_four(b0, g)) {  // points of two materials
+                    for (int l = 0; l < 4; ++l) trial_one(b0 + l);
+                    continue;
+                }
+                detail::StrainLanes e;
                 detail::v4d rc, rs, xx, yy, xy, zz, vol;
-                rotation_lanes(b0, rc, rs);
+                if (pcell[b0] == pcell[b0 + 3] && pcell[b0 + 1] == pcell[b0] && pcell[b0 + 2] == pcell[b0]) {  // one cell: its values once
+                    const CellStrain& ce = strain_[std::size_t(pcell[b0])];
+                    e = strain_lane(pcell[b0]);
+                    rc = detail::v4d{ce.rc, ce.rc, ce.rc, ce.rc}; rs = detail::v4d{ce.rs, ce.rs, ce.rs, ce.rs};
+                } else {
+                    e = strain_lanes(b0);
+                    rotation_lanes(b0, rc, rs);
+                }
                 detail::load(psxx + b0, xx); detail::load(psyy + b0, yy); detail::load(psxy + b0, xy);
                 detail::load(pszz + b0, zz); detail::load(pvol + b0, vol);
-                trial(xx, yy, xy, zz, vol, e, rc, rs);
+                trial(*gconsts[g], xx, yy, xy, zz, vol, e, rc, rs);
                 detail::store(psxx + b0, xx); detail::store(psyy + b0, yy); detail::store(psxy + b0, xy);
                 detail::store(pszz + b0, zz); detail::store(pvol + b0, vol);
             }
-            for (; b0 < b1; ++b0) {  // the last one to three points of the chunk
-                const CellStrain& ce = strain_[std::size_t(pcell[b0])];
-                trial(psxx[b0], psyy[b0], psxy[b0], pszz[b0], pvol[b0], ce, ce.rc, ce.rs);
-            }
+            for (; b0 < b1; ++b0) trial_one(b0);  // the last one to three points of the chunk
         };
-        // eq. 7a/7b (MOTION CENTRE) and the landing of points b0 .. b1-1 of the one group.
+        // eq. 7a/7b (MOTION CENTRE) and the landing of points b0 .. b1-1.
         [[maybe_unused]] auto motion_block = [&](long b0, const long b1) LPFDM_INLINE {
-            const double gm = groups_[0].mass, gv0 = groups_[0].vol0;
             const double* ux = dux_.data();
             const double* uy = duy_.data();
             // Point q lands in cell cn (column ni): eq. 7 and 8, as land() above.
             auto deposit = [&](long q, int cn, int ni) LPFDM_INLINE {
+                const Group& gr = groups_[pgroup[q]];
                 pcell[q] = cn;
-                if (owned(cn)) add_to_cell(std::size_t(cn), gm, std::min(pvol[q], gv0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
+                if (owned(cn)) add_to_cell(std::size_t(cn), gr.mass, std::min(pvol[q], gr.vol0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
                 else p_.listed[std::size_t(pt.list_at + pt.listed++)] = std::int32_t(q);  // another chunk's cell
                 t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
                 t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
-                t.mass += gm;
+                t.mass += gr.mass;
             };
             auto land_one = [&](long q, double x, double y) LPFDM_INLINE {
                 if (!(x >= 0 && x < X && y >= 0 && y < Y)) { pcell[q] = -1; ++t.departed; return; }  // as land()
@@ -4599,13 +4635,22 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 std::memcpy(&c, pcell + b0, sizeof c);
                 columns_rows(c, ci, cj);
                 const v4i n1 = cj * (mx + 1) + ci, n3 = n1 + (mx + 1);  // node(ci, cj); n2 = n1 + 1, n4 = n3 + 1
-                const v4d ux1 = {ux[n1[0]], ux[n1[1]], ux[n1[2]], ux[n1[3]]}, ux2 = {ux[n1[0] + 1], ux[n1[1] + 1], ux[n1[2] + 1], ux[n1[3] + 1]};
-                const v4d ux3 = {ux[n3[0]], ux[n3[1]], ux[n3[2]], ux[n3[3]]}, ux4 = {ux[n3[0] + 1], ux[n3[1] + 1], ux[n3[2] + 1], ux[n3[3] + 1]};
-                const v4d uy1 = {uy[n1[0]], uy[n1[1]], uy[n1[2]], uy[n1[3]]}, uy2 = {uy[n1[0] + 1], uy[n1[1] + 1], uy[n1[2] + 1], uy[n1[3] + 1]};
-                const v4d uy3 = {uy[n3[0]], uy[n3[1]], uy[n3[2]], uy[n3[3]]}, uy4 = {uy[n3[0] + 1], uy[n3[1] + 1], uy[n3[2] + 1], uy[n3[3] + 1]};
-                const v4d umx = 0.25 * (ux1 + ux2 + ux3 + ux4), umy = 0.25 * (uy1 + uy2 + uy3 + uy4);
+                v4d umx, umy;
+                detail::StrainLanes e;
+                if (__builtin_ia32_movmskps(v4f(c == c[0])) == 15) {  // one cell (while runs are long): its values once
+                    const int a = n1[0], b = n3[0];
+                    const double mean_x = 0.25 * (ux[a] + ux[a + 1] + ux[b] + ux[b + 1]), mean_y = 0.25 * (uy[a] + uy[a + 1] + uy[b] + uy[b + 1]);
+                    umx = v4d{mean_x, mean_x, mean_x, mean_x}; umy = v4d{mean_y, mean_y, mean_y, mean_y};
+                    e = strain_lane(c[0]);
+                } else {
+                    const v4d ux1 = {ux[n1[0]], ux[n1[1]], ux[n1[2]], ux[n1[3]]}, ux2 = {ux[n1[0] + 1], ux[n1[1] + 1], ux[n1[2] + 1], ux[n1[3] + 1]};
+                    const v4d ux3 = {ux[n3[0]], ux[n3[1]], ux[n3[2]], ux[n3[3]]}, ux4 = {ux[n3[0] + 1], ux[n3[1] + 1], ux[n3[2] + 1], ux[n3[3] + 1]};
+                    const v4d uy1 = {uy[n1[0]], uy[n1[1]], uy[n1[2]], uy[n1[3]]}, uy2 = {uy[n1[0] + 1], uy[n1[1] + 1], uy[n1[2] + 1], uy[n1[3] + 1]};
+                    const v4d uy3 = {uy[n3[0]], uy[n3[1]], uy[n3[2]], uy[n3[3]]}, uy4 = {uy[n3[0] + 1], uy[n3[1] + 1], uy[n3[2] + 1], uy[n3[3] + 1]};
+                    umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4);
+                    e = strain_lanes(b0);
+                }
                 const v4d xi = __builtin_convertvector(ci, v4d) * L, yj = __builtin_convertvector(cj, v4d) * L;  // ci L, cj L
-                const detail::StrainLanes e = strain_lanes(b0);
                 v4d x0, y0, x, y, ddx, ddy;
                 detail::load(px + b0, x0); detail::load(py + b0, y0);
                 move_point_centre(x0, y0, e, xi, yj, L, umx, umy, x, y, ddx, ddy);  // eq. 7a/7b
@@ -4626,14 +4671,15 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 v4i ni = __builtin_convertvector(x * invL, v4i), nj = __builtin_convertvector(y * invL, v4i);
                 ni = ni < mx1 ? ni : mx1; nj = nj < my1 ? nj : my1;  // std::min(m - 1, int(x / L))
                 const v4i cn = nj * mx + ni;  // cell(ni, nj)
-                if (__builtin_ia32_movmskps(v4f(cn == cn[0])) == 15 && owned(cn[0])) {
+                int g;
+                if (__builtin_ia32_movmskps(v4f(cn == cn[0])) == 15 && owned(cn[0]) && one_group_of_four(b0, g)) {
                     // all four in one cell (the usual case while runs are long): its sums in
                     // registers, the four added in point order as deposit() adds them
                     std::memcpy(pcell + b0, &cn, sizeof cn);
                     v4d vol, sxx, syy, sxy;
                     detail::load(pvol + b0, vol); detail::load(psxx + b0, sxx); detail::load(psyy + b0, syy); detail::load(psxy + b0, sxy);
                     CellSums sums = cell_sums(std::size_t(cn[0]));
-                    sums.add_four(gm, gv0, vol, sxx, syy, sxy, t.mass);  // eq. 7, 8
+                    sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, sxx, syy, sxy, t.mass);  // eq. 7, 8
                     store_sums(std::size_t(cn[0]), sums);
                     t.cmin = std::min(t.cmin, cn[0]); t.cmax = std::max(t.cmax, cn[0]);
                     t.imin = std::min(t.imin, ni[0]); t.imax = std::max(t.imax, ni[0]);
@@ -4670,13 +4716,14 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             // with 2 x 2 points per cell, left half the returns to the one-point code),
             // then the motion and landing of its runs, which read the consulted stresses
             // while they are still in the cache. The same operations on the same values as
-            // the whole step of each run: the output is the same bit for bit.
+            // the whole step of each run: the output is the same bit for bit. A scene with
+            // no user's model takes blocks of exactly kConsultBlock points four at a time instead
+            // (trial_block, motion_block; a run split between two blocks adds the same sums).
             for (long b0 = k0; b0 < k1;) {
                 long b1 = std::min(k1, b0 + kConsultBlock);
                 if constexpr (M == Motion::Centre && !Carry) {
-                    if (single) {  // four points at a time across runs
-                        const MaterialConstants& mc = *group_consts_[0];
-                        trial_block(mc, b0, b1);
+                    if (no_user_groups_) {  // four points at a time across runs
+                        trial_block(b0, b1);
                         consult_timed(b0, b1);
                         motion_block(b0, b1);
                         b0 = b1;  // the next block may start inside a run: a run split in two adds the same sums
