@@ -109,7 +109,7 @@ void compare_kernels(const std::string& name, const Scene& s, long steps, const 
         for (int threads : {1, 2, 3}) {
             const Trace fast = run(s, k, threads, steps, every, user, user_mat);
             const std::string diff = first_difference(ref, fast);
-            INFO(name << ": kernel " << kernel_name(k) << ", " << threads << " thread(s), " << steps << " steps: differs at " << diff);
+            INFO(name << ": kernel " << std::string(kernel_name(k)) << ", " << threads << " thread(s), " << steps << " steps: differs at " << diff);
             CHECK(diff.empty());
         }
 }
