@@ -2645,9 +2645,12 @@ private:
     void choose_point_loop();
     void (Simulation::*run_)(long, long, Part&, Landing&) = nullptr;  // the point loop (choose_point_loop)
     template <Motion M, bool Carry> void advance_run(long k0, long k1, Part& part, Landing& t);
-    template <Motion M, bool Carry, bool Wide> LPFDM_INLINE void run_points(long k0, long k1, Part& part, Landing& t);
+    // Blocks (with Wide, where some group is Mohr-Coulomb): the points in blocks, each
+    // consulted four at a time between its trial and its motion; otherwise run by run.
+    template <Motion M, bool Carry, bool Wide, bool Blocks = false> LPFDM_INLINE void run_points(long k0, long k1, Part& part, Landing& t);
 #if LPFDM_WIDE
     __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Part& part, Landing& t);
+    __attribute__((target("avx2"))) void advance_blocks_wide(long k0, long k1, Part& part, Landing& t);
     // The point loop's arrays of the stress, volume and group (run_points' own pointers).
     struct PointArrays { double *sxx, *syy, *sxy, *szz; const double* vol; const std::uint16_t* group; };
     template <bool Own> __attribute__((target("avx2"))) void consult_lanes(const MaterialConstants& mc, long q, long qend, const PointArrays& a);
@@ -4031,7 +4034,14 @@ inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q,
 template <Motion M, bool Carry>
 inline void Simulation::advance_run(long k0, long k1, Part& part, Landing& landing) { run_points<M, Carry, false>(k0, k1, part, landing); }
 #if LPFDM_WIDE
-__attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Part& part, Landing& landing) { run_points<Motion::Centre, false, true>(k0, k1, part, landing); }
+// Two versions: the one with blocks (a scene with a Mohr-Coulomb material) in the same
+// function made the run-by-run loop of an elastic scene run at half its speed (the
+// compiler's registers), so each has a function of its own.
+__attribute__((target("avx2"), noinline)) inline void Simulation::advance_blocks_wide(long k0, long k1, Part& part, Landing& landing) { run_points<Motion::Centre, false, true, true>(k0, k1, part, landing); }
+__attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Part& part, Landing& landing) {
+    if (mohr_groups_) advance_blocks_wide(k0, k1, part, landing);
+    else run_points<Motion::Centre, false, true>(k0, k1, part, landing);
+}
 
 // eq. 6's Mohr-Coulomb consult of points q .. qend-1 of material mc, which hold their elastic
 // trials (the AVX2 point loop's, consult_block), four points per register: the elastic test,
@@ -4146,7 +4156,7 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
 }
 #endif
 
-template <Motion M, bool Carry, bool Wide>
+template <Motion M, bool Carry, bool Wide, bool Blocks>
 LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, Landing& landing) {
     Landing t = landing;  // locals: kept in registers (stores through the cell arrays could alias a reference)
     Part pt = part;
@@ -4708,7 +4718,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 consult_block(b0, b1);
             }
         };
-        if (mohr_groups_) {
+        if constexpr (Blocks) {  // mohr_groups_ (advance_run_wide)
             // With a Mohr-Coulomb material, the points go in blocks of about kConsultBlock,
             // each ending where a run ends: the elastic trial of the block's runs, then the
             // consult of its Mohr-Coulomb points four at a time whatever cells they lie in
@@ -4743,7 +4753,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
         }
     }
 #endif
-    runs(k0, k1, std::integral_constant<int, kWhole>{});
+    if constexpr (!Blocks) runs(k0, k1, std::integral_constant<int, kWhole>{});
     landing = t;
     part = pt;
 }
