@@ -233,14 +233,15 @@
 // output is the same, byte for byte, with any number of threads: the cell sums of eq. 7
 // and 8 take their terms in point order (a thread's points that land in another
 // thread's cells are added afterwards, in order), node sums in row order.
-// The points are stored cell by cell (as created; they leave that order only as they
-// cross cell edges, and are not re-sorted), so the point phase walks runs of points
-// sharing a cell and reads the cell's strain, rotation and nodes once per run. Even a
-// stable sort by cell would change results: it keeps the order of the points of one
-// cell, but the next step's sum in a cell also takes the points arriving from its
-// neighbours, and those would come in another order. Runs fragment slowly: 4.3 runs
-// per occupied cell after the 60 000 steps of decks/cliff.deck (16 points per cell),
-// 2.0 after 400 steps of the Mohr-Coulomb benchmark.
+// The points are stored cell by cell (as created, and sorted so again every REORDER
+// steps; between sorts they leave that order as they cross cell edges), so the point
+// phase of an elastic scene walks runs of points sharing a cell and reads the cell's
+// strain, rotation and nodes once per run; a scene with a Mohr-Coulomb material takes
+// the points four at a time whatever cells they lie in (a flow's runs are one or two
+// points long), reading those values once where the four share a cell. A sort changes
+// the last bits of a run (the next step's sum in a cell takes the points arriving from
+// its neighbours in another order), not its bytes from one kernel or thread count to
+// another.
 #if defined(_OPENMP)
 #include <omp.h>
 #define LPFDM_STR_(...) #__VA_ARGS__
@@ -3997,11 +3998,13 @@ inline bool Simulation::advance_parted() {
 }
 
 // Points k0 .. k1-1. The points are stored cell by cell and mostly stay so (they are
-// created that way and cross a cell edge rarely), so the loop walks runs of points that
-// share a cell: the cell's strain, rotation, nodes and elastic stress increment are
-// read once per run. The sums of the run's cell are kept in registers while its
-// points stay in it and written back when the run ends; every sum still takes its terms
-// in point order, so the result is the same bit for bit as a plain loop over points.
+// created that way, sorted so every REORDER steps, and cross a cell edge rarely), so the
+// loop walks runs of points that share a cell: the cell's strain, rotation, nodes and
+// elastic stress increment are read once per run. The sums of the run's cell are kept in
+// registers while its points stay in it and written back when the run ends; every sum
+// still takes its terms in point order, so the result is the same bit for bit as a plain
+// loop over points. (The AVX2 loop of a scene with a Mohr-Coulomb material goes four
+// points at a time across cells instead: run_points' trial_block and motion_block.)
 // Requires p_.cell[k] to be the cell holding (x[k], y[k]) (as after every step).
 // One instantiation per motion rule and transfer, so the loop holds only what it uses.
 inline void Simulation::advance_range(long k0, long k1, Part& part, Landing& t) { (this->*run_)(k0, k1, part, t); }
@@ -4553,7 +4556,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
         typedef float v4f __attribute__((vector_size(16)));
         // The column and row of the cells c in the lanes: c / mx as the truncated double
         // (c + 0.5) / mx, exact for every int c (the quotient lies at least 0.5 / mx from an
-        // integer, its rounding error below c / mx 2^-52).
+        // integer, its rounding error below (c + 0.5) / mx 2^-52).
         [[maybe_unused]] auto columns_rows = [&](const v4i& c, v4i& ci, v4i& cj) LPFDM_INLINE {
             cj = __builtin_convertvector((__builtin_convertvector(c, detail::v4d) + 0.5) * inv_mx, v4i);
             ci = c - cj * mx;
@@ -4727,8 +4730,9 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             // then the motion and landing of its runs, which read the consulted stresses
             // while they are still in the cache. The same operations on the same values as
             // the whole step of each run: the output is the same bit for bit. A scene with
-            // no user's model takes blocks of exactly kConsultBlock points four at a time instead
-            // (trial_block, motion_block; a run split between two blocks adds the same sums).
+            // no user's model takes blocks of kConsultBlock points (the chunk's last one
+            // shorter), not ending with a run, four points at a time instead (trial_block,
+            // motion_block; a run split between two blocks adds the same sums).
             for (long b0 = k0; b0 < k1;) {
                 long b1 = std::min(k1, b0 + kConsultBlock);
                 if constexpr (M == Motion::Centre && !Carry) {
