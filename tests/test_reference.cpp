@@ -204,23 +204,24 @@ TEST_CASE("the options no shipped deck uses, on a flowing column and a hopper: t
 // lattice 98 cells wide (a cell's row, c / 98, is where a careless division rounds
 // wrong). And a row of seven points pressed into a smooth side on a rough floor, whose
 // last three (the loop's last points) cross the side and stop on it.
+const char* const kThrownBlock =
+    "GRID     98 40 0.05\n"
+    "MATERIAL 1 MOHR E=1E7 NU=0.3 RHO=2000 PHI=30 C=200 SOFTEN=0.5 SCATTER=0.2\n"
+    "MATERIAL 2 ELASTIC E=2E7 NU=0.25 RHO=2500\n"
+    "CLUSTER  1  0 0.8  4 2  PPC=2\n"
+    "CLUSTER  2  0.5 0.8  3.5 1.2  PPC=2\n"
+    "CLUSTER  1  3.85 1.95  4 2  PPC=1\n"
+    "FIX X    0 0  0 2\n"
+    "FIX XY   1.5 2  4.9 2\n"
+    "WALL 1   3.0 0.8 3.6 0.8  0 2 SMOOTH\n"
+    "GRAVITY  0 2000\n"
+    "SEED     3\n"
+    "STEP     2.5E-4 120\n"
+    "END\n";
+
 TEST_CASE("a flowing block against fixed edges, a wall and the lattice's edge: the same bits") {
-    const std::string block =
-        "GRID     98 40 0.05\n"
-        "MATERIAL 1 MOHR E=1E7 NU=0.3 RHO=2000 PHI=30 C=200 SOFTEN=0.5 SCATTER=0.2\n"
-        "MATERIAL 2 ELASTIC E=2E7 NU=0.25 RHO=2500\n"
-        "CLUSTER  1  0 0.8  4 2  PPC=2\n"
-        "CLUSTER  2  0.5 0.8  3.5 1.2  PPC=2\n"
-        "CLUSTER  1  3.85 1.95  4 2  PPC=1\n"
-        "FIX X    0 0  0 2\n"
-        "FIX XY   1.5 2  4.9 2\n"
-        "WALL 1   3.0 0.8 3.6 0.8  0 2 SMOOTH\n"
-        "GRAVITY  0 2000\n"
-        "SEED     3\n"
-        "STEP     2.5E-4 120\n"
-        "END\n";
     Scene s;
-    REQUIRE(read_deck_text(block, "thrown.deck", s).empty());
+    REQUIRE(read_deck_text(kThrownBlock, "thrown.deck", s).empty());
     compare_kernels("thrown.deck", s, 120);
     Simulation sim(s);
     for (int n = 0; n < 120; ++n) sim.step();
@@ -255,4 +256,16 @@ TEST_CASE("a user constitutive model (eq. 6's signature) runs the same in every 
         if (std::fabs(st.xy) > cap) { ps.plastic_shear += (std::fabs(st.xy) - cap) / G; ps.yielded = true; st.xy = st.xy > 0 ? cap : -cap; }
     };
     compare_kernels("user model", s, std::max(40L, steps_for(s)), tresca, mat);
+    // Beside a Mohr-Coulomb material, a user's model sends the AVX2 loop's blocks run by run.
+    Scene b;
+    REQUIRE(read_deck_text(kThrownBlock, "thrown.deck", b).empty());
+    const Material& m2 = b.materials.back();
+    const double G2 = m2.shear(), lam2 = m2.bulk() - 2 * G2 / 3;
+    auto hooke = [G2, lam2](const StrainIncrement& e, Stress& st, PointState&) {
+        st.xx += (lam2 + 2 * G2) * e.xx + lam2 * e.yy;
+        st.yy += lam2 * e.xx + (lam2 + 2 * G2) * e.yy;
+        st.zz += lam2 * (e.xx + e.yy);
+        st.xy += G2 * e.gamma();
+    };
+    compare_kernels("user model beside Mohr-Coulomb", b, 120, hooke, m2.id);
 }
