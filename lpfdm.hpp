@@ -979,7 +979,10 @@ LPFDM_INLINE inline void move_point_paper(const T& x0, const T& y0, const Strain
 // MOTION CENTRE: the map of eq. 7a/7b about the cell centre, moved by the mean (umx, umy)
 // of the four nodal increments (mirror-symmetric). d: the point's own increment.
 // E: a StrainIncrement, or its four components in the lanes of vectors (four points of four
-// cells, with C their cells' xi, yj, umx, umy in lanes too).
+// cells, with C their cells' xi, yj, umx, umy in lanes too). The mean increment of nodes
+// [1]..[4]: mean_of_four.
+template <class T>
+LPFDM_INLINE inline void mean_of_four(const T& u1, const T& u2, const T& u3, const T& u4, T& mean) { mean = 0.25 * (u1 + u2 + u3 + u4); }
 template <class T, class E, class C>
 LPFDM_INLINE inline void move_point_centre(const T& x0, const T& y0, const E& e, const C& xi, const C& yj, double L, const C& umx, const C& umy, T& x, T& y, T& dx_out, T& dy_out) {
     const T cx = (x0 - xi) - 0.5 * L, cy = (y0 - yj) - 0.5 * L;
@@ -3255,7 +3258,8 @@ inline void Simulation::move_with_cell(int ci, int cj, const StrainIncrement& e,
     if (sc_.motion == Motion::Paper) {
         move_point_paper(x0, y0, e, xi, yj, ux[0], uy[0], x, y);
     } else if (sc_.motion == Motion::Centre) {
-        const double umx = 0.25 * (ux[0] + ux[1] + ux[2] + ux[3]), umy = 0.25 * (uy[0] + uy[1] + uy[2] + uy[3]);
+        double umx, umy;
+        mean_of_four(ux[0], ux[1], ux[2], ux[3], umx); mean_of_four(uy[0], uy[1], uy[2], uy[3], umy);
         move_point_centre(x0, y0, e, xi, yj, L_, umx, umy, x, y, dx, dy);
     } else {
         move_point_bilinear(x0, y0, xi, yj, invL_, ux, uy, x, y, dx, dy);
@@ -4196,7 +4200,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
     };
     // eq. 6 with the Jaumann rotation of eq. 5f (the elastic trial), for one point or four in
     // the lanes of a vector: de the elastic increment, (rc, rs) the cell's rotation.
-    auto elastic_trial = [](auto& xx, auto& yy, auto& xy, auto& zz, const Stress& de, double rc, double rs) LPFDM_INLINE {
+    auto elastic_trial = [](auto& xx, auto& yy, auto& xy, auto& zz, const auto& de, const auto& rc, const auto& rs) LPFDM_INLINE {
         rotate_stress(xx, yy, xy, rc, rs);  // Jaumann: the old stress turns with the material
         xx += de.xx; yy += de.yy; xy += de.xy; zz += de.zz;  // eq. 6
     };
@@ -4261,7 +4265,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 move_point_paper(x0, y0, e, cols[ci].at, rows[cj].at, dux_[n1], duy_[n1], x, y);  // eq. 7a/7b
             } else {  // MOTION CENTRE: eq. 7a/7b about the centre, with the mean increment
                 const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
-                const double umx = 0.25 * (dux_[n1] + dux_[n2] + dux_[n3] + dux_[n4]), umy = 0.25 * (duy_[n1] + duy_[n2] + duy_[n3] + duy_[n4]);
+                double umx, umy;
+                mean_of_four(dux_[n1], dux_[n2], dux_[n3], dux_[n4], umx); mean_of_four(duy_[n1], duy_[n2], duy_[n3], duy_[n4], umy);
                 v4d ddx, ddy;
                 move_point_centre(x0, y0, e, cols[ci].at, rows[cj].at, L, umx, umy, x, y, ddx, ddy);
             }
@@ -4402,7 +4407,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 const double ux1 = dux_[n1], uy1 = duy_[n1];
                 double ux2 = 0, uy2 = 0, ux3 = 0, uy3 = 0, ux4 = 0, uy4 = 0, umx = 0, umy = 0;
                 if constexpr (M != Motion::Paper) { ux2 = dux_[n2]; uy2 = duy_[n2]; ux3 = dux_[n3]; uy3 = duy_[n3]; ux4 = dux_[n4]; uy4 = duy_[n4]; }
-                if constexpr (M == Motion::Centre) { umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4); }
+                if constexpr (M == Motion::Centre) { mean_of_four(ux1, ux2, ux3, ux4, umx); mean_of_four(uy1, uy2, uy3, uy4, umy); }
                 CellSums sums{0, 0, 0, 0, 0};
                 const bool own = owned(c);  // the sums of cell c are this chunk's to add
                 if (own) sums = cell_sums(std::size_t(c));
@@ -4540,187 +4545,6 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 q = qend;
             }
         };
-        // A block of points of elastic and Mohr-Coulomb materials, taken four points at a
-        // time whatever cells they lie in: their cells' strain records, and their nodes'
-        // increments, gathered into the lanes (read once when the four share a cell). A
-        // flowing scene leaves runs of one or two points in a cell, and the loop per run
-        // below then mispredicts about one branch per point (where a run ends: 0.99 a
-        // point-update in the last 100 steps of decks/bench_flow.deck, against 0.11 in its
-        // first); this one branches on what is rare (a cell with a fixed edge or near a
-        // wall, whose points stop_at_edges holds one by one; a point leaving the lattice;
-        // four points of two materials) and on whether the four share a cell. The same
-        // functions on the same values as the runs, point by point, and each point added to
-        // the sums of the cell it lands in (eq. 7, 8) in point order, as there: the same bits.
-        [[maybe_unused]] const double inv_mx = 1.0 / mx;
-        typedef int v4i __attribute__((vector_size(16)));
-        typedef float v4f __attribute__((vector_size(16)));
-        // The column and row of the cells c in the lanes: c / mx as the truncated double
-        // (c + 0.5) / mx, exact for every int c (the quotient lies at least 0.5 / mx from an
-        // integer, its rounding error below (c + 0.5) / mx 2^-52).
-        [[maybe_unused]] auto columns_rows = [&](const v4i& c, v4i& ci, v4i& cj) LPFDM_INLINE {
-            cj = __builtin_convertvector((__builtin_convertvector(c, detail::v4d) + 0.5) * inv_mx, v4i);
-            ci = c - cj * mx;
-        };
-        // The strain records of the cells of points q .. q+3 in lanes, and their rotations.
-        [[maybe_unused]] auto strain_lanes = [&](long q) LPFDM_INLINE {
-            const CellStrain* sc = strain_.data();
-            const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
-            return detail::StrainLanes{{s0.xx, s1.xx, s2.xx, s3.xx}, {s0.yy, s1.yy, s2.yy, s3.yy}, {s0.xy, s1.xy, s2.xy, s3.xy}, {s0.yx, s1.yx, s2.yx, s3.yx}};
-        };
-        // The strain record of cell c in every lane.
-        [[maybe_unused]] auto strain_lane = [&](int c) LPFDM_INLINE {
-            const CellStrain& ce = strain_[std::size_t(c)];
-            return detail::StrainLanes{{ce.xx, ce.xx, ce.xx, ce.xx}, {ce.yy, ce.yy, ce.yy, ce.yy}, {ce.xy, ce.xy, ce.xy, ce.xy}, {ce.yx, ce.yx, ce.yx, ce.yx}};
-        };
-        [[maybe_unused]] auto rotation_lanes = [&](long q, detail::v4d& rc, detail::v4d& rs) LPFDM_INLINE {
-            const CellStrain* sc = strain_.data();
-            const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
-            rc = detail::v4d{s0.rc, s1.rc, s2.rc, s3.rc}; rs = detail::v4d{s0.rs, s1.rs, s2.rs, s3.rs};
-        };
-        // Four points q .. q+3 of one group g (read into g): their groups as one 64-bit word.
-        [[maybe_unused]] auto one_group_of_four = [&](long q, int& g) LPFDM_INLINE {
-            g = pgroup[q];
-            if (single) return true;
-            std::uint64_t gw;
-            std::memcpy(&gw, pgroup + q, sizeof gw);
-            return gw == std::uint64_t(g) * 0x0001000100010001ULL;
-        };
-        // eq. 6 (the elastic trial) and the volume change of points b0 .. b1-1 (Hooke's law
-        // for an elastic or a Mohr-Coulomb point; the latter is consulted afterwards).
-        [[maybe_unused]] auto trial_block = [&](long b0, const long b1) LPFDM_INLINE {
-            auto trial = [&](const MaterialConstants& mc, auto& xx, auto& yy, auto& xy, auto& zz, auto& vol, const auto& e, const auto& rc, const auto& rs) LPFDM_INLINE {
-                std::remove_reference_t<decltype(xx)> dxx, dyy, dxy, dzz;
-                elastic_change(mc, e.xx, e.yy, e.xy, e.yx, dxx, dyy, dxy, dzz);  // eq. 6
-                rotate_stress(xx, yy, xy, rc, rs);  // Jaumann, as elastic_trial
-                xx += dxx; yy += dyy; xy += dxy; zz += dzz;
-                vol *= 1.0 + e.xx + e.yy;
-            };
-            auto trial_one = [&](long q) LPFDM_INLINE {
-                const CellStrain& ce = strain_[std::size_t(pcell[q])];
-                trial(*gconsts[pgroup[q]], psxx[q], psyy[q], psxy[q], pszz[q], pvol[q], ce, ce.rc, ce.rs);
-            };
-            for (; b0 + 4 <= b1; b0 += 4) {
-                int g;
-                if (!one_group_of_four(b0, g)) {  // points of two materials
-                    for (int l = 0; l < 4; ++l) trial_one(b0 + l);
-                    continue;
-                }
-                detail::StrainLanes e;
-                detail::v4d rc, rs, xx, yy, xy, zz, vol;
-                if (pcell[b0] == pcell[b0 + 3] && pcell[b0 + 1] == pcell[b0] && pcell[b0 + 2] == pcell[b0]) {  // one cell: its values once
-                    const CellStrain& ce = strain_[std::size_t(pcell[b0])];
-                    e = strain_lane(pcell[b0]);
-                    rc = detail::v4d{ce.rc, ce.rc, ce.rc, ce.rc}; rs = detail::v4d{ce.rs, ce.rs, ce.rs, ce.rs};
-                } else {
-                    e = strain_lanes(b0);
-                    rotation_lanes(b0, rc, rs);
-                }
-                detail::load(psxx + b0, xx); detail::load(psyy + b0, yy); detail::load(psxy + b0, xy);
-                detail::load(pszz + b0, zz); detail::load(pvol + b0, vol);
-                trial(*gconsts[g], xx, yy, xy, zz, vol, e, rc, rs);
-                detail::store(psxx + b0, xx); detail::store(psyy + b0, yy); detail::store(psxy + b0, xy);
-                detail::store(pszz + b0, zz); detail::store(pvol + b0, vol);
-            }
-            for (; b0 < b1; ++b0) trial_one(b0);  // the last one to three points of the chunk
-        };
-        // eq. 7a/7b (MOTION CENTRE) and the landing of points b0 .. b1-1.
-        [[maybe_unused]] auto motion_block = [&](long b0, const long b1) LPFDM_INLINE {
-            const double* ux = dux_.data();
-            const double* uy = duy_.data();
-            // Point q lands in cell cn (column ni): eq. 7 and 8, as land() above.
-            auto deposit = [&](long q, int cn, int ni) LPFDM_INLINE {
-                const Group& gr = groups_[pgroup[q]];
-                pcell[q] = cn;
-                if (owned(cn)) add_to_cell(std::size_t(cn), gr.mass, std::min(pvol[q], gr.vol0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
-                else p_.listed[std::size_t(pt.list_at + pt.listed++)] = std::int32_t(q);  // another chunk's cell
-                t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
-                t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
-                t.mass += gr.mass;
-            };
-            auto land_one = [&](long q, double x, double y) LPFDM_INLINE {
-                if (!(x >= 0 && x < X && y >= 0 && y < Y)) { pcell[q] = -1; ++t.departed; return; }  // as land()
-                const int ni = std::min(mx - 1, int(x * invL)), nj = std::min(my - 1, int(y * invL));
-                deposit(q, cell(ni, nj), ni);
-            };
-            for (; b0 + 4 <= b1; b0 += 4) {
-                using detail::v4d;
-                v4i c, ci, cj;
-                std::memcpy(&c, pcell + b0, sizeof c);
-                columns_rows(c, ci, cj);
-                const v4i n1 = cj * (mx + 1) + ci, n3 = n1 + (mx + 1);  // node(ci, cj); n2 = n1 + 1, n4 = n3 + 1
-                v4d umx, umy;
-                detail::StrainLanes e;
-                if (__builtin_ia32_movmskps(v4f(c == c[0])) == 15) {  // one cell (while runs are long): its values once
-                    const int a = n1[0], b = n3[0];
-                    const double mean_x = 0.25 * (ux[a] + ux[a + 1] + ux[b] + ux[b + 1]), mean_y = 0.25 * (uy[a] + uy[a + 1] + uy[b] + uy[b + 1]);
-                    umx = v4d{mean_x, mean_x, mean_x, mean_x}; umy = v4d{mean_y, mean_y, mean_y, mean_y};
-                    e = strain_lane(c[0]);
-                } else {
-                    const v4d ux1 = {ux[n1[0]], ux[n1[1]], ux[n1[2]], ux[n1[3]]}, ux2 = {ux[n1[0] + 1], ux[n1[1] + 1], ux[n1[2] + 1], ux[n1[3] + 1]};
-                    const v4d ux3 = {ux[n3[0]], ux[n3[1]], ux[n3[2]], ux[n3[3]]}, ux4 = {ux[n3[0] + 1], ux[n3[1] + 1], ux[n3[2] + 1], ux[n3[3] + 1]};
-                    const v4d uy1 = {uy[n1[0]], uy[n1[1]], uy[n1[2]], uy[n1[3]]}, uy2 = {uy[n1[0] + 1], uy[n1[1] + 1], uy[n1[2] + 1], uy[n1[3] + 1]};
-                    const v4d uy3 = {uy[n3[0]], uy[n3[1]], uy[n3[2]], uy[n3[3]]}, uy4 = {uy[n3[0] + 1], uy[n3[1] + 1], uy[n3[2] + 1], uy[n3[3] + 1]};
-                    umx = 0.25 * (ux1 + ux2 + ux3 + ux4); umy = 0.25 * (uy1 + uy2 + uy3 + uy4);
-                    e = strain_lanes(b0);
-                }
-                const v4d xi = __builtin_convertvector(ci, v4d) * L, yj = __builtin_convertvector(cj, v4d) * L;  // ci L, cj L
-                v4d x0, y0, x, y, ddx, ddy;
-                detail::load(px + b0, x0); detail::load(py + b0, y0);
-                move_point_centre(x0, y0, e, xi, yj, L, umx, umy, x, y, ddx, ddy);  // eq. 7a/7b
-                if (fixed[c[0]] | fixed[c[1]] | fixed[c[2]] | fixed[c[3]]) {  // a cell with a fixed edge, or near a wall
-                    for (int l = 0; l < 4; ++l) {
-                        if (!fixed[c[l]]) continue;
-                        double xl = x[l], yl = y[l];
-                        stop_at_edges(c[l], x0[l], y0[l], xl, yl);
-                        x[l] = xl; y[l] = yl;
-                    }
-                }
-                detail::store(px + b0, x); detail::store(py + b0, y);
-                if (!detail::all_lanes((x >= 0) & (x < X) & (y >= 0) & (y < Y))) {  // a point left the lattice
-                    for (int l = 0; l < 4; ++l) land_one(b0 + l, x[l], y[l]);
-                    continue;
-                }
-                const v4i mx1 = {mx - 1, mx - 1, mx - 1, mx - 1}, my1 = {my - 1, my - 1, my - 1, my - 1};
-                v4i ni = __builtin_convertvector(x * invL, v4i), nj = __builtin_convertvector(y * invL, v4i);
-                ni = ni < mx1 ? ni : mx1; nj = nj < my1 ? nj : my1;  // std::min(m - 1, int(x / L))
-                const v4i cn = nj * mx + ni;  // cell(ni, nj)
-                int g;
-                if (__builtin_ia32_movmskps(v4f(cn == cn[0])) == 15 && owned(cn[0]) && one_group_of_four(b0, g)) {
-                    // all four in one cell (the usual case while runs are long): its sums in
-                    // registers, the four added in point order as deposit() adds them
-                    std::memcpy(pcell + b0, &cn, sizeof cn);
-                    v4d vol, sxx, syy, sxy;
-                    detail::load(pvol + b0, vol); detail::load(psxx + b0, sxx); detail::load(psyy + b0, syy); detail::load(psxy + b0, sxy);
-                    CellSums sums = cell_sums(std::size_t(cn[0]));
-                    sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, sxx, syy, sxy, t.mass);  // eq. 7, 8
-                    store_sums(std::size_t(cn[0]), sums);
-                    t.cmin = std::min(t.cmin, cn[0]); t.cmax = std::max(t.cmax, cn[0]);
-                    t.imin = std::min(t.imin, ni[0]); t.imax = std::max(t.imax, ni[0]);
-                    continue;
-                }
-                for (int l = 0; l < 4; ++l) deposit(b0 + l, cn[l], ni[l]);
-            }
-            for (; b0 < b1; ++b0) {  // the last one to three points of the chunk
-                const int c = pcell[b0], ci = c % mx, cj = c / mx, n1 = node(ci, cj), n3 = n1 + mx + 1;
-                const double umx = 0.25 * (ux[n1] + ux[n1 + 1] + ux[n3] + ux[n3 + 1]), umy = 0.25 * (uy[n1] + uy[n1 + 1] + uy[n3] + uy[n3 + 1]);
-                double x, y, ddx, ddy;
-                move_point_centre(px[b0], py[b0], strain_[std::size_t(c)], ci * L, cj * L, L, umx, umy, x, y, ddx, ddy);  // eq. 7a/7b
-                if (fixed[c]) stop_at_edges(c, px[b0], py[b0], x, y);
-                px[b0] = x; py[b0] = y;
-                land_one(b0, x, y);
-            }
-        };
-        auto consult_timed = [&](long b0, long b1) LPFDM_INLINE {
-            if (profiling_) {  // two clock reads a block of about 256 points
-                const auto c0 = std::chrono::steady_clock::now();
-                consulted = 0;
-                consult_block(b0, b1);
-                pt.return_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
-                pt.returned += consulted;
-            } else {
-                consult_block(b0, b1);
-            }
-        };
         if constexpr (Blocks) {  // mohr_groups_ (advance_run_wide)
             // With a Mohr-Coulomb material, the points go in blocks of about kConsultBlock,
             // each ending where a run ends: the elastic trial of the block's runs, then the
@@ -4733,16 +4557,200 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             // no user's model takes blocks of kConsultBlock points (the chunk's last one
             // shorter), not ending with a run, four points at a time instead (trial_block,
             // motion_block; a run split between two blocks adds the same sums).
-            for (long b0 = k0; b0 < k1;) {
-                long b1 = std::min(k1, b0 + kConsultBlock);
-                if constexpr (M == Motion::Centre && !Carry) {
-                    if (no_user_groups_) {  // four points at a time across runs
-                        trial_block(b0, b1);
-                        consult_timed(b0, b1);
-                        motion_block(b0, b1);
-                        b0 = b1;  // the next block may start inside a run: a run split in two adds the same sums
+            static_assert(M == Motion::Centre && !Carry, "the blocks follow MOTION CENTRE without ADVECT POINTS");
+            // A block of points of elastic and Mohr-Coulomb materials, taken four points at a
+            // time whatever cells they lie in: their cells' strain records, and their nodes'
+            // increments, gathered into the lanes (read once when the four share a cell). A
+            // flowing scene leaves runs of one or two points in a cell, and the loop per run
+            // (runs) then mispredicts about one branch per point (where a run ends: 0.99 a
+            // point-update in the last 100 steps of decks/bench_flow.deck, against 0.11 in its
+            // first); this one branches on what is rare (a cell with a fixed edge or near a
+            // wall, whose points stop_at_edges holds one by one; a point leaving the lattice;
+            // four points of two materials) and on whether the four share a cell. The same
+            // functions on the same values as the runs, point by point, and each point added to
+            // the sums of the cell it lands in (eq. 7, 8) in point order, as there: the same bits.
+            const double inv_mx = 1.0 / mx;
+            typedef int v4i __attribute__((vector_size(16)));
+            typedef float v4f __attribute__((vector_size(16)));
+            // The column and row of the cells c in the lanes: c / mx as the truncated double
+            // (c + 0.5) / mx, exact for every int c (the quotient lies at least 0.5 / mx from an
+            // integer, its rounding error below (c + 0.5) / mx 2^-52).
+            auto columns_rows = [&](const v4i& c, v4i& ci, v4i& cj) LPFDM_INLINE {
+                cj = __builtin_convertvector((__builtin_convertvector(c, detail::v4d) + 0.5) * inv_mx, v4i);
+                ci = c - cj * mx;
+            };
+            // The strain records of the cells of points q .. q+3 in lanes, and their rotations.
+            auto strain_lanes = [&](long q) LPFDM_INLINE {
+                const CellStrain* sc = strain_.data();
+                const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
+                return detail::StrainLanes{{s0.xx, s1.xx, s2.xx, s3.xx}, {s0.yy, s1.yy, s2.yy, s3.yy}, {s0.xy, s1.xy, s2.xy, s3.xy}, {s0.yx, s1.yx, s2.yx, s3.yx}};
+            };
+            // The strain record of cell c in every lane.
+            auto strain_lane = [&](int c) LPFDM_INLINE {
+                const CellStrain& ce = strain_[std::size_t(c)];
+                return detail::StrainLanes{{ce.xx, ce.xx, ce.xx, ce.xx}, {ce.yy, ce.yy, ce.yy, ce.yy}, {ce.xy, ce.xy, ce.xy, ce.xy}, {ce.yx, ce.yx, ce.yx, ce.yx}};
+            };
+            auto rotation_lanes = [&](long q, detail::v4d& rc, detail::v4d& rs) LPFDM_INLINE {
+                const CellStrain* sc = strain_.data();
+                const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
+                rc = detail::v4d{s0.rc, s1.rc, s2.rc, s3.rc}; rs = detail::v4d{s0.rs, s1.rs, s2.rs, s3.rs};
+            };
+            // Four points q .. q+3 of one group g (read into g): their groups as one 64-bit word.
+            auto one_group_of_four = [&](long q, int& g) LPFDM_INLINE {
+                g = pgroup[q];
+                if (single) return true;
+                std::uint64_t gw;
+                std::memcpy(&gw, pgroup + q, sizeof gw);
+                return gw == std::uint64_t(g) * 0x0001000100010001ULL;
+            };
+            // eq. 6 (the elastic trial) and the volume change of points b0 .. b1-1 (Hooke's law
+            // for an elastic or a Mohr-Coulomb point; the latter is consulted afterwards).
+            auto trial_block = [&](long b0, const long b1) LPFDM_INLINE {
+                auto trial = [&](const MaterialConstants& mc, auto& xx, auto& yy, auto& xy, auto& zz, auto& vol, const auto& e, const auto& rc, const auto& rs) LPFDM_INLINE {
+                    using V = std::remove_reference_t<decltype(xx)>;  // one value or four lanes
+                struct { V xx, yy, xy, zz; } de;
+                    elastic_change(mc, e.xx, e.yy, e.xy, e.yx, de.xx, de.yy, de.xy, de.zz);  // eq. 6
+                    elastic_trial(xx, yy, xy, zz, de, rc, rs);
+                    vol *= 1.0 + e.xx + e.yy;
+                };
+                auto trial_one = [&](long q) LPFDM_INLINE {
+                    const CellStrain& ce = strain_[std::size_t(pcell[q])];
+                    trial(*gconsts[pgroup[q]], psxx[q], psyy[q], psxy[q], pszz[q], pvol[q], ce, ce.rc, ce.rs);
+                };
+                for (; b0 + 4 <= b1; b0 += 4) {
+                    int g;
+                    if (!one_group_of_four(b0, g)) {  // points of two materials
+                        for (int l = 0; l < 4; ++l) trial_one(b0 + l);
                         continue;
                     }
+                    detail::StrainLanes e;
+                    detail::v4d rc, rs, xx, yy, xy, zz, vol;
+                    if (pcell[b0] == pcell[b0 + 3] && pcell[b0 + 1] == pcell[b0] && pcell[b0 + 2] == pcell[b0]) {  // one cell: its values once
+                        const CellStrain& ce = strain_[std::size_t(pcell[b0])];
+                        e = strain_lane(pcell[b0]);
+                        rc = detail::v4d{ce.rc, ce.rc, ce.rc, ce.rc}; rs = detail::v4d{ce.rs, ce.rs, ce.rs, ce.rs};
+                    } else {
+                        e = strain_lanes(b0);
+                        rotation_lanes(b0, rc, rs);
+                    }
+                    detail::load(psxx + b0, xx); detail::load(psyy + b0, yy); detail::load(psxy + b0, xy);
+                    detail::load(pszz + b0, zz); detail::load(pvol + b0, vol);
+                    trial(*gconsts[g], xx, yy, xy, zz, vol, e, rc, rs);
+                    detail::store(psxx + b0, xx); detail::store(psyy + b0, yy); detail::store(psxy + b0, xy);
+                    detail::store(pszz + b0, zz); detail::store(pvol + b0, vol);
+                }
+                for (; b0 < b1; ++b0) trial_one(b0);  // the last one to three points of the chunk
+            };
+            // eq. 7a/7b (MOTION CENTRE) and the landing of points b0 .. b1-1.
+            auto motion_block = [&](long b0, const long b1) LPFDM_INLINE {
+                const double* ux = dux_.data();
+                const double* uy = duy_.data();
+                // Point q lands in cell cn (column ni): eq. 7 and 8, as land() above.
+                auto landed_in = [&](int cn, int ni) LPFDM_INLINE {  // the box of the cells landed in
+                    t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
+                    t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
+                };
+                auto deposit = [&](long q, int cn, int ni) LPFDM_INLINE {
+                    const Group& gr = groups_[pgroup[q]];
+                    pcell[q] = cn;
+                    if (owned(cn)) add_to_cell(std::size_t(cn), gr.mass, std::min(pvol[q], gr.vol0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
+                    else p_.listed[std::size_t(pt.list_at + pt.listed++)] = std::int32_t(q);  // another chunk's cell
+                    landed_in(cn, ni);
+                    t.mass += gr.mass;
+                };
+                auto land_one = [&](long q, double x, double y) LPFDM_INLINE {
+                    const int cn = cell_holding(x, y);
+                    if (cn < 0) { pcell[q] = -1; ++t.departed; return; }  // left the lattice (or not finite)
+                    deposit(q, cn, cn % mx);
+                };
+                for (; b0 + 4 <= b1; b0 += 4) {
+                    using detail::v4d;
+                    v4i c, ci, cj;
+                    std::memcpy(&c, pcell + b0, sizeof c);
+                    columns_rows(c, ci, cj);
+                    const v4i n1 = cj * (mx + 1) + ci, n3 = n1 + (mx + 1);  // node(ci, cj); n2 = n1 + 1, n4 = n3 + 1
+                    v4d umx, umy;
+                    detail::StrainLanes e;
+                    if (__builtin_ia32_movmskps(v4f(c == c[0])) == 15) {  // one cell (while runs are long): its values once
+                        const int a = n1[0], b = n3[0];
+                        double mean_x, mean_y;
+                    mean_of_four(ux[a], ux[a + 1], ux[b], ux[b + 1], mean_x); mean_of_four(uy[a], uy[a + 1], uy[b], uy[b + 1], mean_y);
+                        umx = v4d{mean_x, mean_x, mean_x, mean_x}; umy = v4d{mean_y, mean_y, mean_y, mean_y};
+                        e = strain_lane(c[0]);
+                    } else {
+                        const v4d ux1 = {ux[n1[0]], ux[n1[1]], ux[n1[2]], ux[n1[3]]}, ux2 = {ux[n1[0] + 1], ux[n1[1] + 1], ux[n1[2] + 1], ux[n1[3] + 1]};
+                        const v4d ux3 = {ux[n3[0]], ux[n3[1]], ux[n3[2]], ux[n3[3]]}, ux4 = {ux[n3[0] + 1], ux[n3[1] + 1], ux[n3[2] + 1], ux[n3[3] + 1]};
+                        const v4d uy1 = {uy[n1[0]], uy[n1[1]], uy[n1[2]], uy[n1[3]]}, uy2 = {uy[n1[0] + 1], uy[n1[1] + 1], uy[n1[2] + 1], uy[n1[3] + 1]};
+                        const v4d uy3 = {uy[n3[0]], uy[n3[1]], uy[n3[2]], uy[n3[3]]}, uy4 = {uy[n3[0] + 1], uy[n3[1] + 1], uy[n3[2] + 1], uy[n3[3] + 1]};
+                        mean_of_four(ux1, ux2, ux3, ux4, umx); mean_of_four(uy1, uy2, uy3, uy4, umy);
+                        e = strain_lanes(b0);
+                    }
+                    const v4d xi = __builtin_convertvector(ci, v4d) * L, yj = __builtin_convertvector(cj, v4d) * L;  // ci L, cj L
+                    v4d x0, y0, x, y, ddx, ddy;
+                    detail::load(px + b0, x0); detail::load(py + b0, y0);
+                    move_point_centre(x0, y0, e, xi, yj, L, umx, umy, x, y, ddx, ddy);  // eq. 7a/7b
+                    if (fixed[c[0]] | fixed[c[1]] | fixed[c[2]] | fixed[c[3]]) {  // a cell with a fixed edge, or near a wall
+                        for (int l = 0; l < 4; ++l) {
+                            if (!fixed[c[l]]) continue;
+                            double xl = x[l], yl = y[l];
+                            stop_at_edges(c[l], x0[l], y0[l], xl, yl);
+                            x[l] = xl; y[l] = yl;
+                        }
+                    }
+                    detail::store(px + b0, x); detail::store(py + b0, y);
+                    if (!detail::all_lanes((x >= 0) & (x < X) & (y >= 0) & (y < Y))) {  // a point left the lattice
+                        for (int l = 0; l < 4; ++l) land_one(b0 + l, x[l], y[l]);
+                        continue;
+                    }
+                    const v4i mx1 = {mx - 1, mx - 1, mx - 1, mx - 1}, my1 = {my - 1, my - 1, my - 1, my - 1};
+                    v4i ni = __builtin_convertvector(x * invL, v4i), nj = __builtin_convertvector(y * invL, v4i);
+                    ni = ni < mx1 ? ni : mx1; nj = nj < my1 ? nj : my1;  // std::min(m - 1, int(x / L))
+                    const v4i cn = nj * mx + ni;  // cell(ni, nj)
+                    int g;
+                    if (__builtin_ia32_movmskps(v4f(cn == cn[0])) == 15 && owned(cn[0]) && one_group_of_four(b0, g)) {
+                        // all four in one cell (the usual case while runs are long): its sums in
+                        // registers, the four added in point order as deposit() adds them
+                        std::memcpy(pcell + b0, &cn, sizeof cn);
+                        v4d vol, sxx, syy, sxy;
+                        detail::load(pvol + b0, vol); detail::load(psxx + b0, sxx); detail::load(psyy + b0, syy); detail::load(psxy + b0, sxy);
+                        CellSums sums = cell_sums(std::size_t(cn[0]));
+                        sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, sxx, syy, sxy, t.mass);  // eq. 7, 8
+                        store_sums(std::size_t(cn[0]), sums);
+                        landed_in(cn[0], ni[0]);
+                        continue;
+                    }
+                    for (int l = 0; l < 4; ++l) deposit(b0 + l, cn[l], ni[l]);
+                }
+                for (; b0 < b1; ++b0) {  // the last one to three points of the chunk: the reference's steps
+                    const int c = pcell[b0];
+                    const CellStrain& ce = strain_[std::size_t(c)];
+                    const double x0 = px[b0], y0 = py[b0];
+                    double x, y, ddx, ddy;
+                    move_with_cell(c % mx, c / mx, StrainIncrement{ce.xx, ce.yy, ce.xy, ce.yx}, x0, y0, x, y, ddx, ddy);  // eq. 7a/7b
+                    stop_at_edges(c, x0, y0, x, y);
+                    px[b0] = x; py[b0] = y;
+                    land_one(b0, x, y);
+                }
+            };
+            auto consult_timed = [&](long b0, long b1) LPFDM_INLINE {
+                if (profiling_) {  // two clock reads a block of about 256 points
+                    const auto c0 = std::chrono::steady_clock::now();
+                    consulted = 0;
+                    consult_block(b0, b1);
+                    pt.return_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+                    pt.returned += consulted;
+                } else {
+                    consult_block(b0, b1);
+                }
+            };
+            for (long b0 = k0; b0 < k1;) {
+                long b1 = std::min(k1, b0 + kConsultBlock);
+                if (no_user_groups_) {  // four points at a time across runs
+                    trial_block(b0, b1);
+                    consult_timed(b0, b1);
+                    motion_block(b0, b1);
+                    b0 = b1;  // the next block may start inside a run: a run split in two adds the same sums
+                    continue;
                 }
                 while (b1 < k1 && pcell[b1] == pcell[b1 - 1]) ++b1;
                 nrun = irun = 0;
@@ -6795,7 +6803,9 @@ inline void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<dou
         if (sim.scene().motion == Motion::Paper) {
             move_point_paper(p.x[k], p.y[k], e, xi, yj, ax[0], ay[0], x, y);
         } else if (sim.scene().motion == Motion::Centre) {
-            move_point_centre(p.x[k], p.y[k], e, xi, yj, L, 0.25 * (ax[0] + ax[1] + ax[2] + ax[3]), 0.25 * (ay[0] + ay[1] + ay[2] + ay[3]), x, y, ddx, ddy);
+            double umx, umy;
+            mean_of_four(ax[0], ax[1], ax[2], ax[3], umx); mean_of_four(ay[0], ay[1], ay[2], ay[3], umy);
+            move_point_centre(p.x[k], p.y[k], e, xi, yj, L, umx, umy, x, y, ddx, ddy);
         } else {
             move_point_bilinear(p.x[k], p.y[k], xi, yj, 1 / L, ax, ay, x, y, ddx, ddy);
         }
