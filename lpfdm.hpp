@@ -2730,11 +2730,13 @@ private:
     }
     void map_points();
     // eq. 6's Mohr-Coulomb part: the return of point k's elastic trial s with its strength
-    // (Own: its own c and N_phi), and its plastic shear if it yielded.
-    template <bool Own> LPFDM_INLINE void mohr_consult(const MaterialConstants& mc, std::size_t k, Stress& s) {
+    // (Own: its own c and N_phi), and its plastic shear if it yielded. vol: the point's volume
+    // V now (the caller's: a fast loop holds V through a restrict pointer, which no other
+    // access may read meanwhile).
+    template <bool Own> LPFDM_INLINE void mohr_consult(const MaterialConstants& mc, std::size_t k, double vol, Stress& s) {
         const Stress trial = s;
         const MohrResult r = mohr_coulomb_return(mc, strength_of<Own>(mc, k), s);
-        if (r.mode != MohrResult::Elastic) record_yield(mc, k, r.d_gamma_p, trial, s);
+        if (r.mode != MohrResult::Elastic) record_yield(mc, k, vol, r.d_gamma_p, trial, s);
     }
     // Point q was returned from the trial stress to s with plastic shear increment
     // d_gamma_p: its plastic shear, its yielded flag and the work its return dissipated,
@@ -2742,11 +2744,11 @@ private:
     // every kernel changes V before the consult). The AVX2 point loop (consult_lanes) does the
     // same four points at a time (never with ADVECT FLIP, which the reference cycle runs):
     // a change here is a change there.
-    void record_yield(const MaterialConstants& mc, std::size_t q, double d_gamma_p, const Stress& trial, const Stress& s) {
+    void record_yield(const MaterialConstants& mc, std::size_t q, double vol, double d_gamma_p, const Stress& trial, const Stress& s) {
         p_.plastic_shear[q] += d_gamma_p;
         p_.yielded[q] = 1;  // softening takes effect from the next consult
         const Stress b{trial.xx - s.xx, trial.yy - s.yy, trial.xy - s.xy, trial.zz - s.zz};
-        p_.plastic_work[q] += energy_volume(q) * compliance_product(mc, s, b);
+        p_.plastic_work[q] += energy_volume(q, vol) * compliance_product(mc, s, b);
     }
     void user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s);
     void carried_increments(const Range& nodes);
@@ -2973,9 +2975,11 @@ private:
     }
     // The volume point k's stress works on: min(V, V0) as in eq. 8, or with ADVECT FLIP its
     // initial volume V0 (see flip_transfer).
-    double energy_volume(std::size_t k) const {
+    double energy_volume(std::size_t k) const { return energy_volume(k, p_.vol[k]); }
+    // The same with point k's volume vol given.
+    double energy_volume(std::size_t k, double vol) const {
         const double v0 = groups_[p_.group[k]].vol0;
-        return sc_.advect == Advect::Flip ? v0 : std::min(p_.vol[k], v0);
+        return sc_.advect == Advect::Flip ? v0 : std::min(vol, v0);
     }
     double potential_energy(std::size_t k) const { return -groups_[p_.group[k]].mass * (sc_.gravity_x * p_.x[k] + sc_.gravity_y * p_.y[k]); }
     // Earthquakes: ground motion (SHAKE) and absorbing edges (ABSORB); see dynamics_begin.
@@ -3246,7 +3250,7 @@ inline void Simulation::consult_model(std::size_t k, const MaterialConstants& mc
     if (mc.model == Model::User) { user_consult(mc, k, e, s); return; }
     elastic_increment(mc, e, s);  // the elastic trial
     if (mc.model != Model::MohrCoulomb) return;
-    p_.c0.empty() ? mohr_consult<false>(mc, k, s) : mohr_consult<true>(mc, k, s);
+    p_.c0.empty() ? mohr_consult<false>(mc, k, p_.vol[k], s) : mohr_consult<true>(mc, k, p_.vol[k], s);
 }
 
 // eq. 7a/7b (or MOTION CENTRE, BILINEAR): where a point of cell (ci, cj) with the cell's
@@ -4109,7 +4113,7 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
     };
     // Point r with its elastic trial s: the one-point test and return, the stress stored.
     auto one_point = [&](long r, Stress s) {
-        mohr_consult<Own>(mc, std::size_t(r), s);
+        mohr_consult<Own>(mc, std::size_t(r), pvol[r], s);
         psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
     };
     // The groups the first pass leaves lanes of (first: the group's point; bits: the lanes).
@@ -4195,7 +4199,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
     // Mohr-Coulomb point r of material mc with its elastic trial s: the consult of eq. 6
     // (mohr_consult, as the reference's), and the stress written to the point.
     auto consult_point = [&](const MaterialConstants& mc, long r, Stress s, auto own) LPFDM_INLINE {
-        mohr_consult<decltype(own)::value>(mc, std::size_t(r), s);
+        mohr_consult<decltype(own)::value>(mc, std::size_t(r), pvol[r], s);
         psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
     };
     // eq. 6 with the Jaumann rotation of eq. 5f (the elastic trial), for one point or four in
