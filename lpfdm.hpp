@@ -1068,6 +1068,8 @@ typedef long long v4m __attribute__((vector_size(32)));
 LPFDM_INLINE inline bool all_lanes(const v4m& m) { return (m[0] & m[1] & m[2] & m[3]) != 0; }
 // True when no lane of a comparison's mask is set.
 LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { return (m[0] | m[1] | m[2] | m[3]) == 0; }
+// m: lane l set where bit l of `bits` is (movmskpd's inverse).
+LPFDM_INLINE inline void lane_mask(int bits, v4m& m) { m = v4m((v4m{bits, bits, bits, bits} & v4m{1, 2, 4, 8}) != 0); }
 // a = |v| lane by lane (the sign bit cleared, as std::fabs does).
 LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7fffffffffffffffLL); }
 #endif
@@ -4060,9 +4062,10 @@ __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0
 // (detail::mohr_inside_lanes, return_lanes, edge_lanes, all inlined), then the one-point test
 // and return (mohr_consult) for a lane those do not settle and the last one to three points.
 // Own: each point's own strength (scatter). A point's consult reads and writes that point
-// only, so the lanes the closed form leaves go in a second pass over the groups that hold
-// them (most groups end in the first, whose loop then holds no call and no search); each
-// lane's operations are those of the one-point code.
+// only; each lane's operations are those of the one-point code. The lanes the closed form
+// leaves go on at once (edge_lanes, then the one-point code): a second pass over the groups
+// holding them, which made the elastic test and the return again to find what edge_lanes
+// needs, was no faster (8.6 % of the groups of bench_flow.deck's last steps hold one).
 template <bool Own>
 __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const MaterialConstants& mc, long q, const long qend, const PointArrays& a) {
     using detail::v4d;
@@ -4084,7 +4087,9 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
             c0 = v4d{mc.c, mc.c, mc.c, mc.c}; np = v4d{mc.n_phi, mc.n_phi, mc.n_phi, mc.n_phi};
             sq = v4d{mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi};
         }
-        const v4m soft = {-std::int64_t(pyielded[r] != 0), -std::int64_t(pyielded[r + 1] != 0), -std::int64_t(pyielded[r + 2] != 0), -std::int64_t(pyielded[r + 3] != 0)};
+        std::uint32_t w;  // pyielded[r + l] in byte l (x86 is little-endian)
+        std::memcpy(&w, pyielded + r, 4);
+        const v4m soft = v4m((v4m{w, w, w, w} & v4m{0xff, 0xff00, 0xff0000, 0xff000000}) != 0);  // pyielded[r + l] != 0
         const double keep = 1 - mc.soften;
         const v4d c = soft ? c0 * keep : c0;
         two_c_sq = 2 * c * sq;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
@@ -4094,8 +4099,13 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
     auto record = [&](long r, int lanes, const v4d& xx, const v4d& yy, const v4d& xy, const v4d& zz, const v4d& t_xx, const v4d& t_yy, const v4d& t_xy, const v4d& t_zz, const v4d& d_gamma) __attribute__((always_inline, target("avx2"))) {
         v4d work;  // compliance_product(mc, s, trial - s)
         compliance_product(mc, xx, yy, xy, zz, v4d(t_xx - xx), v4d(t_yy - yy), v4d(t_xy - xy), v4d(t_zz - zz), work);
-        const v4d v0 = {groups_[pgroup[r]].vol0, groups_[pgroup[r + 1]].vol0, groups_[pgroup[r + 2]].vol0, groups_[pgroup[r + 3]].vol0};
-        const v4m m = {-std::int64_t(lanes & 1), -std::int64_t(lanes >> 1 & 1), -std::int64_t(lanes >> 2 & 1), -std::int64_t(lanes >> 3 & 1)};
+        std::uint64_t g4;  // the four points' groups, most often one
+        std::memcpy(&g4, pgroup + r, 8);
+        const double v00 = groups_[pgroup[r]].vol0;
+        const v4d v0 = g4 == pgroup[r] * 0x0001000100010001ull ? v4d{v00, v00, v00, v00}
+                                                                : v4d{v00, groups_[pgroup[r + 1]].vol0, groups_[pgroup[r + 2]].vol0, groups_[pgroup[r + 3]].vol0};
+        v4m m;
+        detail::lane_mask(lanes, m);
         v4d gamma, pw, vol;
         detail::load(pshear + r, gamma); detail::load(pwork + r, pw); detail::load(pvol + r, vol);
         const v4d vk = v0 < vol ? v0 : vol;  // std::min(vol, vol0)
@@ -4116,36 +4126,6 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
         mohr_consult<Own>(mc, std::size_t(r), pvol[r], s);
         psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
     };
-    // The groups the first pass leaves lanes of (first: the group's point; bits: the lanes).
-    constexpr int kLeft = 64;
-    long left_at[kLeft];
-    int left_bits[kLeft], nleft = 0;
-    auto second_pass = [&]() __attribute__((always_inline, target("avx2"))) {
-        for (int u = 0; u < nleft; ++u) {
-            const long r = left_at[u];
-            const int left = left_bits[u];
-            v4d xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;  // the left lanes' trials (the first pass kept them)
-            detail::load(psxx + r, xx); detail::load(psyy + r, yy); detail::load(psxy + r, xy); detail::load(pszz + r, zz);
-            strength(r, np, two_c_sq);  // the left lanes' yielded flags are as the first pass read them
-            detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
-            const v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
-            detail::MohrLanes found;
-            detail::return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
-            xx = t_xx; yy = t_yy; xy = t_xy; zz = t_zz;  // (its settled lanes are not these)
-            const int edge = detail::edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, left, d_gamma);
-            if (edge) {
-                const v4m done = {-std::int64_t(edge & 1), -std::int64_t(edge >> 1 & 1), -std::int64_t(edge >> 2 & 1), -std::int64_t(edge >> 3 & 1)};
-                v4d sxx, syy, sxy, szz;
-                detail::load(psxx + r, sxx); detail::load(psyy + r, syy); detail::load(psxy + r, sxy); detail::load(pszz + r, szz);
-                detail::store(psxx + r, done ? xx : sxx); detail::store(psyy + r, done ? yy : syy);
-                detail::store(psxy + r, done ? xy : sxy); detail::store(pszz + r, done ? zz : szz);
-                record(r, edge, xx, yy, xy, zz, t_xx, t_yy, t_xy, t_zz, d_gamma);
-            }
-            for (int l = 0; l < 4; ++l)  // the lanes still left: the one-point code, on the trial
-                if ((left & ~edge) >> l & 1) one_point(r + l, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]});
-        }
-        nleft = 0;
-    };
     for (; q + 4 <= qend; q += 4) {
         v4d xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;
         detail::load(psxx + q, xx); detail::load(psyy + q, yy); detail::load(psxy + q, xy); detail::load(pszz + q, zz);
@@ -4155,14 +4135,22 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
         const v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
         detail::MohrLanes found;
         settled = detail::return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
-        detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy); detail::store(pszz + q, zz);
         if (const int sh = settled >> 4) record(q, sh, xx, yy, xy, zz, t_xx, t_yy, t_xy, t_zz, d_gamma);
-        if ((settled & 15) != 15) {
-            left_at[nleft] = q; left_bits[nleft] = ~settled & 15;
-            if (++nleft == kLeft) second_pass();
+        int left = ~settled & 15;
+        if (left) {  // an edge or the apex line (the search's first two sets), from the trials
+            v4d ex = t_xx, ey = t_yy, exy = t_xy, ez = t_zz;
+            if (const int edge = detail::edge_lanes(ex, ey, exy, ez, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, left, d_gamma)) {
+                v4m done;
+                detail::lane_mask(edge, done);
+                xx = done ? ex : xx; yy = done ? ey : yy; xy = done ? exy : xy; zz = done ? ez : zz;
+                record(q, edge, ex, ey, exy, ez, t_xx, t_yy, t_xy, t_zz, d_gamma);
+                left &= ~edge;
+            }
         }
+        detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy); detail::store(pszz + q, zz);
+        for (int l = 0; left; ++l, left >>= 1)  // the lanes still left: the one-point code, on the trial
+            if (left & 1) one_point(q + l, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]});
     }
-    second_pass();
     for (; q < qend; ++q) one_point(q, Stress{psxx[q], psyy[q], psxy[q], pszz[q]});  // the last one to three points
 }
 #endif
