@@ -4099,11 +4099,7 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
     auto record = [&](long r, int lanes, const v4d& xx, const v4d& yy, const v4d& xy, const v4d& zz, const v4d& t_xx, const v4d& t_yy, const v4d& t_xy, const v4d& t_zz, const v4d& d_gamma) __attribute__((always_inline, target("avx2"))) {
         v4d work;  // compliance_product(mc, s, trial - s)
         compliance_product(mc, xx, yy, xy, zz, v4d(t_xx - xx), v4d(t_yy - yy), v4d(t_xy - xy), v4d(t_zz - zz), work);
-        std::uint64_t g4;  // the four points' groups, most often one
-        std::memcpy(&g4, pgroup + r, 8);
-        const double v00 = groups_[pgroup[r]].vol0;
-        const v4d v0 = g4 == pgroup[r] * 0x0001000100010001ull ? v4d{v00, v00, v00, v00}
-                                                                : v4d{v00, groups_[pgroup[r + 1]].vol0, groups_[pgroup[r + 2]].vol0, groups_[pgroup[r + 3]].vol0};
+        const v4d v0 = {groups_[pgroup[r]].vol0, groups_[pgroup[r + 1]].vol0, groups_[pgroup[r + 2]].vol0, groups_[pgroup[r + 3]].vol0};
         v4m m;
         detail::lane_mask(lanes, m);
         v4d gamma, pw, vol;
