@@ -1547,7 +1547,8 @@ struct MohrLanes { v4d a, t0, t1, t2, sig_t, tol, ft; v4m A, C, shear_first; };
 // mohr_coulomb_correct (where FLAC's h chooses shear). Bit l of the result: lane l is
 // settled; bit 4 + l: it was returned by shear (its stress replaced, d_gamma[l] its plastic
 // shear increment). A lane left unsettled (tension, an edge, or a return the closed form
-// cannot make admissible) takes the one-point code. n_psi, tension, a1, a2: the material's (MaterialConstants).
+// cannot make admissible) goes to edge_lanes (with `found`), and what that leaves to the
+// one-point code. n_psi, tension, a1, a2: the material's (MaterialConstants).
 // return_lanes is inlined where it is called (its caller must be built for AVX2);
 // mohr_return_lanes is the same as a function of its own (the tests call it).
 __attribute__((target("avx2"), always_inline)) inline int return_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, v4d& d_gamma, MohrLanes& found) {
