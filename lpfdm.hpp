@@ -4066,7 +4066,7 @@ __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0
 // only; each lane's operations are those of the one-point code. The lanes the closed form
 // leaves go on at once (edge_lanes, then the one-point code): a second pass over the groups
 // holding them, which made the elastic test and the return again to find what edge_lanes
-// needs, was no faster (8.6 % of the groups of bench_flow.deck's last steps hold one).
+// needs, was no faster (6.8 % of the groups of four hold one in steps 3600-3640 of bench_flow.deck).
 template <bool Own>
 __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const MaterialConstants& mc, long q, const long qend, const PointArrays& a) {
     using detail::v4d;
