@@ -16,8 +16,11 @@
 #     10 % of steps (a run of those steps) and its last 10 % (the state saved by one run
 #     of 90 % of the steps, OUTPUT STATE, continued with --restart), each with 1 and 2
 #     threads; the reference kernel on the same first and last 10 % (it is slow: not
-#     the whole run); and the result of the run (the peer scene's sigma_yy error against
-#     the column at rest, the flow's front travel in cells and fraction yielded).
+#     the whole run); the plain serial loop of commit BEFORE on the whole run, beside a
+#     whole run of the program timed the same way (the summary line's figure, the steps
+#     with their output: that version has no --profile), and what it gave; and the
+#     result of the run (the peer scene's sigma_yy error against the column at rest, the
+#     flow's front travel in cells and fraction yielded).
 # The whole-run scenes are timed by --profile: particle-steps over the sum of the times
 # of the phases of the cycle (the steps alone: not the frames and the state written).
 # The ratio to the reference kernel, measured in the same run, is what compares across
@@ -85,6 +88,29 @@ med() { echo "${1%% *}"; }
 # col FILE K: column K of FILE's lines (the runs of one measure)
 col() { cut -d' ' -f"$2" "$1"; }
 
+# result_of NAME DECK TABLE: what a whole run gave, from its point table ("-" without one)
+result_of() {
+  local name=$1 deck=$2 table=$3 L f0 f1 y
+  [ -s "$table" ] || { echo "-"; return; }
+  case $name in
+  peer)
+    # sigma_yy against the column at rest, -rho g (H - Y), at each point's height at
+    # step 0, relative L2 error over all points (tools/verify_column.awk)
+    awk -v H=32 -v rho=2000 -v g=9.81 -v E=1e7 -v nu=0.3 -f tools/verify_column.awk "$table" |
+      awk '{ printf "syy L2 error %.2f %%", 100 * $3 }' ;;
+  flow)
+    # the front (99 % of the points behind it, tools/verify_front.awk) at step 0 and at
+    # the end, in cells; the fraction of the points that have yielded at the end
+    L=$(awk 'toupper($1) == "GRID" { print $4 }' "$deck")
+    f0=$(awk '/^# step/ { f++ } f == 1' "$table" | awk -f tools/verify_front.awk)
+    f1=$(awk -f tools/verify_front.awk "$table")
+    y=$(awk '/^# step/ { n = s = 0; next } /^[0-9-]/ { n++; s += $8 } END { if (n) printf "%.1f", 100 * s / n }' "$table")
+    awk -v a="$f0" -v b="$f1" -v L="$L" -v y="$y" 'BEGIN { split(a, p, " "); split(b, q, " ")
+      printf "front +%.0f cells (farthest point +%.0f), %s %% yielded", (q[1] - p[1]) / L, (q[2] - p[2]) / L, y }' ;;
+  *) echo "-" ;;
+  esac
+}
+
 rows=()
 for sc in "${scenes[@]}"; do
   IFS='|' read -r name deck opts kind <<<"$sc"
@@ -138,7 +164,7 @@ for sc in "${scenes[@]}"; do
   OMP_NUM_THREADS=2 "$exe" -q -o "$tmp/$name-state" --steps "$resume" "$copy" 2>/dev/null
   state=$tmp/$name-state/$base.state
   [ -s "$state" ] || log "   no state written at step $resume: the last 10 % is not measured"
-  for m in whole1 whole2 first1 first2 last1 last2 reffirst reflast; do : >"$tmp/$m"; done
+  for m in whole1 whole2 first1 first2 last1 last2 reffirst reflast plainw progw; do : >"$tmp/$m"; done
   for r in $(seq "$runs"); do
     # interleaved run by run, so that a slow spell of the machine falls on all of them
     timed "$steps" 1 "$tmp/$name-w1-$r" "$copy" >>"$tmp/whole1"
@@ -151,10 +177,18 @@ for sc in "${scenes[@]}"; do
       timed "$tenth" 2 "$tmp/$name-l2" --restart "$state" "$copy" >>"$tmp/last2"
       timed "$tenth" 1 "$tmp/$name-l0" --kernel reference --restart "$state" "$copy" >>"$tmp/reflast"
     fi
+    # the plain loop of BEFORE on the whole run (the deck as it is: that version writes no
+    # state), beside the program's own whole run timed the same way (its summary line:
+    # the steps with their output), one thread each
+    if [ -n "$before" ]; then
+      rate "$before" 1 "$deck" "" >>"$tmp/plainw"
+      cp "$tmp/o/${base}_points.txt" "$tmp/$name-plain-points.txt" 2>/dev/null
+      rate "$exe" 1 "$deck" "" >>"$tmp/progw"
+    fi
     [ "$r" -lt "$runs" ] && rm -rf "$tmp/$name-w1-$r" "$tmp/$name-w2-$r"  # (the last run's table is measured below)
   done
   pts=$(sed -nE 's/^lpfdm: [0-9]+ steps, ([0-9]+) points.*/\1/p' "$tmp/$name-w1-$runs/stdout")
-  for m in whole1 whole2 first1 first2 last1 last2 reffirst reflast; do
+  for m in whole1 whole2 first1 first2 last1 last2 reffirst reflast plainw progw; do
     eval "$m=\$(col \"\$tmp/$m\" 1 | stats)"
     log "   $(printf '%-9s' "$m") $(eval echo "\$$m") (median min max)"
   done
@@ -163,28 +197,15 @@ for sc in "${scenes[@]}"; do
   done
   mem1=$(col "$tmp/whole1" 2 | stats); mem2=$(col "$tmp/whole2" 2 | stats); bpp=$(col "$tmp/whole1" 3 | stats)
   # The result of the run, from the point table of the last one-thread whole run.
-  table=$tmp/$name-w1-$runs/${base}_points.txt
-  check="-"
-  if [ -s "$table" ]; then
-    case $name in
-    peer)
-      # sigma_yy against the column at rest, -rho g (H - Y), at each point's height at
-      # step 0, relative L2 error over all points (tools/verify_column.awk)
-      check=$(awk -v H=32 -v rho=2000 -v g=9.81 -v E=1e7 -v nu=0.3 -f tools/verify_column.awk "$table" |
-        awk '{ printf "syy L2 error %.2f %%", 100 * $3 }') ;;
-    flow)
-      # the front (99 % of the points behind it, tools/verify_front.awk) at step 0 and at
-      # the end, in cells; the fraction of the points that have yielded at the end
-      L=$(awk 'toupper($1) == "GRID" { print $4 }' "$deck")
-      f0=$(awk '/^# step/ { f++ } f == 1' "$table" | awk -f tools/verify_front.awk)
-      f1=$(awk -f tools/verify_front.awk "$table")
-      y=$(awk '/^# step/ { n = s = 0; next } /^[0-9-]/ { n++; s += $8 } END { if (n) printf "%.1f", 100 * s / n }' "$table")
-      check=$(awk -v a="$f0" -v b="$f1" -v L="$L" -v y="$y" 'BEGIN { split(a, p, " "); split(b, q, " ")
-        printf "front +%.0f cells (farthest point +%.0f), %s %% yielded", (q[1] - p[1]) / L, (q[2] - p[2]) / L, y }') ;;
-    esac
-  fi
+  check=$(result_of "$name" "$deck" "$tmp/$name-w1-$runs/${base}_points.txt")
   log "   $check"
-  rows+=("| $name | $pts | $steps | $(med "$whole1") | $(med "$whole2") ($(ratio "$(med "$whole2")" "$(med "$whole1")")x) | $(med "$first1") / $(med "$first2") | $(med "$last1") / $(med "$last2") | $(med "$reffirst") / $(med "$reflast") (10 %) | $(ratio "$(med "$first1")" "$(med "$reffirst")") / $(ratio "$(med "$last1")" "$(med "$reflast")") | - | - | $(med "$mem1") / $(med "$mem2") | $(med "$bpp") | $check |")
+  befcell="-"
+  if [ -n "$before" ] && [ -s "$tmp/plainw" ]; then
+    befcell="$(med "$plainw") ($(ratio "$(med "$progw")" "$(med "$plainw")"), whole run)"
+    log "   plain loop of $before_rev, whole run: $plainw; the program beside it, timed alike: $progw (median min max)"
+    log "   plain loop of $before_rev, its result: $(result_of "$name" "$deck" "$tmp/$name-plain-points.txt")"
+  fi
+  rows+=("| $name | $pts | $steps | $(med "$whole1") | $(med "$whole2") ($(ratio "$(med "$whole2")" "$(med "$whole1")")x) | $(med "$first1") / $(med "$first2") | $(med "$last1") / $(med "$last2") | $(med "$reffirst") / $(med "$reflast") (10 %) | $(ratio "$(med "$first1")" "$(med "$reffirst")") / $(ratio "$(med "$last1")" "$(med "$reflast")") | $befcell | - | $(med "$mem1") / $(med "$mem2") | $(med "$bpp") | $check |")
 done
 
 echo
