@@ -7,14 +7,15 @@
 #      no fmt, no Eigen);
 #   4. the full build, cmake -S . -B DIR && cmake --build DIR && ctest --test-dir DIR, in a
 #      temporary directory: it builds with no warning (GCC or the default compiler, -O3),
-#      the program runs two threads when asked (OpenMP found), `ctest -N` lists the unit
+#      the program runs two threads when asked (OpenMP found) and writes the same bytes as
+#      EXE (make's -O2 build) on two Mohr-Coulomb runs, `ctest -N` lists the unit
 #      tests (unit_quick, unit_slow) and one test for every tests/check_*.sh, and the tests
 #      labelled quick pass: the unit tests not tagged [slow] and the two quickest checks,
 #      cli and vtu (make test runs the rest with its own builds). Run by ctest as the test
 #      `cmake` (LPFDM_CMAKE_INSIDE_CTEST set), the check leaves way 4 out: that ctest run
 #      is way 4.
 #
-# usage: tests/check_cmake.sh EXE   (EXE only chooses whether to run: tests/run.sh runs every
+# usage: tests/check_cmake.sh EXE   (EXE chooses whether to run, and is compared in way 4: tests/run.sh runs every
 # check once per build of the program, and this one runs for the plain build, not for a
 # sanitizer build, whose name contains "san", like the fuzzing smoke)
 # Needs cmake and pkg-config (make test installs them). Last line "cmake: N passed, M failed".
@@ -22,6 +23,8 @@ set -u
 . "$(dirname "$0")/lib.sh"
 cd "$(dirname "$0")/.." || exit 2
 plain_build_only cmake "${1:-}"
+prog=$1
+case $prog in /*) ;; *) prog=$OLDPWD/$prog ;; esac  # (given from where the script was started)
 passed=0 failed=0
 fail() { echo "FAIL cmake $1"; failed=$((failed + 1)); }
 for tool in cmake pkg-config; do
@@ -114,6 +117,26 @@ else
         passed=$((passed + 1))
     else
         fail "the program of the full build does not run two threads with --threads 2 (OpenMP not found?): $(grep -m 1 '^# run: threads' "$tmp/omp/column_history.txt" 2>/dev/null || head -n 2 "$tmp/omp.log")"
+    fi
+    # The same bytes as the program under test (make's build, -O2; CMake's Release, -O3,
+    # and perhaps another compiler): a Mohr-Coulomb cut failing under its own weight (a
+    # thousand steps: softening, points crossing cells) and the first steps of the flowing
+    # collapse (the AVX2 loop of four points, the consult's edge lanes), one thread each.
+    differ=""
+    for args in "--steps 1000 decks/cut_high.deck" "--steps 300 decks/bench_flow.deck"; do
+        name=$(basename "${args##* }" .deck)
+        # shellcheck disable=SC2086  # (the options, word by word)
+        OMP_NUM_THREADS=1 "$prog" -q -o "$tmp/same-make/$name" $args >/dev/null 2>&1 &&
+            OMP_NUM_THREADS=1 "$tmp/full/lpfdm" -q -o "$tmp/same-cmake/$name" $args >/dev/null 2>&1 ||
+            { differ="$differ $name (a run failed)"; continue; }
+        for f in "$tmp/same-make/$name"/*; do
+            cmp -s "$f" "$tmp/same-cmake/$name/$(basename "$f")" || differ="$differ $(basename "$f")"
+        done
+    done
+    if [ -z "$differ" ]; then
+        passed=$((passed + 1))
+    else
+        fail "the program of the full build writes other bytes than $prog:$differ"
     fi
     # ctest -N: "  Test  #3: decks" lines; every check script and the two unit parts.
     registered=$(ctest --test-dir "$tmp/full" -N 2>&1 | sed -nE 's/^ *Test +#[0-9]+: ([^ ]+).*/\1/p' | sort)
