@@ -4584,6 +4584,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
                 rc = detail::v4d{s0.rc, s1.rc, s2.rc, s3.rc}; rs = detail::v4d{s0.rs, s1.rs, s2.rs, s3.rs};
             };
+            // Four cells in the lanes, all the same one.
+            auto one_cell = [](const v4i& c) LPFDM_INLINE { return __builtin_ia32_movmskps(v4f(c == c[0])) == 15; };
             // Four points q .. q+3 of one group g (read into g): their groups as one 64-bit word.
             auto one_group_of_four = [&](long q, int& g) LPFDM_INLINE {
                 g = pgroup[q];
@@ -4597,7 +4599,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             auto trial_block = [&](long b0, const long b1) LPFDM_INLINE {
                 auto trial = [&](const MaterialConstants& mc, auto& xx, auto& yy, auto& xy, auto& zz, auto& vol, const auto& e, const auto& rc, const auto& rs) LPFDM_INLINE {
                     using V = std::remove_reference_t<decltype(xx)>;  // one value or four lanes
-                struct { V xx, yy, xy, zz; } de;
+                    struct { V xx, yy, xy, zz; } de;
                     elastic_change(mc, e.xx, e.yy, e.xy, e.yx, de.xx, de.yy, de.xy, de.zz);  // eq. 6
                     elastic_trial(xx, yy, xy, zz, de, rc, rs);
                     vol *= 1.0 + e.xx + e.yy;
@@ -4614,9 +4616,11 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     }
                     detail::StrainLanes e;
                     detail::v4d rc, rs, xx, yy, xy, zz, vol;
-                    if (pcell[b0] == pcell[b0 + 3] && pcell[b0 + 1] == pcell[b0] && pcell[b0 + 2] == pcell[b0]) {  // one cell: its values once
-                        const CellStrain& ce = strain_[std::size_t(pcell[b0])];
-                        e = strain_lane(pcell[b0]);
+                    v4i c;
+                    std::memcpy(&c, pcell + b0, sizeof c);
+                    if (one_cell(c)) {  // one cell: its values once
+                        const CellStrain& ce = strain_[std::size_t(c[0])];
+                        e = strain_lane(c[0]);
                         rc = detail::v4d{ce.rc, ce.rc, ce.rc, ce.rc}; rs = detail::v4d{ce.rs, ce.rs, ce.rs, ce.rs};
                     } else {
                         e = strain_lanes(b0);
@@ -4660,10 +4664,10 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     const v4i n1 = cj * (mx + 1) + ci, n3 = n1 + (mx + 1);  // node(ci, cj); n2 = n1 + 1, n4 = n3 + 1
                     v4d umx, umy;
                     detail::StrainLanes e;
-                    if (__builtin_ia32_movmskps(v4f(c == c[0])) == 15) {  // one cell (while runs are long): its values once
+                    if (one_cell(c)) {  // one cell (while runs are long): its values once
                         const int a = n1[0], b = n3[0];
                         double mean_x, mean_y;
-                    mean_of_four(ux[a], ux[a + 1], ux[b], ux[b + 1], mean_x); mean_of_four(uy[a], uy[a + 1], uy[b], uy[b + 1], mean_y);
+                        mean_of_four(ux[a], ux[a + 1], ux[b], ux[b + 1], mean_x); mean_of_four(uy[a], uy[a + 1], uy[b], uy[b + 1], mean_y);
                         umx = v4d{mean_x, mean_x, mean_x, mean_x}; umy = v4d{mean_y, mean_y, mean_y, mean_y};
                         e = strain_lane(c[0]);
                     } else {
@@ -4696,7 +4700,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     ni = ni < mx1 ? ni : mx1; nj = nj < my1 ? nj : my1;  // std::min(m - 1, int(x / L))
                     const v4i cn = nj * mx + ni;  // cell(ni, nj)
                     int g;
-                    if (__builtin_ia32_movmskps(v4f(cn == cn[0])) == 15 && owned(cn[0]) && one_group_of_four(b0, g)) {
+                    if (one_cell(cn) && owned(cn[0]) && one_group_of_four(b0, g)) {
                         // all four in one cell (the usual case while runs are long): its sums in
                         // registers, the four added in point order as deposit() adds them
                         std::memcpy(pcell + b0, &cn, sizeof cn);
