@@ -225,6 +225,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <fmt/compile.h>
 #include <fmt/format.h>
 #endif
 
@@ -6632,7 +6633,7 @@ inline void write_points_frame(std::FILE* f, const Simulation& sim, bool first) 
     const bool plastic = !p.plastic_shear.empty();
     for (const std::int32_t slot : sim.by_id()) {  // by id, whatever the storage order (REORDER)
         const std::size_t k = std::size_t(slot);
-        fmt::format_to(std::back_inserter(b), "{:.9g} {:.9g} {:.7g} {:.7g} {:.7g} {:.7g} {:.6g} {} {} {}\n", p.x[k], p.y[k], p.sxx[k], p.syy[k],
+        fmt::format_to(std::back_inserter(b), FMT_COMPILE("{:.9g} {:.9g} {:.7g} {:.7g} {:.7g} {:.7g} {:.6g} {} {} {}\n"), p.x[k], p.y[k], p.sxx[k], p.syy[k],
                        p.sxy[k], p.szz[k], plastic ? p.plastic_shear[k] : 0.0, plastic ? int(p.yielded[k]) : 0, sim.material_id(k), p.id[k]);
         if (b.size() > (1 << 20)) { std::fwrite(b.data(), 1, b.size(), f); b.clear(); }
     }
