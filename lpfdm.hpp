@@ -2906,7 +2906,8 @@ private:
     // nodes
     std::vector<double> dux_, duy_, fx_, fy_, nmass_, nmass_prev_;
     std::vector<std::uint8_t> fixed_;
-    std::vector<std::int32_t> fixed_nodes_;
+    std::vector<std::int32_t> fixed_nodes_;   // ascending
+    std::vector<std::int32_t> fixed_rows_;    // row j's fixed nodes: fixed_nodes_[fixed_rows_[j] .. fixed_rows_[j + 1] - 1]
     enum : std::uint8_t { kEdgeBottom = 1, kEdgeTop = 2, kEdgeLeft = 4, kEdgeRight = 8, kEdgeWall = 16 };  // kEdgeWall: near a wall's face
     std::vector<std::uint8_t> fixed_edges_;  // per cell: which of its edges are fixed across
     // Per column i (and row j): its left edge i L, and the bounds of x / L inside it, i and i + 1
@@ -3076,6 +3077,9 @@ inline void Simulation::setup() {
             for (int i = i0; i <= i1; ++i) fixed_[node(i, j)] |= std::uint8_t(f.dirs);
     }
     for (std::size_t n = 0; n < nodes; ++n) if (fixed_[n]) fixed_nodes_.push_back(std::int32_t(n));
+    fixed_rows_.assign(std::size_t(my_ + 2), 0);
+    for (const std::int32_t n : fixed_nodes_) ++fixed_rows_[std::size_t(n / (mx_ + 1) + 1)];
+    for (int j = 0; j <= my_; ++j) fixed_rows_[std::size_t(j + 1)] += fixed_rows_[std::size_t(j)];
     // Cell edges whose two nodes are both fixed across the edge: no point may cross them.
     fixed_edges_.assign(cells, 0);
     for (int j = 0; j < my_; ++j)
@@ -5218,7 +5222,7 @@ inline void Simulation::integrate() {
     // Node n of the nodes this step's cells touch, or the nodes n .. n + 3 in the lanes of
     // a vector T. Each node of nr keeps the increment eq. 13 begins from, in this same pass
     // and by the same threads (what keep_increments does in the reference cycle).
-    auto advance = [&](int n, auto tag) LPFDM_INLINE {
+    auto advance = [ux_n, uy_n, ux_old, uy_old, nm, fxn, fyn, dt2, alpha](int n, auto tag) LPFDM_INLINE {
         using T = typename decltype(tag)::type;
         constexpr bool one = std::is_same_v<T, double>;
         T m, fx, fy, ux0, uy0;
@@ -5238,23 +5242,6 @@ inline void Simulation::integrate() {
         }
         detail::store(ux_n + n, ux); detail::store(uy_n + n, uy);
     };
-    auto advance_row = [&](int j, auto wide) LPFDM_INLINE {
-        const bool row_inside = j >= nodes_now.j0 && j < nodes_now.j1;  // then nr holds nodes_now's columns
-        const int ia = row_inside ? nodes_now.i0 : nr.i1, ib = row_inside ? nodes_now.i1 : nr.i1;
-        const int n0 = j * (mx + 1);
-        auto idle = [&](int i) {  // no mass, no motion
-            const int n = n0 + i;
-            ux_old[n] = ux_n[n]; uy_old[n] = uy_n[n];
-            nm[n] = 0; fxn[n] = fyn[n] = 0; ux_n[n] = uy_n[n] = 0;
-        };
-        for (int i = nr.i0; i < ia; ++i) idle(i);
-        detail::sweep(n0 + ia, n0 + ib, wide, advance);
-        for (int i = ib; i < nr.i1; ++i) idle(i);
-    };
-    by_rows(kAdvanceRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(advance_row, j); });
-    integrated_ = nr;
-    if (dynamic_) absorb_increments();  // the dashpots of ABSORB
-    const Range wall_nodes = impose_supports();
     double *row_ke_of = row_ke_.data(), *row_du_of = row_du_.data();
     // The kinetic energy of row j, summed in node order, and its largest increment (nodes
     // with mass only); four nodes' terms at a time in the lanes of a vector.
@@ -5292,7 +5279,45 @@ inline void Simulation::integrate() {
         row_du_of[j] = row_du;
         energy_row_terms(j, nr.i0, nr.i1, wide);  // the energy account's terms of the row
     };
-    by_rows(kEnergyRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(energy_row, j); });
+    // Without SHAKE or ABSORB (whose ground and dashpots change increments between eq. 13
+    // and the supports) the fixed directions are imposed in eq. 13's pass, row by row, and
+    // each row's energy terms made there, while its nodes are in cache: impose_supports
+    // later sets the same zeros again and takes the reactions, and the rows where a wall
+    // drove a node are made again after it. The same numbers as eq. 13's pass, the supports
+    // and then every row's terms (step_reference), one pass over the nodes fewer.
+    const bool fused = !dynamic_;
+    const std::int32_t *fixed_at = fixed_nodes_.data(), *fixed_row = fixed_rows_.data();
+    const std::uint8_t* fixed = fixed_.data();
+    auto hold_row = [&](int j) LPFDM_INLINE {
+        for (std::int32_t a = fixed_row[j]; a < fixed_row[j + 1]; ++a) {
+            const int n = fixed_at[a];
+            if (fixed[n] & kFixX) ux_n[n] = 0;
+            if (fixed[n] & kFixY) uy_n[n] = 0;
+        }
+    };
+    auto advance_row = [&](int j, auto wide) LPFDM_INLINE {
+        const bool row_inside = j >= nodes_now.j0 && j < nodes_now.j1;  // then nr holds nodes_now's columns
+        const int ia = row_inside ? nodes_now.i0 : nr.i1, ib = row_inside ? nodes_now.i1 : nr.i1;
+        const int n0 = j * (mx + 1);
+        auto idle = [&](int i) {  // no mass, no motion
+            const int n = n0 + i;
+            ux_old[n] = ux_n[n]; uy_old[n] = uy_n[n];
+            nm[n] = 0; fxn[n] = fyn[n] = 0; ux_n[n] = uy_n[n] = 0;
+        };
+        for (int i = nr.i0; i < ia; ++i) idle(i);
+        detail::sweep(n0 + ia, n0 + ib, wide, advance);
+        for (int i = ib; i < nr.i1; ++i) idle(i);
+        if (fused) {
+            hold_row(j);
+            energy_row(j, wide);
+        }
+    };
+    by_rows(kAdvanceRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(advance_row, j); });
+    integrated_ = nr;
+    if (dynamic_) absorb_increments();  // the dashpots of ABSORB
+    const Range wall_nodes = impose_supports();
+    const int e0 = fused ? std::max(nr.j0, wall_nodes.j0) : nr.j0, e1 = fused ? std::min(nr.j1, wall_nodes.j1) : nr.j1;
+    if (e0 < e1) by_rows(kEnergyRows, e0, e1, long(e1 - e0) * (nr.i1 - nr.i0), [&](int j) { each_row(energy_row, j); });
     for (int j = nr.j0; j < nr.j1; ++j) {
         ke += row_ke_[std::size_t(j)];
         maxdu = std::max(maxdu, row_du_[std::size_t(j)]);
