@@ -1076,10 +1076,16 @@ typedef long long v4m __attribute__((vector_size(32)));
 #else
 #define LPFDM_SHUFFLE(a, b, i, j, k, l) __builtin_shuffle(a, b, ::lpfdm::detail::v4m{i, j, k, l})
 #endif
+// The sign bits of a comparison's mask (all ones or zero in each lane) folded to two, by
+// an SSE2 instruction: what (m[0] & m[1] & m[2] & m[3]) != 0 takes seven for.
+typedef long long v2m __attribute__((vector_size(16)));
+typedef double v2d __attribute__((vector_size(16)));
+LPFDM_INLINE inline int lane_signs(const v2m& a) { return __builtin_ia32_movmskpd(v2d(a)); }
+LPFDM_INLINE inline void halves(const v4m& m, v2m& lo, v2m& hi) { std::memcpy(&lo, &m, sizeof lo); std::memcpy(&hi, reinterpret_cast<const char*>(&m) + sizeof lo, sizeof hi); }
 // True when every lane of a comparison's mask is set.
-LPFDM_INLINE inline bool all_lanes(const v4m& m) { return (m[0] & m[1] & m[2] & m[3]) != 0; }
+LPFDM_INLINE inline bool all_lanes(const v4m& m) { v2m lo, hi; halves(m, lo, hi); return lane_signs(lo & hi) == 3; }
 // True when no lane of a comparison's mask is set.
-LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { return (m[0] | m[1] | m[2] | m[3]) == 0; }
+LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { v2m lo, hi; halves(m, lo, hi); return lane_signs(lo | hi) == 0; }
 // m: lane l set where bit l of `bits` is (movmskpd's inverse).
 LPFDM_INLINE inline void lane_mask(int bits, v4m& m) { m = v4m((v4m{bits, bits, bits, bits} & v4m{1, 2, 4, 8}) != 0); }
 // a = |v| lane by lane (the sign bit cleared, as std::fabs does).
