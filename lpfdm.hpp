@@ -912,8 +912,12 @@ LPFDM_INLINE inline void store(double* p, const T& v) {
     if constexpr (std::is_same_v<T, double>) {
         *p = v;
     } else {
+#if LPFDM_WIDE
         typedef double U __attribute__((vector_size(sizeof(T)), aligned(alignof(double))));
         *reinterpret_cast<U*>(p) = v;
+#else
+        std::memcpy(p, &v, sizeof v);
+#endif
     }
 }
 // A type as a value (a lambda's argument that says which T to use).
@@ -5337,7 +5341,10 @@ inline void Simulation::integrate() {
 
 // Fixed directions, then moving walls (paper section 3), imposed on the increments eq. 13
 // made; the reactions are what the supports exert on the material (minus the net nodal
-// force they cancel). Returns the nodes the walls drove.
+// force they cancel). Returns the nodes the walls drove. integrate() relies on this, in a
+// scene that neither shakes nor absorbs: the increments change only at fixed nodes (to
+// zero, in their fixed directions) and inside the range returned; a support that changed
+// others would leave its rows' energy terms stale there.
 // The work a support does in one direction of node n, holding it at c where eq. 13 began
 // from b: its force S = m (c - b) / dt^2 - F on the step's mean increment (b + c) / 2
 // (into w), and S c / 2 (into h: energy() takes the last step's off, trapezoidal sums).
