@@ -34,7 +34,7 @@ struct OptionSpec {
     const char* arg;  // the value's name, or nullptr for a flag
     const char* help; // lines after the first are indented under it
 };
-constexpr int kSeed = 256, kStrict = 257, kNoAvx2 = 258, kRestart = 259;  // getopt values of the options without a short form
+constexpr int kSeed = 256, kStrict = 257, kNoAvx2 = 258, kRestart = 259, kNoAvx512 = 260;  // getopt values of the options without a short form
 const OptionSpec kOptions[] = {
     {"output", 'o', "DIR", "write the output files into DIR (created; default: the current directory)"},
     {"steps", 'n', "N", "run N steps instead of the deck's"},
@@ -52,6 +52,8 @@ const OptionSpec kOptions[] = {
     {"strict", 0, nullptr, "warnings are errors: a deck that draws one stops with exit status 2"},
     {"profile", 'p', nullptr, "print the time of each phase of the cycle, peak memory and bytes per point"},
     {"no-avx2", 0, nullptr, "the same as --kernel scalar"},
+    {"no-avx512", 0, nullptr, "the Mohr-Coulomb consult four points per AVX2 register, not eight per AVX-512 register\n"
+                              "where the processor has it (the same output)"},
     {"quiet", 'q', nullptr, "no progress line and no summary"},
     {"help", 'h', nullptr, "this text"},
     {"version", 'V', nullptr, "the version"},
@@ -59,7 +61,7 @@ const OptionSpec kOptions[] = {
 int option_value(const OptionSpec& o) {
     if (o.brief) return o.brief;
     const std::string n = o.name;
-    return n == "seed" ? kSeed : n == "strict" ? kStrict : n == "restart" ? kRestart : kNoAvx2;
+    return n == "seed" ? kSeed : n == "strict" ? kStrict : n == "restart" ? kRestart : n == "no-avx512" ? kNoAvx512 : kNoAvx2;
 }
 
 // The usage text: the synopsis, each option from kOptions, the exit status.
@@ -92,7 +94,7 @@ struct Options {
     std::string deck, outdir = ".", restart;
     long refine = 1, steps = 0;
     long long seed = -1;
-    bool quiet = false, profile = false, strict = false;
+    bool quiet = false, profile = false, strict = false, avx512 = true;
     lpfdm::Kernel kernel = lpfdm::Kernel::Fast;
     long threads = 0;
     std::vector<std::pair<std::string, double>> settings;
@@ -169,6 +171,7 @@ int main(int argc, char** argv) {
         case 'p': opt.profile = true; break;
         case kStrict: opt.strict = true; break;
         case kNoAvx2: opt.kernel = lpfdm::Kernel::Scalar; break;
+        case kNoAvx512: opt.avx512 = false; break;
         case 'o':
             if (!*arg) cli_errors.push_back("-o needs a directory");
             else opt.outdir = arg;
@@ -299,6 +302,7 @@ int main(int argc, char** argv) {
 #endif
     lpfdm::Simulation sim(scene, opt.kernel);
     sim.set_profiling(opt.profile);
+    if (!opt.avx512) sim.set_wide512(false);
     lpfdm::RunInfo run;
     run.deck = opt.deck;
     run.deck_digest = lpfdm::fnv1a64(text);
@@ -524,7 +528,8 @@ int main(int argc, char** argv) {
         const char* lanes = ref ? (opt.kernel == lpfdm::Kernel::Reference ? "the reference cycle" : "the reference cycle (ADVECT FLIP's only kernel)")
                             : !sim.wide() ? "points, cells and nodes one at a time"
                             : sim.scene().motion == lpfdm::Motion::Centre && sim.scene().advect == lpfdm::Advect::Eq12 && sim.scene().mapping == lpfdm::Mapping::Paper
-                                ? "points, cells and nodes four per AVX2 register"
+                                ? (sim.wide512() && sim.return_updates() > 0 ? "points, cells and nodes four per AVX2 register, the Mohr-Coulomb consult eight per AVX-512 register"
+                                                                   : "points, cells and nodes four per AVX2 register")
                                 : "cells and nodes four per AVX2 register, points one at a time";
         std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, %s\n", ref ? 1 : nthreads,
                     double(ru.ru_maxrss) / 1024.0, sim.bytes_per_point(), lanes);

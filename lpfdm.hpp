@@ -203,6 +203,7 @@
 //   * Stability: dt must not exceed L sqrt(rho / ((M + lambda)(1 + alpha))), M = K + 4G/3,
 //     lambda = K - 2G/3: below L / c_p, the limit of a full lattice, because a lone cell
 //     has a faster mode and local damping stiffens the fastest one (see stable_dt).
+#ifndef LPFDM_LANES  // (the end of this file: what namespace detail reads twice)
 #ifndef LPFDM_HPP
 #define LPFDM_HPP
 
@@ -266,6 +267,18 @@
 #define LPFDM_WIDE 1
 #else
 #define LPFDM_WIDE 0
+#endif
+// With it, the Mohr-Coulomb consult of the AVX2 point loop (the elastic test and the plastic
+// return) has a third version, eight points per register, built for AVX-512 (F, VL, DQ) and
+// taken when the processor has it (Simulation::have_wide512): the same text as the four-lane
+// one, read twice (detail::lanes4 and detail::lanes8, the end of this file). AVX-512 brings
+// fused multiply-add with it, which the compiler would use on a * b + c: those functions
+// are built without contraction (GCC: the optimize attribute; Clang: the pragma below, for
+// the whole header).
+#if defined(__clang__)
+#define LPFDM_AVX512 target("avx2,avx512f,avx512vl,avx512dq")
+#else
+#define LPFDM_AVX512 target("avx2,avx512f,avx512vl,avx512dq"), optimize("fp-contract=off")
 #endif
 // Clang contracts a * b + c into a fused multiply-add by default (-ffp-contract=on), and
 // rewrites such expressions even for a processor without one: the AVX2 lanes then differ
@@ -1094,6 +1107,10 @@ LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { v2m lo, hi; halves(m, lo,
 LPFDM_INLINE inline void lane_mask(int bits, v4m& m) { m = v4m((v4m{bits, bits, bits, bits} & v4m{1, 2, 4, 8}) != 0); }
 // a = |v| lane by lane (the sign bit cleared, as std::fabs does).
 LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7fffffffffffffffLL); }
+// Eight doubles (and eight lane masks): AVX-512 registers inside a function built for
+// LPFDM_AVX512 (the Mohr-Coulomb consult's second width, detail::lanes8).
+typedef double v8d __attribute__((vector_size(64)));
+typedef long long v8m __attribute__((vector_size(64)));
 #endif
 LPFDM_INLINE inline void abs_of(double v, double& a) { a = std::fabs(v); }
 }  // namespace detail
@@ -1335,8 +1352,9 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // with psi < phi they rarely (8 of 4.5 million searches in that collapse; 3 of 473 210
     // between the apex-first order and the one before it) give two
     // different returns, of which the one beside FLAC's own plane is taken. The AVX2 point
-    // loop makes those first two sets four points at a time (detail::mohr_edge_lanes, the
-    // same operations): a change to the search's order or arithmetic is a change there.
+    // loop makes those first two sets four or eight points at a time (edge_return, the end
+    // of this file: the same operations): a change to the search's order or arithmetic is a
+    // change there.
     bool found = false;
     const int p0 = shear_first ? shear_plane(i1, i3) : 6 + i3;
     int first[3] = {-1, -1, -1};  // the planes to pair with p0 before the others, in order
@@ -1525,244 +1543,59 @@ LPFDM_INLINE inline void add_four(v4d& acc, const v4d& vol, const v4d& sxx, cons
 }
 // The strain increments of eq. 5a-5d of four cells (four points' cells) in the lanes.
 struct StrainLanes { v4d xx, yy, xy, yx; };
-// The Mohr-Coulomb consult of four elastic trials in the lanes of a vector: mohr_inside,
-// and mohr_coulomb_correct's closed-form shear return, with the same operations in the
-// same order as those compute them one stress at a time (std::min(a, b) is b < a ? b : a,
-// std::max(a, b) a < b ? b : a), so the lanes they settle get the same numbers bit for bit.
-// Built for AVX2 (the square root's builtin needs the target); the AVX2 point loop
-// (Simulation::consult_lanes) inlines them all (return_lanes, edge_lanes).
-//
-// Mohr's circle of (xx, yy) with its radius r given: t.a, t.sig and mohr_inside's lo, hi
-// and shear test.
-__attribute__((target("avx2"), always_inline)) inline void mohr_circle_lanes(const v4d& xx, const v4d& yy, const v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, v4d& a, v4d& t0, v4d& t1, v4d& hi, v4m& shear_ok) {
-    const v4d p = 0.5 * (xx + yy);
-    a = 0.5 * (xx - yy);
-    t0 = p - r; t1 = p + r;
-    const v4d lo = zz < t0 ? zz : t0;
-    hi = t1 < zz ? zz : t1;
-    shear_ok = lo - hi * np + two_c_sq >= 0;
-}
-// mohr_inside's first exit: bit l set when trial l is inside with no tensile principal
-// value. r: the circle's radius, for mohr_return_lanes.
+// The Mohr-Coulomb consult of elastic trials in the lanes of a vector, four (AVX2) and
+// eight (AVX-512): one text, the end of this file, read twice here, once into namespace
+// lanes4 and once into lanes8, each time with the attribute of its instruction set. Not a
+// template of the vector type: GCC builds a function's vector comparisons for the
+// instruction set of that function before inlining it, so a template without AVX-512,
+// inlined into a function with it, compared eight lanes one by one (the consult took 26 ns
+// a point-update instead of 10 in the flow's last steps).
+// LPFDM_SELF: this file (__FILE_NAME__ where the compiler has it: whatever its name).
+#if defined(__FILE_NAME__)
+#define LPFDM_SELF __FILE_NAME__
+#else
+#define LPFDM_SELF "lpfdm.hpp"
+#endif
+// The point arrays the consult in lanes reads and writes.
+struct ConsultArrays {
+    double *sxx, *syy, *sxy, *szz;
+    const double* vol;
+    const std::uint16_t* group;
+    const double *c0, *n_phi, *sqrt_n_phi;  // each point's own strength (scatter), or null
+    std::uint8_t* yielded;
+    double *plastic_shear, *plastic_work;
+};
+#define LPFDM_LANES 4
+namespace lanes4 {
+#include LPFDM_SELF
+}  // namespace lanes4
+#undef LPFDM_LANES
+#define LPFDM_LANES 8
+namespace lanes8 {
+#include LPFDM_SELF
+}  // namespace lanes8
+#undef LPFDM_LANES
+using MohrLanes = lanes4::Found;
+using MohrLanes8 = lanes8::Found;
+// The lanes' functions as functions of their own, for the tests: four lanes (built for
+// AVX2) and eight (built for AVX-512; call them only where Simulation::have_wide512()).
 __attribute__((target("avx2"))) inline int mohr_inside_lanes(const v4d& xx, const v4d& yy, const v4d& xy, const v4d& zz, const v4d& np, const v4d& two_c_sq, v4d& r) {
-    constexpr double huge = std::numeric_limits<double>::infinity();
-    const v4d inf = {huge, huge, huge, huge}, half_diff = 0.5 * (xx - yy);
-    r = __builtin_ia32_sqrtpd256(half_diff * half_diff + xy * xy);
-    v4d a, t0, t1, hi;
-    v4m shear_ok;
-    mohr_circle_lanes(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
-    return __builtin_ia32_movmskpd256(v4d(shear_ok & (hi <= 0) & (two_c_sq >= 0) & (np < inf)));
-}
-// std::min(std::min(a, b), c) and std::max(std::max(a, b), c) in each lane, with their
-// operations (std::min(a, b) is b < a ? b : a, std::max(a, b) a < b ? b : a).
-LPFDM_INLINE inline void extremes(const v4d& a, const v4d& b, const v4d& c, v4d& lo, v4d& hi) {
-    const v4d m = b < a ? b : a, M = a < b ? b : a;
-    lo = c < m ? c : m;
-    hi = M < c ? c : M;
-}
-// What mohr_return_lanes found of each trial, for mohr_edge_lanes (mohr_coulomb_correct's
-// names): the circle's a, the principal values t0 <= t1 and t2 = sig_zz, the tension limit,
-// the tolerance, the tension plane's f at the largest, the order (A: t1 <= t2, C: t2 < t0,
-// else t0 <= t2 < t1) and FLAC's choice of shear.
-struct MohrLanes { v4d a, t0, t1, t2, sig_t, tol, ft; v4m A, C, shear_first; };
-// The rest of mohr_inside (the tension planes) and the closed-form shear return of
-// mohr_coulomb_correct (where FLAC's h chooses shear). Bit l of the result: lane l is
-// settled; bit 4 + l: it was returned by shear (its stress replaced, d_gamma[l] its plastic
-// shear increment). A lane left unsettled (tension, an edge, or a return the closed form
-// cannot make admissible) goes to edge_lanes (with `found`), and what that leaves to the
-// one-point code. n_psi, tension, a1, a2: the material's (MaterialConstants).
-// return_lanes is inlined where it is called (its caller must be built for AVX2);
-// mohr_return_lanes is the same as a function of its own (the tests call it).
-__attribute__((target("avx2"), always_inline)) inline int return_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, v4d& d_gamma, MohrLanes& found) {
-    constexpr double huge = std::numeric_limits<double>::infinity();
-    const v4d inf = {huge, huge, huge, huge}, zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
-    v4d a, t0, t1, hi;
-    v4m shear_ok;
-    mohr_circle_lanes(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
-    const v4d t2 = zz;
-    v4d sig_t = np > 1 ? two_c_sq / (np - 1) : inf;  // tension_limit
-    if (tension >= 0) sig_t = tension < sig_t ? v4d{tension, tension, tension, tension} : sig_t;
-    const v4m inside = shear_ok & (sig_t - hi >= 0);  // implied by the first exit
-    // The order of t0 <= t1 and t2 (t0 <= t1 holds for every lane without NaN, and a lane
-    // with NaN in its trial or strength fails the check below through tol).
-    const v4m above = t1 > t2, below = t0 > t2;
-    const v4m A = ~above, B = above & ~below, C = above & below;  // (i1 i2 i3) = (0 1 2), (0 2 1), (2 0 1)
-    const v4d ti1 = C ? t2 : t0, ti3 = A ? t2 : t1;
-    const v4d fs = ti1 - ti3 * np + two_c_sq, ft = sig_t - ti3;
-    v4d a0, a1v, a2v, at;
-    abs_of(t0, a0); abs_of(t1, a1v); abs_of(t2, a2v); abs_of(sig_t, at);
-    const v4d tol = 1e-11 * (a0 + a1v + a2v + two_c_sq + (at < inf ? sig_t : zero));
-    const v4d ns0 = np < n_psi ? np : v4d{n_psi, n_psi, n_psi, n_psi};  // std::min(n_psi, np)
-    const v4d d1 = a1 - a2 * ns0, d2 = a2 * (1 - ns0), d3 = a2 - a1 * ns0;
-    const v4d mu = -fs / (d1 - np * d3);
-    const v4d s0 = t0 + mu * (C ? d2 : d1), s1 = t1 + mu * (A ? d2 : d3), s2 = t2 + mu * (A ? d3 : B ? d2 : d1);
-    v4d lo_n, hi_n;
-    extremes(s0, s1, s2, lo_n, hi_n);
-    // FLAC's h chooses shear where the tension plane is violated too (h_fn, the same
-    // operations; a lane with ft >= 0 does not need it, as the one-point code skips it, and
-    // most groups of four hold no lane that does: their square root is not taken).
-    v4m shear_first = (fs < 0) & (ft >= 0);
-    if (const v4m both = (fs < 0) & ~(ft >= 0); __builtin_ia32_movmskpd256(v4d(both))) {
-        const v4d alpha_p = __builtin_ia32_sqrtpd256(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
-        const v4d h = ti3 - sig_t + alpha_p * (ti1 - sig_p);
-        shear_first |= both & ~(h > 0);
-    }
-    const v4m shear = ~inside & shear_first & (lo_n - np * hi_n + two_c_sq >= -tol) & (sig_t - hi_n >= -tol);
-    // to_xy: the same principal direction, the new principal values
-    const v4d pn = 0.5 * (s1 + s0), rn = 0.5 * (s1 - s0);
-    const v4d inv_r = one / r, c2 = r > 0 ? a * inv_r : one, s2xy = r > 0 ? xy * inv_r : zero;
-    xx = shear ? pn + rn * c2 : xx;
-    yy = shear ? pn - rn * c2 : yy;
-    xy = shear ? rn * s2xy : xy;
-    zz = shear ? s2 : zz;
-    abs_of(-mu - mu * ns0, d_gamma);  // |e1 - e3|
-    found = MohrLanes{a, t0, t1, t2, sig_t, tol, ft, A, C, shear_first};
-    return __builtin_ia32_movmskpd256(v4d(inside | shear)) | __builtin_ia32_movmskpd256(v4d(shear)) << 4;
+    return lanes4::inside(xx, yy, xy, zz, np, two_c_sq, r);
 }
 __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, v4d& d_gamma, MohrLanes& found) {
-    return return_lanes(xx, yy, xy, zz, r, np, two_c_sq, n_psi, tension, a1, a2, d_gamma, found);
+    return lanes4::shear_return(xx, yy, xy, zz, r, np, two_c_sq, n_psi, tension, a1, a2, d_gamma, found);
 }
-// The lanes mohr_return_lanes left (bits of `left`; their trials in xx .. zz, what it found of
-// them in m): the first two
-// sets of mohr_coulomb_correct's search, with the same operations in the same order, four
-// lanes at a time. Its closed-form shear return was not admissible there, or FLAC's h chose
-// tension, whose return is made here and, where admissible, left to the one-point code.
-// The search then pairs its plane p0 with first[0], then first[1], the pairs that end most
-// searches in a flowing collapse (an edge of two shear planes, the apex line of shear and
-// tension, the corner of tension and shear). Bit l of the result: lane l was returned by
-// one of them (xx .. zz its stress, d_gamma[l] its plastic shear, as the one-point code's
-// mode Edge gives them); a lane left unsettled (a third set, an infinite or NaN value, an
-// admissible tension return) takes the one-point code, which tries the same two sets first.
-__attribute__((target("avx2"), always_inline)) inline int edge_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double a1, double a2, const MohrLanes& m, int left, v4d& d_gamma) {
-    constexpr double huge = std::numeric_limits<double>::infinity();
-    const v4d inf = {huge, huge, huge, huge}, zero = {0, 0, 0, 0}, one = {1, 1, 1, 1}, two = {2, 2, 2, 2};
-    const v4d &a = m.a, &t0 = m.t0, &t1 = m.t1, &t2 = m.t2, &sig_t = m.sig_t, &tol = m.tol, &ft = m.ft;
-    const v4m &C = m.C, &shear_first = m.shear_first;
-    v4d a0, a1v, a2v, at, ar, anp, ac;
-    abs_of(t0, a0); abs_of(t1, a1v); abs_of(t2, a2v); abs_of(sig_t, at); abs_of(r, ar); abs_of(np, anp); abs_of(two_c_sq, ac);
-    // Finite values only (then nine planes, and t0 <= t1): any other lane takes the one-point code.
-    const v4m finite = (a0 < inf) & (a1v < inf) & (a2v < inf) & (at < inf) & (ar < inf) & (anp < inf) & (ac < inf);
-    const v4m lanes = {-std::int64_t(left & 1), -std::int64_t(left >> 1 & 1), -std::int64_t(left >> 2 & 1), -std::int64_t(left >> 3 & 1)};
-    v4m todo = lanes & finite;
-    if (!__builtin_ia32_movmskpd256(v4d(todo))) return 0;
-    // i1, i2, i3: the order of the trial's principal values, as mohr_coulomb_correct sorts them
-    // ((0 1 2) in A, (2 0 1) in C, else (0 2 1)); the finite lanes' tol is the one-point code's
-    const v4d i1 = C ? two : zero, i2 = m.A ? one : (C ? zero : two), i3 = m.A ? two : one;
-    const v4d ns = np < n_psi ? np : v4d{n_psi, n_psi, n_psi, n_psi};  // st.n_psi
-    {  // the tension return of the closed form, where FLAC's h chose it: admissible lanes are the one-point code's
-        const v4d mu = -ft / a1;
-        const v4d d_other = mu * a2, d_i3 = mu * a1;  // sg[i1] -= mu a2, sg[i2] -= mu a2, sg[i3] -= mu a1
-        const v4d g0 = t0 - (i3 == zero ? d_i3 : d_other), g1 = t1 - (i3 == one ? d_i3 : d_other), g2 = t2 - (i3 == two ? d_i3 : d_other);
-        v4d lo, hi_t;
-        extremes(g0, g1, g2, lo, hi_t);
-        const v4m admissible = (lo - np * hi_t + two_c_sq >= -tol) & (sig_t - hi_t >= -tol);
-        todo &= shear_first | ~admissible;
-    }
-    // A plane of the nine, lane by lane: shear (i, j), n = e_i - N_phi e_j and m = e_i - N_psi e_j,
-    // or tension on i, n = m = -e_i; idx its number in mohr_coulomb_correct (2 i + (j > i ? j - 1 : j), 6 + i).
-    struct Plane { v4d n[3], m[3], kk, idx; };
-    const v4d n_one = 1.0 - np * 0.0, n_neg = 0.0 - np * 1.0, n_zero = 0.0 - np * 0.0;
-    const v4d m_one = 1.0 - ns * 0.0, m_neg = 0.0 - ns * 1.0, m_zero = 0.0 - ns * 0.0;
-    const v4d minus_one = -one, minus_zero = {-0.0, -0.0, -0.0, -0.0};
-    auto shear_plane = [&](const v4d& i, const v4d& j, Plane& q) LPFDM_INLINE {
-        for (int t = 0; t < 3; ++t) {
-            const v4d tt = {double(t), double(t), double(t), double(t)};
-            q.n[t] = i == tt ? n_one : (j == tt ? n_neg : n_zero);
-            q.m[t] = i == tt ? m_one : (j == tt ? m_neg : m_zero);
-        }
-        q.kk = two_c_sq;
-        q.idx = 2 * i + (j > i ? j - 1 : j);
-    };
-    auto tension_plane = [&](const v4d& i, Plane& q) LPFDM_INLINE {
-        for (int t = 0; t < 3; ++t) {
-            const v4d tt = {double(t), double(t), double(t), double(t)};
-            q.n[t] = q.m[t] = i == tt ? minus_one : minus_zero;
-        }
-        q.kk = sig_t;
-        q.idx = 6 + i;
-    };
-    auto pick = [](const v4m& c, const Plane& x, const Plane& y, Plane& q) LPFDM_INLINE {
-        for (int t = 0; t < 3; ++t) { q.n[t] = c ? x.n[t] : y.n[t]; q.m[t] = c ? x.m[t] : y.m[t]; }
-        q.kk = c ? x.kk : y.kk;
-        q.idx = c ? x.idx : y.idx;
-    };
-    // p0 and first[0], first[1] (mohr_coulomb_correct's order)
-    const v4d o = i3 == two ? i1 : 1 - i3;
-    Plane p0, q1, q2, x, y;
-    shear_plane(i1, i3, x); tension_plane(i3, y); pick(shear_first, x, y, p0);
-    shear_plane(i1, i2, x); shear_plane(o, i3, y); pick(shear_first, x, y, q1);
-    tension_plane(i1, x); shear_plane(i3, o, y); pick(shear_first, x, y, q2);
-    const double d12 = a1 - a2;
-    const v4d mu_min = -tol / (a1 + 1);
-    const v4d tr[3] = {t0, t1, t2};
-    // try_set of the pair (p0, q), its planes in index order: true in the lanes where it is admissible
-    auto try_pair = [&](const Plane& q, v4d sg[3], v4d& gamma, v4m& ok) LPFDM_INLINE {
-        const v4m p_first = p0.idx < q.idx;
-        Plane u, v;
-        pick(p_first, p0, q, u); pick(p_first, q, p0, v);
-        v4d dm[2][3], f[2];
-        const Plane* pl[2] = {&u, &v};
-        for (int w = 0; w < 2; ++w) {
-            const Plane& z = *pl[w];
-            const v4d a2_tr = a2 * (z.m[0] + z.m[1] + z.m[2]);
-            for (int t = 0; t < 3; ++t) dm[w][t] = a2_tr + d12 * z.m[t];
-            f[w] = z.n[0] * tr[0] + z.n[1] * tr[1] + z.n[2] * tr[2] + z.kk;
-        }
-        v4d A[2][2];
-        for (int w = 0; w < 2; ++w)
-            for (int x = 0; x < 2; ++x) A[w][x] = pl[w]->n[0] * dm[x][0] + pl[w]->n[1] * dm[x][1] + pl[w]->n[2] * dm[x][2];
-        const v4d b0 = -f[0], b1 = -f[1];
-        // Gaussian elimination with partial pivoting, 2 x 2, as try_set
-        v4d abs00, abs10;
-        abs_of(A[0][0], abs00); abs_of(A[1][0], abs10);
-        const v4m sw = abs10 > abs00;
-        const v4d p00 = sw ? A[1][0] : A[0][0], p01 = sw ? A[1][1] : A[0][1], q10 = sw ? A[0][0] : A[1][0], q11 = sw ? A[0][1] : A[1][1];
-        const v4d pb = sw ? b1 : b0, qb = sw ? b0 : b1;
-        const v4d fr = q10 / p00;
-        const v4d a11 = q11 - fr * p01, bb1 = qb - fr * pb;
-        const v4d mu1 = bb1 / a11, mu0 = (pb - p01 * mu1) / p00;
-        v4d ap00, aa11;
-        abs_of(p00, ap00); abs_of(a11, aa11);
-        const v4d tiny = {1e-300, 1e-300, 1e-300, 1e-300};
-        ok = ~(ap00 < tiny) & ~(aa11 < tiny) & ~(mu0 < mu_min) & ~(mu1 < mu_min);
-        for (int t = 0; t < 3; ++t) { sg[t] = tr[t]; sg[t] += mu0 * dm[0][t]; sg[t] += mu1 * dm[1][t]; }
-        v4d lo, hi_n;
-        extremes(sg[0], sg[1], sg[2], lo, hi_n);
-        ok &= ~(lo - np * hi_n + two_c_sq < -tol) & ~(sig_t - hi_n < -tol);
-        // plastic strains d_eps^p = -sum mu_a m_a; d_gamma = max - min
-        v4d ep[3];
-        for (int t = 0; t < 3; ++t) { ep[t] = zero; ep[t] -= mu0 * u.m[t]; ep[t] -= mu1 * v.m[t]; }
-        v4d e_min, e_max;
-        extremes(ep[0], ep[1], ep[2], e_min, e_max);
-        gamma = e_max - e_min;
-    };
-    v4d sg[3], best[3], gamma, best_gamma;
-    v4m done, second;
-    try_pair(q1, sg, gamma, done);
-    done &= todo;
-    for (int t = 0; t < 3; ++t) best[t] = sg[t];
-    best_gamma = gamma;
-    if (__builtin_ia32_movmskpd256(v4d(todo & ~done))) {
-        try_pair(q2, sg, gamma, second);
-        second &= todo & ~done;
-        for (int t = 0; t < 3; ++t) best[t] = second ? sg[t] : best[t];
-        best_gamma = second ? gamma : best_gamma;
-        done |= second;
-    }
-    // to_xy: the same principal direction, the new principal values
-    const v4d pn = 0.5 * (best[1] + best[0]), rn = 0.5 * (best[1] - best[0]);
-    const v4d inv_r = one / r, c2 = r > 0 ? a * inv_r : one, s2xy = r > 0 ? xy * inv_r : zero;
-    xx = done ? pn + rn * c2 : xx;
-    yy = done ? pn - rn * c2 : yy;
-    xy = done ? rn * s2xy : xy;
-    zz = done ? best[2] : zz;
-    d_gamma = done ? best_gamma : d_gamma;
-    return __builtin_ia32_movmskpd256(v4d(done));
-}
-// edge_lanes is inlined where it is called (the caller built for AVX2); mohr_edge_lanes is
-// the same as a function of its own (the tests call it).
 __attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double a1, double a2, const MohrLanes& m, int left, v4d& d_gamma) {
-    return edge_lanes(xx, yy, xy, zz, r, np, two_c_sq, n_psi, a1, a2, m, left, d_gamma);
+    return lanes4::edge_return(xx, yy, xy, zz, r, np, two_c_sq, n_psi, a1, a2, m, left, d_gamma);
+}
+__attribute__((LPFDM_AVX512)) inline int mohr_inside_lanes(const v8d& xx, const v8d& yy, const v8d& xy, const v8d& zz, const v8d& np, const v8d& two_c_sq, v8d& r) {
+    return lanes8::inside(xx, yy, xy, zz, np, two_c_sq, r);
+}
+__attribute__((LPFDM_AVX512)) inline int mohr_return_lanes(v8d& xx, v8d& yy, v8d& xy, v8d& zz, const v8d& r, const v8d& np, const v8d& two_c_sq, double n_psi, double tension, double a1, double a2, v8d& d_gamma, MohrLanes8& found) {
+    return lanes8::shear_return(xx, yy, xy, zz, r, np, two_c_sq, n_psi, tension, a1, a2, d_gamma, found);
+}
+__attribute__((LPFDM_AVX512)) inline int mohr_edge_lanes(v8d& xx, v8d& yy, v8d& xy, v8d& zz, const v8d& r, const v8d& np, const v8d& two_c_sq, double n_psi, double a1, double a2, const MohrLanes8& m, int left, v8d& d_gamma) {
+    return lanes8::edge_return(xx, yy, xy, zz, r, np, two_c_sq, n_psi, a1, a2, m, left, d_gamma);
 }
 #endif
 // f(i, Tag<T>) for i = i0 .. i1 - 1: with Wide (std::true_type, inside a function built for
@@ -2288,6 +2121,7 @@ public:
         if (sc_.advect == Advect::Flip) kernel = kernel_ = Kernel::Reference;
         if (sc_.motion == Motion::Default) sc_.motion = sc_.mapping == Mapping::Smooth ? Motion::Bilinear : Motion::Centre;
         wide_ = kernel == Kernel::Fast && have_wide();
+        wide512_ = wide_ && have_wide512();
 #if defined(_OPENMP)
         if (kernel != Kernel::Reference) team_ = std::max(1, std::min(omp_get_max_threads(), omp_get_thread_limit()));
 #endif
@@ -2343,8 +2177,21 @@ public:
     }
     void set_wide(bool on) {
         wide_ = on && have_wide() && kernel_ != Kernel::Reference;
+        wide512_ = wide_ && have_wide512();
         choose_point_loop();
     }
+    // The AVX2 point loop's Mohr-Coulomb consult eight points per AVX-512 register instead
+    // of four per AVX2 register: used when the AVX2 version is on and the processor has
+    // AVX-512 F, VL and DQ; set_wide512(false) keeps four (the same numbers, bit for bit).
+    static bool have_wide512() {
+#if LPFDM_WIDE
+        return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq");
+#else
+        return false;
+#endif
+    }
+    void set_wide512(bool on) { wide512_ = on && wide_ && have_wide512(); }
+    bool wide512() const { return wide512_; }
     // Threads the fast kernel uses: omp_get_max_threads() when the Simulation was made
     // (1 for the reference kernel, or without OpenMP).
     int threads() const { return team_; }
@@ -2682,7 +2529,18 @@ private:
     __attribute__((target("avx2"))) void advance_blocks_wide(long k0, long k1, Part& part, Landing& t);
     // The point loop's arrays of the stress, volume and group (run_points' own pointers).
     struct PointArrays { double *sxx, *syy, *sxy, *szz; const double* vol; const std::uint16_t* group; };
+    // The Mohr-Coulomb consult in lanes: four points (AVX2) and eight (AVX-512), one code
+    // (detail::lanes4::consult, detail::lanes8::consult); the arrays it reads and writes, and
+    // its one-point test and return of point r with elastic trial s (the stress stored).
+    detail::ConsultArrays consult_arrays(const PointArrays& a) {
+        return {a.sxx, a.syy, a.sxy, a.szz, a.vol, a.group, p_.c0.data(), p_.n_phi.data(), p_.sqrt_n_phi.data(), p_.yielded.data(), p_.plastic_shear.data(), p_.plastic_work.data()};
+    }
+    template <bool Own> void consult_one(const MaterialConstants& mc, long r, Stress s, const PointArrays& a) {
+        mohr_consult<Own>(mc, std::size_t(r), a.vol[r], s);
+        a.sxx[r] = s.xx; a.syy[r] = s.yy; a.sxy[r] = s.xy; a.szz[r] = s.zz;
+    }
     template <bool Own> __attribute__((target("avx2"))) void consult_lanes(const MaterialConstants& mc, long q, long qend, const PointArrays& a);
+    template <bool Own> __attribute__((LPFDM_AVX512)) void consult_lanes8(const MaterialConstants& mc, long q, long qend, const PointArrays& a);
 #endif
     // Row j of a lattice phase: f(j, std::false_type), or f(j, std::true_type) built for
     // AVX2 (f inlined into row_wide) when the AVX2 version is on, so that f may work
@@ -2891,6 +2749,7 @@ private:
     double return_s_ = 0;  // profiling: return_seconds()
     long returned_ = 0;
     bool wide_ = false;  // the AVX2 version of the point loop and lattice phases (LPFDM_WIDE)
+    bool wide512_ = false;  // its Mohr-Coulomb consult eight points per AVX-512 register
 
     Scene sc_;
     int mx_ = 0, my_ = 0;
@@ -4084,98 +3943,22 @@ __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0
     else run_points<Motion::Centre, false, true>(k0, k1, part, landing);
 }
 
-// eq. 6's Mohr-Coulomb consult of points q .. qend-1 of material mc, which hold their elastic
-// trials (the AVX2 point loop's, consult_block), four points per register: the elastic test,
-// the closed-form shear return and the search's first two sets (an edge, the apex line)
-// (detail::mohr_inside_lanes, return_lanes, edge_lanes, all inlined), then the one-point test
-// and return (mohr_consult) for a lane those do not settle and the last one to three points.
-// Own: each point's own strength (scatter). A point's consult reads and writes that point
-// only; each lane's operations are those of the one-point code. The lanes the closed form
-// leaves go on at once (edge_lanes, then the one-point code): a second pass over the groups
-// holding them, which made the elastic test and the return again to find what edge_lanes
-// needs, was no faster (6.8 % of the groups of four hold one in steps 3600-3640 of bench_flow.deck).
+// eq. 6's Mohr-Coulomb consult of points q .. qend-1 of material mc, which hold their
+// elastic trials (the AVX2 point loop's, consult_block): four points per AVX2 register
+// (detail::lanes4::consult) and the last one to three by the one-point code; or eight per
+// AVX-512 register (detail::lanes8::consult) and the last one to seven as consult_lanes
+// does them. Own: each point's own strength (scatter).
 template <bool Own>
 __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const MaterialConstants& mc, long q, const long qend, const PointArrays& a) {
-    using detail::v4d;
-    using detail::v4m;
-    // The stresses through the caller's (restrict) pointers; the plastic state through plain
-    // ones, as mohr_consult (record_yield) writes it too.
-    double *psxx = a.sxx, *psyy = a.syy, *psxy = a.sxy, *pszz = a.szz;
-    const double* pvol = a.vol;
-    const std::uint16_t* pgroup = a.group;
-    const double *pc0 = p_.c0.data(), *pnphi = p_.n_phi.data(), *psqrt = p_.sqrt_n_phi.data();
-    std::uint8_t* pyielded = p_.yielded.data();
-    double *pshear = p_.plastic_shear.data(), *pwork = p_.plastic_work.data();
-    // strength_of, four points at once: the same operations in each lane
-    auto strength = [&](long r, v4d& np, v4d& two_c_sq) __attribute__((always_inline, target("avx2"))) {
-        v4d c0, sq;
-        if constexpr (Own) {
-            detail::load(pc0 + r, c0); detail::load(pnphi + r, np); detail::load(psqrt + r, sq);
-        } else {
-            c0 = v4d{mc.c, mc.c, mc.c, mc.c}; np = v4d{mc.n_phi, mc.n_phi, mc.n_phi, mc.n_phi};
-            sq = v4d{mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi, mc.sqrt_n_phi};
-        }
-        std::uint32_t w;  // pyielded[r + l] in byte l (x86 is little-endian)
-        std::memcpy(&w, pyielded + r, 4);
-        const v4m soft = v4m((v4m{w, w, w, w} & v4m{0xff, 0xff00, 0xff0000, 0xff000000}) != 0);  // pyielded[r + l] != 0
-        const double keep = 1 - mc.soften;
-        const v4d c = soft ? c0 * keep : c0;
-        two_c_sq = 2 * c * sq;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
-    };
-    // record_yield of lanes `lanes` (bits), returned from the trials t_* to xx .. zz with
-    // plastic shear d_gamma: the same operations
-    auto record = [&](long r, int lanes, const v4d& xx, const v4d& yy, const v4d& xy, const v4d& zz, const v4d& t_xx, const v4d& t_yy, const v4d& t_xy, const v4d& t_zz, const v4d& d_gamma) __attribute__((always_inline, target("avx2"))) {
-        v4d work;  // compliance_product(mc, s, trial - s)
-        compliance_product(mc, xx, yy, xy, zz, v4d(t_xx - xx), v4d(t_yy - yy), v4d(t_xy - xy), v4d(t_zz - zz), work);
-        const v4d v0 = {groups_[pgroup[r]].vol0, groups_[pgroup[r + 1]].vol0, groups_[pgroup[r + 2]].vol0, groups_[pgroup[r + 3]].vol0};
-        v4m m;
-        detail::lane_mask(lanes, m);
-        v4d gamma, pw, vol;
-        detail::load(pshear + r, gamma); detail::load(pwork + r, pw); detail::load(pvol + r, vol);
-        const v4d vk = v0 < vol ? v0 : vol;  // std::min(vol, vol0)
-        gamma = m ? gamma + d_gamma : gamma;
-        pw = m ? pw + vk * work : pw;
-        detail::store(pshear + r, gamma); detail::store(pwork + r, pw);
-        // softening from the next consult: 1 where a lane yielded (one word, no branch: lanes yield at random)
-        static constexpr std::uint32_t kLaneBytes[16] = {0x0u, 0xffu, 0xff00u, 0xffffu, 0xff0000u, 0xff00ffu, 0xffff00u, 0xffffffu,
-                                                         0xff000000u, 0xff0000ffu, 0xff00ff00u, 0xff00ffffu, 0xffff0000u, 0xffff00ffu, 0xffffff00u, 0xffffffffu};
-        std::uint32_t w;
-        std::memcpy(&w, pyielded + r, 4);  // pyielded[r + l] in byte l (x86 is little-endian)
-        const std::uint32_t set = kLaneBytes[lanes & 15];
-        w = (w & ~set) | (0x01010101u & set);
-        std::memcpy(pyielded + r, &w, 4);
-    };
-    // Point r with its elastic trial s: the one-point test and return, the stress stored.
-    auto one_point = [&](long r, Stress s) {
-        mohr_consult<Own>(mc, std::size_t(r), pvol[r], s);
-        psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
-    };
-    for (; q + 4 <= qend; q += 4) {
-        v4d xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;
-        detail::load(psxx + q, xx); detail::load(psyy + q, yy); detail::load(psxy + q, xy); detail::load(pszz + q, zz);
-        strength(q, np, two_c_sq);
-        int settled = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
-        if (settled == 15) continue;  // all four inside: the trial stands
-        const v4d t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
-        detail::MohrLanes found;
-        settled = detail::return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
-        if (const int sh = settled >> 4) record(q, sh, xx, yy, xy, zz, t_xx, t_yy, t_xy, t_zz, d_gamma);
-        int left = ~settled & 15;
-        if (left) {  // an edge or the apex line (the search's first two sets), from the trials
-            v4d ex = t_xx, ey = t_yy, exy = t_xy, ez = t_zz;
-            if (const int edge = detail::edge_lanes(ex, ey, exy, ez, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, left, d_gamma)) {
-                v4m done;
-                detail::lane_mask(edge, done);
-                xx = done ? ex : xx; yy = done ? ey : yy; xy = done ? exy : xy; zz = done ? ez : zz;
-                record(q, edge, ex, ey, exy, ez, t_xx, t_yy, t_xy, t_zz, d_gamma);
-                left &= ~edge;
-            }
-        }
-        detail::store(psxx + q, xx); detail::store(psyy + q, yy); detail::store(psxy + q, xy); detail::store(pszz + q, zz);
-        for (int l = 0; left; ++l, left >>= 1)  // the lanes still left: the one-point code, on the trial
-            if (left & 1) one_point(q + l, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]});
-    }
-    for (; q < qend; ++q) one_point(q, Stress{psxx[q], psyy[q], psxy[q], pszz[q]});  // the last one to three points
+    auto one_point = [&](long r, Stress s) { consult_one<Own>(mc, r, s, a); };
+    q = detail::lanes4::consult<Own>(mc, q, qend, consult_arrays(a), [&](int g) { return groups_[std::size_t(g)].vol0; }, one_point);
+    for (; q < qend; ++q) one_point(q, Stress{a.sxx[q], a.syy[q], a.sxy[q], a.szz[q]});
+}
+template <bool Own>
+__attribute__((LPFDM_AVX512)) inline void Simulation::consult_lanes8(const MaterialConstants& mc, long q, const long qend, const PointArrays& a) {
+    auto one_point = [&](long r, Stress s) { consult_one<Own>(mc, r, s, a); };
+    q = detail::lanes8::consult<Own>(mc, q, qend, consult_arrays(a), [&](int g) { return groups_[std::size_t(g)].vol0; }, one_point);
+    if (q < qend) consult_lanes<Own>(mc, q, qend, a);
 }
 #endif
 
@@ -4554,8 +4337,13 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 long qend = single ? b1 : q + 1;
                 while (qend < b1 && group_consts_[std::size_t(pgroup[qend])] == &mc) ++qend;
                 if (mc.model == Model::MohrCoulomb) {
-                    if (!p_.c0.empty()) consult_lanes<true>(mc, q, qend, arrays);  // scatter: each point's own strength
-                    else consult_lanes<false>(mc, q, qend, arrays);
+                    if (!p_.c0.empty()) {  // scatter: each point's own strength
+                        if (wide512_) consult_lanes8<true>(mc, q, qend, arrays);
+                        else consult_lanes<true>(mc, q, qend, arrays);
+                    } else {
+                        if (wide512_) consult_lanes8<false>(mc, q, qend, arrays);
+                        else consult_lanes<false>(mc, q, qend, arrays);
+                    }
                     consulted += qend - q;
                 }
                 q = qend;
@@ -7104,3 +6892,398 @@ inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uin
 #pragma float_control(pop)
 #endif
 #endif  // LPFDM_HPP
+#else  // LPFDM_LANES
+// ------------------------------------------------------------------------------------
+// The Mohr-Coulomb consult in lanes (read twice by the header, above: into namespace
+// detail::lanes4 with LPFDM_LANES 4 and detail::lanes8 with LPFDM_LANES 8).
+//
+// eq. 6's elastic test and plastic return of N elastic trials at once, in the lanes of a
+// vector V of N doubles (M: its mask, all ones or zero in a lane): mohr_inside and
+// mohr_coulomb_correct's closed-form shear return and the first two sets of its search,
+// with the same operations in the same order as those compute them one stress at a time
+// (std::min(a, b) is b < a ? b : a, std::max(a, b) a < b ? b : a), so the lanes they settle
+// get the same numbers bit for bit. Four lanes: AVX2 registers; eight: AVX-512 registers
+// (F, VL, DQ), built without fused multiply-add (LPFDM_AVX512). Every function here and
+// every lambda is built for its width (LPFDM_LANE): a compiler lowers the vector code of a
+// function built for less, lane by lane.
+#if LPFDM_LANES == 4
+using V = v4d;
+using M = v4m;
+#define LPFDM_LANE __attribute__((always_inline, target("avx2")))
+#else
+using V = v8d;
+using M = v8m;
+#define LPFDM_LANE __attribute__((always_inline, LPFDM_AVX512))
+#endif
+constexpr int N = LPFDM_LANES;
+// bit l of lane l, and byte l of a word of N bytes (all ones) in lane l
+#if LPFDM_LANES == 4
+constexpr M kLaneBit = {1, 2, 4, 8}, kLaneByte = {0xff, 0xff00, 0xff0000, 0xff000000};
+#else
+constexpr M kLaneBit = {1, 2, 4, 8, 16, 32, 64, 128};
+constexpr M kLaneByte = {0xff, 0xff00, 0xff0000, 0xff000000, 0xff00000000, 0xff0000000000, 0xff000000000000, static_cast<long long>(0xff00000000000000ULL)};
+#endif
+// bit l: lane l's sign bit (of a mask: lane l set)
+LPFDM_LANE inline int bits(const M& m) {
+#if LPFDM_LANES == 4
+    return __builtin_ia32_movmskpd256(v4d(m));
+#else
+    return __builtin_ia32_cvtq2mask512(m);
+#endif
+}
+// r = sqrt(x) in each lane (correctly rounded, as std::sqrt)
+LPFDM_LANE inline void sqrt_of(const V& x, V& r) {
+#if LPFDM_LANES == 4
+    r = __builtin_ia32_sqrtpd256(x);
+#elif defined(__clang__)
+    r = __builtin_ia32_sqrtpd512(x, 4);
+#else
+    r = __builtin_ia32_sqrtpd512_mask(x, x, -1, 4);
+#endif
+}
+// m: lane l set where bit l of `b` is (bits' inverse)
+LPFDM_LANE inline void lane_mask(int b, M& m) { m = M(((M{} + b) & kLaneBit) != 0); }
+// a = |v| lane by lane (the sign bit cleared, as std::fabs does)
+LPFDM_LANE inline void abs_of(const V& v, V& a) { a = V(M(v) & 0x7fffffffffffffffLL); }
+// v = x in every lane (a broadcast: the same bits, the sign of a zero too)
+LPFDM_LANE inline void splat(double x, V& v) {
+    for (int l = 0; l < N; ++l) v[l] = x;
+}
+
+// Mohr's circle of (xx, yy) with its radius r given: t.a, t.sig and mohr_inside's lo, hi
+// and shear test.
+LPFDM_LANE inline void circle(const V& xx, const V& yy, const V& zz, const V& r, const V& np, const V& two_c_sq, V& a, V& t0, V& t1, V& hi, M& shear_ok) {
+    const V p = 0.5 * (xx + yy);
+    a = 0.5 * (xx - yy);
+    t0 = p - r; t1 = p + r;
+    const V lo = zz < t0 ? zz : t0;
+    hi = t1 < zz ? zz : t1;
+    shear_ok = lo - hi * np + two_c_sq >= 0;
+}
+// mohr_inside's first exit: bit l set when trial l is inside with no tensile principal
+// value. r: the circle's radius, for shear_return.
+LPFDM_LANE inline int inside(const V& xx, const V& yy, const V& xy, const V& zz, const V& np, const V& two_c_sq, V& r) {
+    constexpr double huge = std::numeric_limits<double>::infinity();
+    V inf;
+    splat(huge, inf);
+    const V half_diff = 0.5 * (xx - yy);
+    sqrt_of(V(half_diff * half_diff + xy * xy), r);
+    V a, t0, t1, hi;
+    M shear_ok;
+    circle(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
+    return bits(M(shear_ok & (hi <= 0) & (two_c_sq >= 0) & (np < inf)));
+}
+// std::min(std::min(a, b), c) and std::max(std::max(a, b), c) in each lane, with their
+// operations (std::min(a, b) is b < a ? b : a, std::max(a, b) a < b ? b : a).
+LPFDM_LANE inline void extremes(const V& a, const V& b, const V& c, V& lo, V& hi) {
+    const V m = b < a ? b : a, M = a < b ? b : a;
+    lo = c < m ? c : m;
+    hi = M < c ? c : M;
+}
+// What shear_return found of each trial, for edge_return (mohr_coulomb_correct's
+// names): the circle's a, the principal values t0 <= t1 and t2 = sig_zz, the tension limit,
+// the tolerance, the tension plane's f at the largest, the order (A: t1 <= t2, C: t2 < t0,
+// else t0 <= t2 < t1) and FLAC's choice of shear.
+struct Found { V a, t0, t1, t2, sig_t, tol, ft; M A, C, shear_first; };
+// The rest of mohr_inside (the tension planes) and the closed-form shear return of
+// mohr_coulomb_correct (where FLAC's h chooses shear). Bit l of the result: lane l is
+// settled; bit N + l (N lanes): it was returned by shear (its stress replaced, d_gamma[l]
+// its plastic shear increment). A lane left unsettled (tension, an edge, or a return the closed form
+// cannot make admissible) goes to edge_return (with `found`), and what that leaves to the
+// one-point code. n_psi, tension, a1, a2: the material's (MaterialConstants).
+LPFDM_LANE inline int shear_return(V& xx, V& yy, V& xy, V& zz, const V& r, const V& np, const V& two_c_sq, double n_psi, double tension, double a1, double a2, V& d_gamma, Found& found) {
+    constexpr double huge = std::numeric_limits<double>::infinity();
+    V inf, zero, one, n_psi_v, tension_v;
+    splat(huge, inf); splat(0.0, zero); splat(1.0, one); splat(n_psi, n_psi_v); splat(tension, tension_v);
+    V a, t0, t1, hi;
+    M shear_ok;
+    circle(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
+    const V t2 = zz;
+    V sig_t = np > 1 ? two_c_sq / (np - 1) : inf;  // tension_limit
+    if (tension >= 0) sig_t = tension < sig_t ? tension_v : sig_t;
+    const M inside = shear_ok & (sig_t - hi >= 0);  // implied by the first exit
+    // The order of t0 <= t1 and t2 (t0 <= t1 holds for every lane without NaN, and a lane
+    // with NaN in its trial or strength fails the check below through tol).
+    const M above = t1 > t2, below = t0 > t2;
+    const M A = ~above, B = above & ~below, C = above & below;  // (i1 i2 i3) = (0 1 2), (0 2 1), (2 0 1)
+    const V ti1 = C ? t2 : t0, ti3 = A ? t2 : t1;
+    const V fs = ti1 - ti3 * np + two_c_sq, ft = sig_t - ti3;
+    V a0, a1v, a2v, at;
+    abs_of(t0, a0); abs_of(t1, a1v); abs_of(t2, a2v); abs_of(sig_t, at);
+    const V tol = 1e-11 * (a0 + a1v + a2v + two_c_sq + (at < inf ? sig_t : zero));
+    const V ns0 = np < n_psi ? np : n_psi_v;  // std::min(n_psi, np)
+    const V d1 = a1 - a2 * ns0, d2 = a2 * (1 - ns0), d3 = a2 - a1 * ns0;
+    const V mu = -fs / (d1 - np * d3);
+    const V s0 = t0 + mu * (C ? d2 : d1), s1 = t1 + mu * (A ? d2 : d3), s2 = t2 + mu * (A ? d3 : B ? d2 : d1);
+    V lo_n, hi_n;
+    extremes(s0, s1, s2, lo_n, hi_n);
+    // FLAC's h chooses shear where the tension plane is violated too (h_fn, the same
+    // operations; a lane with ft >= 0 does not need it, as the one-point code skips it, and
+    // most groups of four hold no lane that does: their square root is not taken).
+    M shear_first = (fs < 0) & (ft >= 0);
+    if (const M both = (fs < 0) & ~(ft >= 0); bits(both)) {
+        V root;
+        sqrt_of(V(1 + np * np), root);
+        const V alpha_p = root + np, sig_p = sig_t * np - two_c_sq;
+        const V h = ti3 - sig_t + alpha_p * (ti1 - sig_p);
+        shear_first |= both & ~(h > 0);
+    }
+    const M shear = ~inside & shear_first & (lo_n - np * hi_n + two_c_sq >= -tol) & (sig_t - hi_n >= -tol);
+    // to_xy: the same principal direction, the new principal values
+    const V pn = 0.5 * (s1 + s0), rn = 0.5 * (s1 - s0);
+    const V inv_r = one / r, c2 = r > 0 ? a * inv_r : one, s2xy = r > 0 ? xy * inv_r : zero;
+    xx = shear ? pn + rn * c2 : xx;
+    yy = shear ? pn - rn * c2 : yy;
+    xy = shear ? rn * s2xy : xy;
+    zz = shear ? s2 : zz;
+    abs_of(-mu - mu * ns0, d_gamma);  // |e1 - e3|
+    found = Found{a, t0, t1, t2, sig_t, tol, ft, A, C, shear_first};
+    return bits(M(inside | shear)) | bits(shear) << N;
+}
+// The lanes shear_return left (bits of `left`; their trials in xx .. zz, what it found of
+// them in m): the first two
+// sets of mohr_coulomb_correct's search, with the same operations in the same order, in
+// lanes. Its closed-form shear return was not admissible there, or FLAC's h chose
+// tension, whose return is made here and, where admissible, left to the one-point code.
+// The search then pairs its plane p0 with first[0], then first[1], the pairs that end most
+// searches in a flowing collapse (an edge of two shear planes, the apex line of shear and
+// tension, the corner of tension and shear). Bit l of the result: lane l was returned by
+// one of them (xx .. zz its stress, d_gamma[l] its plastic shear, as the one-point code's
+// mode Edge gives them); a lane left unsettled (a third set, an infinite or NaN value, an
+// admissible tension return) takes the one-point code, which tries the same two sets first.
+LPFDM_LANE inline int edge_return(V& xx, V& yy, V& xy, V& zz, const V& r, const V& np, const V& two_c_sq, double n_psi, double a1, double a2, const Found& m, int left, V& d_gamma) {
+    constexpr double huge = std::numeric_limits<double>::infinity();
+    V inf, zero, one, two, n_psi_v;
+    splat(huge, inf); splat(0.0, zero); splat(1.0, one); splat(2.0, two); splat(n_psi, n_psi_v);
+    const V &a = m.a, &t0 = m.t0, &t1 = m.t1, &t2 = m.t2, &sig_t = m.sig_t, &tol = m.tol, &ft = m.ft;
+    const M &C = m.C, &shear_first = m.shear_first;
+    V a0, a1v, a2v, at, ar, anp, ac;
+    abs_of(t0, a0); abs_of(t1, a1v); abs_of(t2, a2v); abs_of(sig_t, at); abs_of(r, ar); abs_of(np, anp); abs_of(two_c_sq, ac);
+    // Finite values only (then nine planes, and t0 <= t1): any other lane takes the one-point code.
+    const M finite = (a0 < inf) & (a1v < inf) & (a2v < inf) & (at < inf) & (ar < inf) & (anp < inf) & (ac < inf);
+    M lanes;
+    lane_mask(left, lanes);
+    M todo = lanes & finite;
+    if (!bits(todo)) return 0;
+    // i1, i2, i3: the order of the trial's principal values, as mohr_coulomb_correct sorts them
+    // ((0 1 2) in A, (2 0 1) in C, else (0 2 1)); the finite lanes' tol is the one-point code's
+    const V i1 = C ? two : zero, i2 = m.A ? one : (C ? zero : two), i3 = m.A ? two : one;
+    const V ns = np < n_psi ? np : n_psi_v;  // st.n_psi
+    {  // the tension return of the closed form, where FLAC's h chose it: admissible lanes are the one-point code's
+        const V mu = -ft / a1;
+        const V d_other = mu * a2, d_i3 = mu * a1;  // sg[i1] -= mu a2, sg[i2] -= mu a2, sg[i3] -= mu a1
+        const V g0 = t0 - (i3 == zero ? d_i3 : d_other), g1 = t1 - (i3 == one ? d_i3 : d_other), g2 = t2 - (i3 == two ? d_i3 : d_other);
+        V lo, hi_t;
+        extremes(g0, g1, g2, lo, hi_t);
+        const M admissible = (lo - np * hi_t + two_c_sq >= -tol) & (sig_t - hi_t >= -tol);
+        todo &= shear_first | ~admissible;
+    }
+    // A plane of the nine, lane by lane: shear (i, j), n = e_i - N_phi e_j and m = e_i - N_psi e_j,
+    // or tension on i, n = m = -e_i; idx its number in mohr_coulomb_correct (2 i + (j > i ? j - 1 : j), 6 + i).
+    struct Plane { V n[3], m[3], kk, idx; };
+    const V n_one = 1.0 - np * 0.0, n_neg = 0.0 - np * 1.0, n_zero = 0.0 - np * 0.0;
+    const V m_one = 1.0 - ns * 0.0, m_neg = 0.0 - ns * 1.0, m_zero = 0.0 - ns * 0.0;
+    V minus_zero;
+    splat(-0.0, minus_zero);
+    const V minus_one = -one;
+    auto shear_plane = [&](const V& i, const V& j, Plane& q) LPFDM_LANE {
+        for (int t = 0; t < 3; ++t) {
+            V tt;
+            splat(double(t), tt);
+            q.n[t] = i == tt ? n_one : (j == tt ? n_neg : n_zero);
+            q.m[t] = i == tt ? m_one : (j == tt ? m_neg : m_zero);
+        }
+        q.kk = two_c_sq;
+        q.idx = 2 * i + (j > i ? j - 1 : j);
+    };
+    auto tension_plane = [&](const V& i, Plane& q) LPFDM_LANE {
+        for (int t = 0; t < 3; ++t) {
+            V tt;
+            splat(double(t), tt);
+            q.n[t] = q.m[t] = i == tt ? minus_one : minus_zero;
+        }
+        q.kk = sig_t;
+        q.idx = 6 + i;
+    };
+    auto pick = [](const M& c, const Plane& x, const Plane& y, Plane& q) LPFDM_LANE {
+        for (int t = 0; t < 3; ++t) { q.n[t] = c ? x.n[t] : y.n[t]; q.m[t] = c ? x.m[t] : y.m[t]; }
+        q.kk = c ? x.kk : y.kk;
+        q.idx = c ? x.idx : y.idx;
+    };
+    // p0 and first[0], first[1] (mohr_coulomb_correct's order)
+    const V o = i3 == two ? i1 : 1 - i3;
+    Plane p0, q1, q2, x, y;
+    shear_plane(i1, i3, x); tension_plane(i3, y); pick(shear_first, x, y, p0);
+    shear_plane(i1, i2, x); shear_plane(o, i3, y); pick(shear_first, x, y, q1);
+    tension_plane(i1, x); shear_plane(i3, o, y); pick(shear_first, x, y, q2);
+    const double d12 = a1 - a2;
+    const V mu_min = -tol / (a1 + 1);
+    const V tr[3] = {t0, t1, t2};
+    // try_set of the pair (p0, q), its planes in index order: true in the lanes where it is admissible
+    auto try_pair = [&](const Plane& q, V sg[3], V& gamma, M& ok) LPFDM_LANE {
+        const M p_first = p0.idx < q.idx;
+        Plane u, v;
+        pick(p_first, p0, q, u); pick(p_first, q, p0, v);
+        V dm[2][3], f[2];
+        const Plane* pl[2] = {&u, &v};
+        for (int w = 0; w < 2; ++w) {
+            const Plane& z = *pl[w];
+            const V a2_tr = a2 * (z.m[0] + z.m[1] + z.m[2]);
+            for (int t = 0; t < 3; ++t) dm[w][t] = a2_tr + d12 * z.m[t];
+            f[w] = z.n[0] * tr[0] + z.n[1] * tr[1] + z.n[2] * tr[2] + z.kk;
+        }
+        V A[2][2];
+        for (int w = 0; w < 2; ++w)
+            for (int x = 0; x < 2; ++x) A[w][x] = pl[w]->n[0] * dm[x][0] + pl[w]->n[1] * dm[x][1] + pl[w]->n[2] * dm[x][2];
+        const V b0 = -f[0], b1 = -f[1];
+        // Gaussian elimination with partial pivoting, 2 x 2, as try_set
+        V abs00, abs10;
+        abs_of(A[0][0], abs00); abs_of(A[1][0], abs10);
+        const M sw = abs10 > abs00;
+        const V p00 = sw ? A[1][0] : A[0][0], p01 = sw ? A[1][1] : A[0][1], q10 = sw ? A[0][0] : A[1][0], q11 = sw ? A[0][1] : A[1][1];
+        const V pb = sw ? b1 : b0, qb = sw ? b0 : b1;
+        const V fr = q10 / p00;
+        const V a11 = q11 - fr * p01, bb1 = qb - fr * pb;
+        const V mu1 = bb1 / a11, mu0 = (pb - p01 * mu1) / p00;
+        V ap00, aa11;
+        abs_of(p00, ap00); abs_of(a11, aa11);
+        V tiny;
+        splat(1e-300, tiny);
+        ok = ~(ap00 < tiny) & ~(aa11 < tiny) & ~(mu0 < mu_min) & ~(mu1 < mu_min);
+        for (int t = 0; t < 3; ++t) { sg[t] = tr[t]; sg[t] += mu0 * dm[0][t]; sg[t] += mu1 * dm[1][t]; }
+        V lo, hi_n;
+        extremes(sg[0], sg[1], sg[2], lo, hi_n);
+        ok &= ~(lo - np * hi_n + two_c_sq < -tol) & ~(sig_t - hi_n < -tol);
+        // plastic strains d_eps^p = -sum mu_a m_a; d_gamma = max - min
+        V ep[3];
+        for (int t = 0; t < 3; ++t) { ep[t] = zero; ep[t] -= mu0 * u.m[t]; ep[t] -= mu1 * v.m[t]; }
+        V e_min, e_max;
+        extremes(ep[0], ep[1], ep[2], e_min, e_max);
+        gamma = e_max - e_min;
+    };
+    V sg[3], best[3], gamma, best_gamma;
+    M done, second;
+    try_pair(q1, sg, gamma, done);
+    done &= todo;
+    for (int t = 0; t < 3; ++t) best[t] = sg[t];
+    best_gamma = gamma;
+    if (bits(M(todo & ~done))) {
+        try_pair(q2, sg, gamma, second);
+        second &= todo & ~done;
+        for (int t = 0; t < 3; ++t) best[t] = second ? sg[t] : best[t];
+        best_gamma = second ? gamma : best_gamma;
+        done |= second;
+    }
+    // to_xy: the same principal direction, the new principal values
+    const V pn = 0.5 * (best[1] + best[0]), rn = 0.5 * (best[1] - best[0]);
+    const V inv_r = one / r, c2 = r > 0 ? a * inv_r : one, s2xy = r > 0 ? xy * inv_r : zero;
+    xx = done ? pn + rn * c2 : xx;
+    yy = done ? pn - rn * c2 : yy;
+    xy = done ? rn * s2xy : xy;
+    zz = done ? best[2] : zz;
+    d_gamma = done ? best_gamma : d_gamma;
+    return bits(done);
+}
+// eq. 6's consult of the Mohr-Coulomb points q .. q + N k - 1 of material mc (the largest
+// whole number of groups of N before qend), which hold their elastic trials (the AVX2
+// point loop's, Simulation::consult_block): the elastic test, the closed-form shear return
+// and the search's first two sets (an edge, the apex line), then one_point(r, trial) (the
+// one-point test and return, mohr_consult, and the stress stored) for a lane those do not
+// settle. Returns where it stopped (the caller consults the last points). Own: each point's
+// own strength (scatter); vol0_of(g): V0 of group g. A point's consult reads and writes that
+// point only; each lane's operations are those of the one-point code. The lanes the closed
+// form leaves go on at once (edge_return, then the one-point code): a second pass over the
+// groups holding them, which made the elastic test and the return again to find what
+// edge_return needs, was no faster (6.8 % of the groups of four hold one in steps 3600-3640
+// of bench_flow.deck).
+template <bool Own, class Vol0, class OnePoint>
+LPFDM_LANE inline long consult(const MaterialConstants& mc, long q, const long qend, const ConsultArrays& a, const Vol0& vol0_of, const OnePoint& one_point) {
+    // Local pointers (the stores of the yielded flags, through bytes, may change any object)
+    double *psxx = a.sxx, *psyy = a.syy, *psxy = a.sxy, *pszz = a.szz;
+    const double* pvol = a.vol;
+    const std::uint16_t* pgroup = a.group;
+    const double *pc0 = a.c0, *pnphi = a.n_phi, *psqrt = a.sqrt_n_phi;
+    std::uint8_t* pyielded = a.yielded;
+    double *pshear = a.plastic_shear, *pwork = a.plastic_work;
+    // pyielded[r + l] != 0 in lane l (one word: byte l is lane l's, x86 being little-endian)
+    using Word = std::conditional_t<N == 4, std::uint32_t, std::uint64_t>;
+    auto yielded_lanes = [&](long r, M& soft) LPFDM_LANE {
+        Word w;
+        std::memcpy(&w, pyielded + r, sizeof w);
+        soft = M(((M{} + static_cast<long long>(w)) & kLaneByte) != 0);
+    };
+    // strength_of, N points at once: the same operations in each lane
+    auto strength = [&](long r, V& np, V& two_c_sq) LPFDM_LANE {
+        V c0, sq;
+        if constexpr (Own) {
+            load(pc0 + r, c0); load(pnphi + r, np); load(psqrt + r, sq);
+        } else {
+            splat(mc.c, c0); splat(mc.n_phi, np); splat(mc.sqrt_n_phi, sq);
+        }
+        M soft;
+        yielded_lanes(r, soft);
+        const double keep = 1 - mc.soften;
+        const V c = soft ? c0 * keep : c0;
+        two_c_sq = 2 * c * sq;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
+    };
+    // record_yield of lanes `lanes` (bits), returned from the trials t_* to xx .. zz with
+    // plastic shear d_gamma: the same operations
+    auto record = [&](long r, int lanes, const V& xx, const V& yy, const V& xy, const V& zz, const V& t_xx, const V& t_yy, const V& t_xy, const V& t_zz, const V& d_gamma) LPFDM_LANE {
+        V work;  // compliance_product(mc, s, trial - s)
+        compliance_product(mc, xx, yy, xy, zz, V(t_xx - xx), V(t_yy - yy), V(t_xy - xy), V(t_zz - zz), work);
+        V v0{};  // the lanes' groups' V0: one look-up where they are one group (a word holds four)
+        std::uint64_t g[N / 4];
+        std::memcpy(g, pgroup + r, sizeof g);
+        bool one = true;
+        for (int w = 0; w < N / 4; ++w) one &= g[w] == (g[0] & 0xffff) * 0x0001000100010001ULL;
+        if (one) splat(vol0_of(int(g[0] & 0xffff)), v0);
+        else for (int l = 0; l < N; ++l) v0[l] = vol0_of(pgroup[r + l]);
+        M m;
+        lane_mask(lanes, m);
+        V gamma, pw, vol;
+        load(pshear + r, gamma); load(pwork + r, pw); load(pvol + r, vol);
+        const V vk = v0 < vol ? v0 : vol;  // std::min(vol, vol0)
+        gamma = m ? gamma + d_gamma : gamma;
+        pw = m ? pw + vk * work : pw;
+        store(pshear + r, gamma); store(pwork + r, pw);
+        // softening from the next consult: 1 where a lane yielded (words, no branch: lanes yield at random)
+        static constexpr std::uint32_t kLaneBytes[16] = {0x0u, 0xffu, 0xff00u, 0xffffu, 0xff0000u, 0xff00ffu, 0xffff00u, 0xffffffu,
+                                                         0xff000000u, 0xff0000ffu, 0xff00ff00u, 0xff00ffffu, 0xffff0000u, 0xffff00ffu, 0xffffff00u, 0xffffffffu};
+        for (int w = 0; w < N / 4; ++w) {
+            std::uint32_t y;
+            std::memcpy(&y, pyielded + r + 4 * w, 4);  // pyielded[r + 4 w + l] in byte l
+            const std::uint32_t set = kLaneBytes[lanes >> (4 * w) & 15];
+            y = (y & ~set) | (0x01010101u & set);
+            std::memcpy(pyielded + r + 4 * w, &y, 4);
+        }
+    };
+    constexpr int all = (1 << N) - 1;
+    for (; q + N <= qend; q += N) {
+        V xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;
+        load(psxx + q, xx); load(psyy + q, yy); load(psxy + q, xy); load(pszz + q, zz);
+        strength(q, np, two_c_sq);
+        int settled = inside(xx, yy, xy, zz, np, two_c_sq, radius);
+        if (settled == all) continue;  // every lane inside: the trials stand
+        const V t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
+        Found found;
+        settled = shear_return(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
+        if (const int sh = settled >> N) record(q, sh, xx, yy, xy, zz, t_xx, t_yy, t_xy, t_zz, d_gamma);
+        int left = ~settled & all;
+        if (left) {  // an edge or the apex line (the search's first two sets), from the trials
+            V ex = t_xx, ey = t_yy, exy = t_xy, ez = t_zz;
+            if (const int edge = edge_return(ex, ey, exy, ez, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, left, d_gamma)) {
+                M done;
+                lane_mask(edge, done);
+                xx = done ? ex : xx; yy = done ? ey : yy; xy = done ? exy : xy; zz = done ? ez : zz;
+                record(q, edge, ex, ey, exy, ez, t_xx, t_yy, t_xy, t_zz, d_gamma);
+                left &= ~edge;
+            }
+        }
+        store(psxx + q, xx); store(psyy + q, yy); store(psxy + q, xy); store(pszz + q, zz);
+        for (int l = 0; left; ++l, left >>= 1)  // the lanes still left: the one-point code, on the trial
+            if (left & 1) one_point(q + l, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]});
+    }
+    return q;
+}
+#undef LPFDM_LANE
+#endif  // LPFDM_LANES

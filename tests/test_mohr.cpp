@@ -312,7 +312,8 @@ const double kOdd[] = {0.0, -0.0, 1e-310, -1e-310, 1e300, -1e300, std::numeric_l
                        -std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()};
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 // Lane l of (xx, yy, xy, zz) holds stress s, bit for bit.
-bool lane_holds(const detail::v4d& xx, const detail::v4d& yy, const detail::v4d& xy, const detail::v4d& zz, int l, const Stress& s) {
+template <class V>
+bool lane_holds(const V& xx, const V& yy, const V& xy, const V& zz, int l, const Stress& s) {
     const double lane[4] = {xx[l], yy[l], xy[l], zz[l]}, one[4] = {s.xx, s.yy, s.xy, s.zz};
     return std::memcmp(lane, one, sizeof lane) == 0;
 }
@@ -325,45 +326,80 @@ MohrResult one_point_correction(const MaterialConstants& mc, const detail::MohrT
     st.tension = mc.tension;
     return detail::mohr_coulomb_correct(mc, st, t, s);
 }
+// The consult's lanes of one width: four (AVX2, the vector detail::v4d) and eight (AVX-512,
+// detail::v8d), the same code; each test below runs for both where the processor has them.
+template <class V> struct Width;
+template <> struct Width<detail::v4d> {
+    using Found = detail::MohrLanes;
+    static constexpr int N = 4;
+    static bool here() { return Simulation::have_wide(); }
+};
+template <> struct Width<detail::v8d> {
+    using Found = detail::MohrLanes8;
+    static constexpr int N = 8;
+    static bool here() { return Simulation::have_wide512(); }
+};
+// Whether this processor runs the lanes of V (says so when it does not).
+template <class V>
+bool lanes_here() {
+    if (!Width<V>::here()) MESSAGE(Width<V>::N << " lanes: not on this processor");
+    return Width<V>::here();
+}
+template <class V>
+void settles_as_one_point();
+template <class V>
+void edges_as_one_point();
 }  // namespace
 #endif
 
-TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as the one-point code does, bit for bit") {
-    // The AVX2 point loop keeps four trials that detail::mohr_inside_lanes passes, else it
-    // calls mohr_return_lanes; it keeps a lane that settles and sends any other through
-    // mohr_inside and mohr_coulomb_correct. So a lane passed by the first must be exactly
+TEST_CASE("Mohr-Coulomb consult in lanes (AVX2, AVX-512): what it settles, it settles as the one-point code does, bit for bit") {
+    // The AVX2 point loop keeps the trials of a group of four or eight that
+    // detail::mohr_inside_lanes passes, else it calls mohr_return_lanes; it keeps a lane
+    // that settles and sends any other through mohr_inside and mohr_coulomb_correct. So a lane passed by the first must be exactly
     // one for which mohr_inside takes its first exit; a lane settled as inside must be
     // inside for mohr_inside, a lane returned by shear must get the one-point return's
     // stress and plastic shear exactly (mode Shear), and an unsettled lane must be
     // outside. Random stresses from tiny to huge, with zeros of both signs, subnormals,
     // infinities and NaN in every component and strength, and three tension limits.
 #if LPFDM_WIDE
-    if (!Simulation::have_wide()) return;
+    settles_as_one_point<detail::v4d>();
+    settles_as_one_point<detail::v8d>();
+#else
+    MESSAGE("built without the AVX2 version (LPFDM_WIDE): nothing to compare");
+#endif
+}
+#if LPFDM_WIDE
+namespace {
+template <class V>
+void settles_as_one_point() {
+    using W = Width<V>;
+    constexpr int N = W::N;
+    if (!lanes_here<V>()) return;
     Random r(29);
     auto value = [&](double scale, double shift) {
         const int pick = int(r.uniform() * 100);
         return pick < 9 ? kOdd[pick] : scale * (r.uniform() - shift);
     };
     long passed = 0, first_exits = 0, inside = 0, shear = 0, other = 0, past_tension = 0;
-    for (int k = 0; k < 60000; ++k) {
+    for (int k = 0; k < 240000 / N; ++k) {  // 240 000 trials whatever the width
         Material m = Material::mohr(1, 5e7, 0.1 + 0.35 * r.uniform(), 2000, 45 * r.uniform(), 1e4 * r.uniform());
         m.psi_deg = m.phi_deg * r.uniform();
         m.tension = k % 3 == 0 ? -1.0 : (k % 3 == 1 ? 0.0 : 1e4 * r.uniform());
         const MaterialConstants mc = constants_of(m);
-        detail::v4d xx, yy, xy, zz, np, two_c_sq, d_gamma;
-        Stress s[4];
-        for (int l = 0; l < 4; ++l) {
+        V xx, yy, xy, zz, np, two_c_sq, d_gamma;
+        Stress s[N];
+        for (int l = 0; l < N; ++l) {
             const double scale = std::ldexp(1.0, int(r.uniform() * 40) - 20) * 1e3;
             s[l] = {value(scale, 0.8), value(scale, 0.8), value(scale, 0.5), value(scale, 0.8)};
             xx[l] = s[l].xx; yy[l] = s[l].yy; xy[l] = s[l].xy; zz[l] = s[l].zz;
             np[l] = k % 13 == 0 ? value(3, 0) : mc.n_phi * (1 + 0.2 * (r.uniform() - 0.5));  // scattered
             two_c_sq[l] = k % 17 == 0 ? value(1e4, 0.2) : 2 * mc.c * r.uniform() * std::sqrt(np[l]);
         }
-        detail::v4d radius;
+        V radius;
         const int first = detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
-        detail::MohrLanes found;
+        typename W::Found found;
         const int bits = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
-        for (int l = 0; l < 4; ++l) {
+        for (int l = 0; l < N; ++l) {
             const double unset = -12345.5;  // mohr_inside sets t.sig_t unless it takes its first exit
             detail::MohrTrial t;
             t.np = np[l];
@@ -371,7 +407,7 @@ TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as th
             t.sig_t = unset;
             Stress one = s[l];
             const bool in = detail::mohr_inside(t, mc.tension, one);
-            const bool settled = bits >> l & 1, returned = bits >> (4 + l) & 1;
+            const bool settled = bits >> l & 1, returned = bits >> (N + l) & 1;
             if (first >> l & 1) {  // mohr_inside's first exit: mohr_return_lanes settles it as inside too
                 REQUIRE((settled && !returned));
                 CHECK(t.sig_t == unset);
@@ -399,29 +435,40 @@ TEST_CASE("Mohr-Coulomb consult in AVX2 lanes: what it settles, it settles as th
         }
     }
     CHECK(passed == first_exits);  // and takes it wherever mohr_inside does
-    MESSAGE("lanes through the first exit " << passed << ", settled as inside " << inside << ", returned by shear " << shear << " (" << past_tension << " of them past the tension limit too), left to the one-point code " << other);
+    MESSAGE(N << " lanes: through the first exit " << passed << ", settled as inside " << inside << ", returned by shear " << shear << " (" << past_tension << " of them past the tension limit too), left to the one-point code " << other);
     CHECK(inside > 20000);  // every outcome is frequent
     CHECK(shear > 10000);
     CHECK(past_tension > 1000);
     CHECK(other > 20000);
-#else
-    MESSAGE("built without the AVX2 version (LPFDM_WIDE): nothing to compare");
-#endif
 }
+}  // namespace
+#endif
 
-TEST_CASE("Mohr-Coulomb edges in AVX2 lanes: the search's first two sets, as the one-point code makes them, bit for bit") {
+TEST_CASE("Mohr-Coulomb edges in lanes (AVX2, AVX-512): the search's first two sets, as the one-point code makes them, bit for bit") {
     // Where FLAC's closed form is not admissible, mohr_coulomb_correct searches sets of
     // planes; detail::mohr_edge_lanes makes its first two (p0 with first[0], then first[1])
-    // four lanes at a time. A lane it settles must get the one-point code's mode Edge, its
+    // four or eight lanes at a time. A lane it settles must get the one-point code's mode Edge, its
     // stress and its plastic shear exactly; a lane it leaves is the one-point code's (the
     // closed form's tension return, a later set, or values that are not finite). Trials
     // from the flowing collapse's range (a weak soil near its apex, sig_zz anywhere between
     // and beyond the in-plane pair), then the odd values of the test above.
 #if LPFDM_WIDE
-    if (!Simulation::have_wide()) return;
+    edges_as_one_point<detail::v4d>();
+    edges_as_one_point<detail::v8d>();
+#else
+    MESSAGE("built without the AVX2 version (LPFDM_WIDE): nothing to compare");
+#endif
+}
+#if LPFDM_WIDE
+namespace {
+template <class V>
+void edges_as_one_point() {
+    using W = Width<V>;
+    constexpr int N = W::N;
+    if (!lanes_here<V>()) return;
     Random r(31);
     long tried = 0, edge = 0, left = 0, past_shear_only = 0, past_tension = 0, tension_first = 0;
-    for (int k = 0; k < 60000; ++k) {
+    for (int k = 0; k < 240000 / N; ++k) {  // 240 000 trials whatever the width
         // One trial in five is of a kind where the sort or the branch could slip: a circle of
         // radius 0 (5), sig_zz exactly p - r or p + r (6), N_phi <= 1 under a tension cut-off
         // (7), nu = 0.499 (8), a principal stress exactly at the cut-off (9).
@@ -431,9 +478,9 @@ TEST_CASE("Mohr-Coulomb edges in AVX2 lanes: the search's first two sets, as the
         m.tension = k % 3 == 0 ? -1.0 : (k % 3 == 1 ? 0.0 : 1e3 * r.uniform());
         if (special == 7 || special == 9) m.tension = 1e3 * r.uniform();
         const MaterialConstants mc = constants_of(m);
-        detail::v4d xx, yy, xy, zz, np, two_c_sq, d_gamma, radius;
-        Stress s[4];
-        for (int l = 0; l < 4; ++l) {
+        V xx, yy, xy, zz, np, two_c_sq, d_gamma, radius;
+        Stress s[N];
+        for (int l = 0; l < N; ++l) {
             const double scale = k % 7 == 0 ? std::ldexp(1.0, int(r.uniform() * 40) - 20) * 1e3 : 2e4;
             auto value = [&](double shift) { return k % 11 == 0 && r.uniform() < 0.1 ? kOdd[int(r.uniform() * 9)] : scale * (r.uniform() - shift); };
             s[l] = {value(0.8), value(0.8), value(0.5), value(0.8)};
@@ -448,13 +495,13 @@ TEST_CASE("Mohr-Coulomb edges in AVX2 lanes: the search's first two sets, as the
             two_c_sq[l] = 2 * mc.c * (r.uniform() < 0.5 ? 0.5 : 1.0) * std::sqrt(np[l]);  // softened or intact
         }
         detail::mohr_inside_lanes(xx, yy, xy, zz, np, two_c_sq, radius);
-        detail::MohrLanes found;
+        typename W::Found found;
         const int bits = detail::mohr_return_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
-        const int unsettled = ~bits & 15;
+        const int unsettled = ~bits & ((1 << N) - 1);
         if (!unsettled) continue;
         const int got = detail::mohr_edge_lanes(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, unsettled, d_gamma);
         CHECK((got & ~unsettled) == 0);  // only the lanes it was given
-        for (int l = 0; l < 4; ++l) {
+        for (int l = 0; l < N; ++l) {
             if (!(unsettled >> l & 1)) continue;
             ++tried;
             detail::MohrTrial t;
@@ -477,16 +524,15 @@ TEST_CASE("Mohr-Coulomb edges in AVX2 lanes: the search's first two sets, as the
             tension_first += !found.shear_first[l];  // FLAC's h chose the tension plane (p0 is sig3's)
         }
     }
-    MESSAGE("lanes the closed form left " << tried << ": settled on an edge or the apex line " << edge << " (" << past_shear_only << " past the shear planes only, " << past_tension << " past the tension limit; " << tension_first << " from FLAC's tension return), left to the one-point code " << left);
+    MESSAGE(N << " lanes: the closed form left " << tried << ": settled on an edge or the apex line " << edge << " (" << past_shear_only << " past the shear planes only, " << past_tension << " past the tension limit; " << tension_first << " from FLAC's tension return), left to the one-point code " << left);
     CHECK(edge > 20000);  // the lanes settle most of them
     CHECK(past_shear_only > 10000);  // edges of two shear planes
     CHECK(past_tension > 10000);     // the apex line, the corner of tension and shear
     CHECK(tension_first > 200);
     CHECK(left > 1000);  // and leave the rest
-#else
-    MESSAGE("built without the AVX2 version (LPFDM_WIDE): nothing to compare");
-#endif
 }
+}  // namespace
+#endif
 
 TEST_CASE("Jaumann, eq. 5f: a stressed point turned 360 degrees in small rigid steps keeps its invariants") {
     OnePoint op(Material::mohr(1, 5e7, 0.3, 1700, 30, 9800));
