@@ -6947,7 +6947,11 @@ LPFDM_LANE inline void lane_mask(int b, M& m) { m = M(((M{} + b) & kLaneBit) != 
 LPFDM_LANE inline void abs_of(const V& v, V& a) { a = V(M(v) & 0x7fffffffffffffffLL); }
 // v = x in every lane (a broadcast: the same bits, the sign of a zero too)
 LPFDM_LANE inline void splat(double x, V& v) {
-    for (int l = 0; l < N; ++l) v[l] = x;
+#if LPFDM_LANES == 4
+    v = V{x, x, x, x};
+#else
+    v = V{x, x, x, x, x, x, x, x};
+#endif
 }
 
 // Mohr's circle of (xx, yy) with its radius r given: t.a, t.sig and mohr_inside's lo, hi
