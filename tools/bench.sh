@@ -149,6 +149,14 @@ for sc in "${scenes[@]}"; do
       narrow=$(cut -d' ' -f1 <<<"$pair" | stats); wide=$(cut -d' ' -f2 <<<"$pair" | stats)
       log "   one value at a time $narrow, beside the default $wide"
     fi
+    # A Mohr-Coulomb scene on a processor whose default takes the consult eight points per
+    # AVX-512 register: the consult four per AVX2 register (--no-avx512) against the default.
+    if grep -qi '^ *MATERIAL.* MOHR' "$deck" && "$exe" --help 2>/dev/null | grep -q -- --no-avx512 &&
+       OMP_NUM_THREADS=1 "$exe" --profile -q -o "$tmp/o" --steps 1 "$deck" 2>/dev/null | grep -q AVX-512; then
+      pair=$(for r in $(seq "$runs"); do echo "$(rate "$exe" 1 "$deck" "$opts --no-avx512") $(rate "$exe" 1 "$deck" "$opts")"; done)
+      four=$(cut -d' ' -f1 <<<"$pair" | stats); eight=$(cut -d' ' -f2 <<<"$pair" | stats)
+      log "   the consult four points per AVX2 register $four, beside the default (eight per AVX-512 register) $eight: $(ratio "$(med "$eight")" "$(med "$four")")x"
+    fi
     befcell="-"; [ -n "$before" ] && befcell="$(med "$bef") ($(ratio "$(med "$fast")" "$(med "$bef")"))"
     rows+=("| $name | $pts | $steps | $(med "$one") | $(med "$two") ($(ratio "$(med "$two")" "$(med "$one")")x) | - | - | $(med "$ref") | $(ratio "$(med "$fast")" "$(med "$ref")") | $befcell | $(med "$narrow") ($(ratio "$(med "$wide")" "$(med "$narrow")")) | $(med "$mem1") / $(med "$mem2") | $(med "$bpp") | |")
     continue
@@ -164,16 +172,20 @@ for sc in "${scenes[@]}"; do
   OMP_NUM_THREADS=2 "$exe" -q -o "$tmp/$name-state" --steps "$resume" "$copy" 2>/dev/null
   state=$tmp/$name-state/$base.state
   [ -s "$state" ] || log "   no state written at step $resume: the last 10 % is not measured"
-  for m in whole1 whole2 first1 first2 last1 last2 reffirst reflast plainw progw; do : >"$tmp/$m"; done
+  for m in whole1 whole2 first1 first2 last1 last2 reffirst reflast plainw progw cw cf cl; do : >"$tmp/$m"; done
+  consult() { sed -nE 's/.*Mohr-Coulomb consult.* ([0-9.]+) ns per point-update.*/\1/p' "$1/stdout"; }  # its ns, from --profile
   for r in $(seq "$runs"); do
     # interleaved run by run, so that a slow spell of the machine falls on all of them
     timed "$steps" 1 "$tmp/$name-w1-$r" "$copy" >>"$tmp/whole1"
+    consult "$tmp/$name-w1-$r" >>"$tmp/cw"
     timed "$steps" 2 "$tmp/$name-w2-$r" "$copy" >>"$tmp/whole2"
     timed "$tenth" 1 "$tmp/$name-f1" --steps "$tenth" "$copy" >>"$tmp/first1"
+    consult "$tmp/$name-f1" >>"$tmp/cf"
     timed "$tenth" 2 "$tmp/$name-f2" --steps "$tenth" "$copy" >>"$tmp/first2"
     timed "$tenth" 1 "$tmp/$name-f0" --kernel reference --steps "$tenth" "$copy" >>"$tmp/reffirst"
     if [ -s "$state" ]; then
       timed "$tenth" 1 "$tmp/$name-l1" --restart "$state" "$copy" >>"$tmp/last1"
+      consult "$tmp/$name-l1" >>"$tmp/cl"
       timed "$tenth" 2 "$tmp/$name-l2" --restart "$state" "$copy" >>"$tmp/last2"
       timed "$tenth" 1 "$tmp/$name-l0" --kernel reference --restart "$state" "$copy" >>"$tmp/reflast"
     fi
@@ -198,6 +210,9 @@ for sc in "${scenes[@]}"; do
   mem1=$(col "$tmp/whole1" 2 | stats); mem2=$(col "$tmp/whole2" 2 | stats); bpp=$(col "$tmp/whole1" 3 | stats)
   # The result of the run, from the point table of the last one-thread whole run.
   check=$(result_of "$name" "$deck" "$tmp/$name-w1-$runs/${base}_points.txt")
+  if [ -s "$tmp/cw" ]; then  # the Mohr-Coulomb consult's ns a point-update (--profile), one thread
+    check="$check; consult $(med "$(stats <"$tmp/cw")") ns a point-update (first / last 10 %: $(med "$(stats <"$tmp/cf")") / $(med "$(stats <"$tmp/cl")"))"
+  fi
   log "   $check"
   befcell="-"
   if [ -n "$before" ] && [ -s "$tmp/plainw" ]; then
