@@ -26,13 +26,16 @@
 //   Reference  Simulation::step_reference: the plain cycle, every cell, point and node,
 //              one value at a time, one thread. Read this one: it is the definition.
 //   Fast       (default) the same cycle on the occupied cells only, by threads (OpenMP,
-//              -fopenmp) and four values per AVX2 register when the processor has it.
+//              -fopenmp) and four values per AVX2 register when the processor has it;
+//              with AVX-512 too, the Mohr-Coulomb consult eight points per register
+//              (Simulation::set_wide512(false) keeps four).
 //   Scalar     Fast without AVX2.
 //   All give the same numbers, bit for bit, on every deck (tests/test_reference.cpp).
 //
 // CONFIGURATION (define before including)
 //   LPFDM_NO_IO    leave out the deck reader and the writers (then no fmt is needed)
-//   LPFDM_NO_WIDE  leave out the AVX2 version (so does any build with -mfma)
+//   LPFDM_NO_WIDE  leave out the AVX2 version and the AVX-512 consult (so does any build
+//                  with -mfma)
 //
 // THE PAPER'S EQUATIONS, AND THE FUNCTION THAT COMPUTES EACH
 //   eq. 5a-5d  cell strain increments from nodal increments     cell_strain (MAPPING SMOOTH:
