@@ -35,7 +35,8 @@
 // CONFIGURATION (define before including)
 //   LPFDM_NO_IO    leave out the deck reader and the writers (then no fmt is needed)
 //   LPFDM_NO_WIDE  leave out the AVX2 version and the AVX-512 consult (so does any build
-//                  with -mfma)
+//                  with -mfma or -mavx512f)
+//   LPFDM_NO_AVX512  never take the AVX-512 consult (needed with Clang -ffp-contract=fast)
 //
 // THE PAPER'S EQUATIONS, AND THE FUNCTION THAT COMPUTES EACH
 //   eq. 5a-5d  cell strain increments from nodal increments     cell_strain (MAPPING SMOOTH:
@@ -265,8 +266,9 @@
 // per register instead of one or two, the same numbers bit for bit. Define LPFDM_NO_WIDE to
 // leave it out. A build with fused multiply-add (-mfma, -march=native, x86-64-v3) leaves
 // it out too: the compiler fuses a*b - c*d on either product, not always alike in the two
-// versions, so they would no longer agree bit for bit.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__FMA__) && !defined(LPFDM_NO_WIDE)
+// versions, so they would no longer agree bit for bit. So does a build for AVX-512
+// (-mavx512f), which brings fused multiply-add to GCC without defining __FMA__.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__FMA__) && !defined(__AVX512F__) && !defined(LPFDM_NO_WIDE)
 #define LPFDM_WIDE 1
 #else
 #define LPFDM_WIDE 0
@@ -276,8 +278,10 @@
 // taken when the processor has it (Simulation::have_wide512): the same text as the four-lane
 // one, read twice (detail::lanes4 and detail::lanes8, the end of this file). AVX-512 brings
 // fused multiply-add with it, which the compiler would use on a * b + c: those functions
-// are built without contraction (GCC: the optimize attribute; Clang: the pragma below, for
-// the whole header).
+// are built without contraction (GCC: the optimize attribute, whatever -ffp-contract says;
+// Clang: the pragma below, for the whole header, which Clang disregards under
+// -ffp-contract=fast: with that option, define LPFDM_NO_AVX512, and the program never
+// takes this version). LPFDM_AVX512: the attribute of those functions.
 #if defined(__clang__)
 #define LPFDM_AVX512 target("avx2,avx512f,avx512vl,avx512dq")
 #else
@@ -2110,7 +2114,8 @@ bool balance(int team, const Was& was, const Seconds& seconds, T* now) {
 //   Reference  the plain cycle (Simulation::step_reference): every cell, point and node,
 //              one value at a time, one thread. The definition of a step.
 //   Fast       the same cycle over the occupied part of the lattice only, by threads
-//              (OpenMP), and four values per AVX2 register where the processor has it.
+//              (OpenMP), and four values per AVX2 register where the processor has it
+//              (the Mohr-Coulomb consult eight per AVX-512 register where it has that).
 //   Scalar     Fast without AVX2.
 // All three give the same numbers, bit for bit (tests/test_reference.cpp).
 enum class Kernel : std::uint8_t { Fast, Scalar, Reference };
@@ -2186,8 +2191,9 @@ public:
     // The AVX2 point loop's Mohr-Coulomb consult eight points per AVX-512 register instead
     // of four per AVX2 register: used when the AVX2 version is on and the processor has
     // AVX-512 F, VL and DQ; set_wide512(false) keeps four (the same numbers, bit for bit).
+    // Never with LPFDM_NO_AVX512 defined (see LPFDM_AVX512). set_wide(true) turns it on again.
     static bool have_wide512() {
-#if LPFDM_WIDE
+#if LPFDM_WIDE && !defined(LPFDM_NO_AVX512)
         return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq");
 #else
         return false;
@@ -2201,7 +2207,7 @@ public:
     bool wide() const { return wide_; }
     const double* phase_seconds() const { return phase_s_; }          // kPhases entries, in step order
     // While profiling, the Mohr-Coulomb consult of the fast AVX2 point loop alone (eq. 6's
-    // elastic test and plastic return, four points a register; part of the points phase):
+    // elastic test and plastic return, four or eight points a register; part of the points phase):
     // its seconds (summed over threads) and the point-updates it consulted. Zero for the
     // other loops, which consult point by point inside the motion.
     double return_seconds() const { return return_s_; }
@@ -2525,7 +2531,7 @@ private:
     void (Simulation::*run_)(long, long, Part&, Landing&) = nullptr;  // the point loop (choose_point_loop)
     template <Motion M, bool Carry> void advance_run(long k0, long k1, Part& part, Landing& t);
     // Blocks (with Wide, where some group is Mohr-Coulomb): the points in blocks, each
-    // consulted four at a time between its trial and its motion; otherwise run by run.
+    // consulted four or eight at a time between its trial and its motion; otherwise run by run.
     template <Motion M, bool Carry, bool Wide, bool Blocks = false> LPFDM_INLINE void run_points(long k0, long k1, Part& part, Landing& t);
 #if LPFDM_WIDE
     __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Part& part, Landing& t);
@@ -2627,8 +2633,8 @@ private:
     // Point q was returned from the trial stress to s with plastic shear increment
     // d_gamma_p: its plastic shear, its yielded flag and the work its return dissipated,
     // V s : C^-1 (trial - s), V = energy_volume: min(V, V0) as in eq. 8 (this step's volume:
-    // every kernel changes V before the consult). The AVX2 point loop (consult_lanes) does the
-    // same four points at a time (never with ADVECT FLIP, which the reference cycle runs):
+    // every kernel changes V before the consult). The AVX2 point loop (detail::lanesN::consult's
+    // record) does the same four or eight points at a time (never with ADVECT FLIP, which the reference cycle runs):
     // a change here is a change there.
     void record_yield(const MaterialConstants& mc, std::size_t q, double vol, double d_gamma_p, const Stress& trial, const Stress& s) {
         p_.plastic_shear[q] += d_gamma_p;
@@ -4355,7 +4361,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
         if constexpr (Blocks) {  // mohr_groups_ (advance_run_wide)
             // With a Mohr-Coulomb material, the points go in blocks of about kConsultBlock,
             // each ending where a run ends: the elastic trial of the block's runs, then the
-            // consult of its Mohr-Coulomb points four at a time whatever cells they lie in
+            // consult of its Mohr-Coulomb points four or eight at a time whatever cells they lie in
             // (the consult needs no cell; lanes within runs, rarely more than four points long
             // with 2 x 2 points per cell, left half the returns to the one-point code),
             // then the motion and landing of its runs, which read the consulted stresses
@@ -6983,9 +6989,9 @@ LPFDM_LANE inline int inside(const V& xx, const V& yy, const V& xy, const V& zz,
 // std::min(std::min(a, b), c) and std::max(std::max(a, b), c) in each lane, with their
 // operations (std::min(a, b) is b < a ? b : a, std::max(a, b) a < b ? b : a).
 LPFDM_LANE inline void extremes(const V& a, const V& b, const V& c, V& lo, V& hi) {
-    const V m = b < a ? b : a, M = a < b ? b : a;
+    const V m = b < a ? b : a, big = a < b ? b : a;
     lo = c < m ? c : m;
-    hi = M < c ? c : M;
+    hi = big < c ? c : big;
 }
 // What shear_return found of each trial, for edge_return (mohr_coulomb_correct's
 // names): the circle's a, the principal values t0 <= t1 and t2 = sig_zz, the tension limit,
@@ -7026,7 +7032,7 @@ LPFDM_LANE inline int shear_return(V& xx, V& yy, V& xy, V& zz, const V& r, const
     extremes(s0, s1, s2, lo_n, hi_n);
     // FLAC's h chooses shear where the tension plane is violated too (h_fn, the same
     // operations; a lane with ft >= 0 does not need it, as the one-point code skips it, and
-    // most groups of four hold no lane that does: their square root is not taken).
+    // most groups hold no lane that does: their square root is not taken).
     M shear_first = (fs < 0) & (ft >= 0);
     if (const M both = (fs < 0) & ~(ft >= 0); bits(both)) {
         V root;
@@ -7193,7 +7199,7 @@ LPFDM_LANE inline int edge_return(V& xx, V& yy, V& xy, V& zz, const V& r, const 
 }
 // eq. 6's consult of the Mohr-Coulomb points q .. q + N k - 1 of material mc (the largest
 // whole number of groups of N before qend), which hold their elastic trials (the AVX2
-// point loop's, Simulation::consult_block): the elastic test, the closed-form shear return
+// point loop's, consult_block in Simulation::run_points): the elastic test, the closed-form shear return
 // and the search's first two sets (an edge, the apex line), then one_point(r, trial) (the
 // one-point test and return, mohr_consult, and the stress stored) for a lane those do not
 // settle. Returns where it stopped (the caller consults the last points). Own: each point's
