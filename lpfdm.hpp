@@ -1110,8 +1110,6 @@ LPFDM_INLINE inline void halves(const v4m& m, v2m& lo, v2m& hi) { std::memcpy(&l
 LPFDM_INLINE inline bool all_lanes(const v4m& m) { v2m lo, hi; halves(m, lo, hi); return lane_signs(lo & hi) == 3; }
 // True when no lane of a comparison's mask is set.
 LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { v2m lo, hi; halves(m, lo, hi); return lane_signs(lo | hi) == 0; }
-// m: lane l set where bit l of `bits` is (movmskpd's inverse).
-LPFDM_INLINE inline void lane_mask(int bits, v4m& m) { m = v4m((v4m{bits, bits, bits, bits} & v4m{1, 2, 4, 8}) != 0); }
 // a = |v| lane by lane (the sign bit cleared, as std::fabs does).
 LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7fffffffffffffffLL); }
 // Eight doubles (and eight lane masks): AVX-512 registers inside a function built for
