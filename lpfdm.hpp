@@ -3996,6 +3996,28 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
     const int mx = mx_, my = my_;
     const double L = L_, invL = invL_, X = mx * L, Y = my * L;
     const bool single = groups_.size() == 1;
+    // Software prefetch (speed only: no number changes). At a million points the point
+    // arrays come from memory at every step, nine streams at once, and the processor's own
+    // prefetcher, which follows a stream within a 4 KiB page and starts again at the next,
+    // kept the elastic loop (usual_runs) waiting for them: with the lines of point k + 128
+    // asked for as it reaches point k (every other four: a line of doubles), the elastic
+    // million-point scene's point phase takes a quarter less time. Where the points fit in
+    // the cache the requests find their lines there. The Mohr-Coulomb block loop does not
+    // ask: it waits on its arithmetic, not on memory (mohr-1M as fast with it, mohr-65k 6 %
+    // slower, the requests' own cost).
+    constexpr long kAhead = 128;
+    [[maybe_unused]] auto ahead = [&](long k) LPFDM_INLINE {
+#if defined(__GNUC__)
+        if ((k & 4) || k + kAhead >= k1) return;
+        const long q = k + kAhead;
+        __builtin_prefetch(px + q, 1); __builtin_prefetch(py + q, 1);
+        __builtin_prefetch(psxx + q, 1); __builtin_prefetch(psyy + q, 1); __builtin_prefetch(psxy + q, 1);
+        __builtin_prefetch(pszz + q, 1); __builtin_prefetch(pvol + q, 1);
+        __builtin_prefetch(pcell + q, 1); __builtin_prefetch(pgroup + q, 0);
+#else
+        (void)k;
+#endif
+    };
     const Span* cols = cols_.data();
     const Span* rows = rows_.data();
     // Mohr-Coulomb point r of material mc with its elastic trial s: the consult of eq. 6
@@ -4043,6 +4065,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
         double mass = t.mass;
         int cmin = t.cmin, cmax = t.cmax, imin = t.imin, imax = t.imax;
         for (; k + 4 <= stop; k += 4) {
+            ahead(k);
             const int c = pcell[k];
             v4i w;
             std::memcpy(&w, pcell + k, sizeof w);
