@@ -3908,7 +3908,7 @@ inline bool Simulation::advance_parted() {
 // registers while its points stay in it and written back when the run ends; every sum
 // still takes its terms in point order, so the result is the same bit for bit as a plain
 // loop over points. (The AVX2 loop of a scene with a Mohr-Coulomb material goes four
-// points at a time across cells instead: run_points' trial_block and motion_block.)
+// points at a time across cells instead: run_points' move_block and land_block.)
 // Requires p_.cell[k] to be the cell holding (x[k], y[k]) (as after every step).
 // One instantiation per motion rule and transfer, so the loop holds only what it uses.
 inline void Simulation::advance_range(long k0, long k1, Part& part, Landing& t) { (this->*run_)(k0, k1, part, t); }
@@ -4389,8 +4389,10 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             // while they are still in the cache. The same operations on the same values as
             // the whole step of each run: the output is the same bit for bit. A scene with
             // no user's model takes blocks of kConsultBlock points (the chunk's last one
-            // shorter), not ending with a run, four points at a time instead (trial_block,
-            // motion_block; a run split between two blocks adds the same sums).
+            // shorter), not ending with a run, four points at a time instead: the trial and
+            // the motion of the block (move_block; the motion of eq. 7a/7b needs no stress),
+            // the consult, then the sums of eq. 7 and 8 (land_block). A run split between two
+            // blocks adds the same sums.
             static_assert(M == Motion::Centre && !Carry, "the blocks follow MOTION CENTRE without ADVECT POINTS");
             // A block of points of elastic and Mohr-Coulomb materials, taken four points at a
             // time whatever cells they lie in: their cells' strain records, and their nodes'
@@ -4400,7 +4402,10 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             // point-update in the last 100 steps of decks/bench_flow.deck, against 0.11 in its
             // first); this one branches on what is rare (a cell with a fixed edge or near a
             // wall, whose points stop_at_edges holds one by one; a point leaving the lattice;
-            // four points of two materials) and on whether the four share a cell. The same
+            // four points of two materials) and on whether the four share a cell. Trial and
+            // motion in one pass read each four's strain records once (in two passes, the
+            // trial's and the motion's, the flow's last 400 steps took 11 % longer in this
+            // loop, its first 400 steps 7 %). The same
             // functions on the same values as the runs, point by point, and each point added to
             // the sums of the cell it lands in (eq. 7, 8) in point order, as there: the same bits.
             const double inv_mx = 1.0 / mx;
@@ -4439,9 +4444,16 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 std::memcpy(&gw, pgroup + q, sizeof gw);
                 return gw == std::uint64_t(g) * 0x0001000100010001ULL;
             };
-            // eq. 6 (the elastic trial) and the volume change of points b0 .. b1-1 (Hooke's law
-            // for an elastic or a Mohr-Coulomb point; the latter is consulted afterwards).
-            auto trial_block = [&](long b0, const long b1) LPFDM_INLINE {
+            // The block's first pass, four points at a time: eq. 6's elastic trial and the
+            // volume change (Hooke's law for an elastic or a Mohr-Coulomb point; the latter is
+            // consulted afterwards), then eq. 7a/7b (MOTION CENTRE, which needs no stress) and
+            // the cell each point lands in, written to its cell (-1: it left the lattice), with
+            // the box of those cells and the mass landed. Each four's strain records, gathered
+            // once for both. The sums of eq. 7 and 8 wait for the consulted stresses
+            // (land_block).
+            auto move_block = [&](long b0, const long b1) LPFDM_INLINE {
+                const double* ux = dux_.data();
+                const double* uy = duy_.data();
                 auto trial = [&](const MaterialConstants& mc, auto& xx, auto& yy, auto& xy, auto& zz, auto& vol, const auto& e, const auto& rc, const auto& rs) LPFDM_INLINE {
                     using V = std::remove_reference_t<decltype(xx)>;  // one value or four lanes
                     struct { V xx, yy, xy, zz; } de;
@@ -4453,75 +4465,59 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     const CellStrain& ce = strain_[std::size_t(pcell[q])];
                     trial(*gconsts[pgroup[q]], psxx[q], psyy[q], psxy[q], pszz[q], pvol[q], ce, ce.rc, ce.rs);
                 };
-                for (; b0 + 4 <= b1; b0 += 4) {
-                    int g;
-                    if (!one_group_of_four(b0, g)) {  // points of two materials
-                        for (int l = 0; l < 4; ++l) trial_one(b0 + l);
-                        continue;
-                    }
-                    detail::StrainLanes e;
-                    detail::v4d rc, rs, xx, yy, xy, zz, vol;
-                    v4i c;
-                    std::memcpy(&c, pcell + b0, sizeof c);
-                    if (one_cell(c)) {  // one cell: its values once
-                        const CellStrain& ce = strain_[std::size_t(c[0])];
-                        e = strain_lane(c[0]);
-                        rc = detail::v4d{ce.rc, ce.rc, ce.rc, ce.rc}; rs = detail::v4d{ce.rs, ce.rs, ce.rs, ce.rs};
-                    } else {
-                        e = strain_lanes(b0);
-                        rotation_lanes(b0, rc, rs);
-                    }
-                    detail::load(psxx + b0, xx); detail::load(psyy + b0, yy); detail::load(psxy + b0, xy);
-                    detail::load(pszz + b0, zz); detail::load(pvol + b0, vol);
-                    trial(*gconsts[g], xx, yy, xy, zz, vol, e, rc, rs);
-                    detail::store(psxx + b0, xx); detail::store(psyy + b0, yy); detail::store(psxy + b0, xy);
-                    detail::store(pszz + b0, zz); detail::store(pvol + b0, vol);
-                }
-                for (; b0 < b1; ++b0) trial_one(b0);  // the last one to three points of the chunk
-            };
-            // eq. 7a/7b (MOTION CENTRE) and the landing of points b0 .. b1-1.
-            auto motion_block = [&](long b0, const long b1) LPFDM_INLINE {
-                const double* ux = dux_.data();
-                const double* uy = duy_.data();
-                // Point q lands in cell cn (column ni): eq. 7 and 8, as land() above.
                 auto landed_in = [&](int cn, int ni) LPFDM_INLINE {  // the box of the cells landed in
                     t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
                     t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
                 };
-                auto deposit = [&](long q, int cn, int ni) LPFDM_INLINE {
-                    const Group& gr = groups_[pgroup[q]];
-                    pcell[q] = cn;
-                    if (owned(cn)) add_to_cell(std::size_t(cn), gr.mass, std::min(pvol[q], gr.vol0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
-                    else p_.listed[std::size_t(pt.list_at + pt.listed++)] = std::int32_t(q);  // another chunk's cell
-                    landed_in(cn, ni);
-                    t.mass += gr.mass;
-                };
+                // Point q, moved to (x, y): the cell it lands in (cell_holding), or it left.
                 auto land_one = [&](long q, double x, double y) LPFDM_INLINE {
                     const int cn = cell_holding(x, y);
-                    if (cn < 0) { pcell[q] = -1; ++t.departed; return; }  // left the lattice (or not finite)
-                    deposit(q, cn, cn % mx);
+                    pcell[q] = cn;
+                    if (cn < 0) { ++t.departed; return; }  // left the lattice (or not finite)
+                    landed_in(cn, cn % mx);
+                    t.mass += groups_[pgroup[q]].mass;
                 };
                 for (; b0 + 4 <= b1; b0 += 4) {
                     using detail::v4d;
                     v4i c, ci, cj;
                     std::memcpy(&c, pcell + b0, sizeof c);
+                    const bool one = one_cell(c);
+                    detail::StrainLanes e;
+                    v4d rc, rs;
+                    if (one) {  // one cell (while runs are long): its values once
+                        const CellStrain& ce = strain_[std::size_t(c[0])];
+                        e = strain_lane(c[0]);
+                        rc = v4d{ce.rc, ce.rc, ce.rc, ce.rc}; rs = v4d{ce.rs, ce.rs, ce.rs, ce.rs};
+                    } else {
+                        e = strain_lanes(b0);
+                        rotation_lanes(b0, rc, rs);
+                    }
+                    int g;
+                    const bool one_group = one_group_of_four(b0, g);
+                    if (one_group) {
+                        v4d xx, yy, xy, zz, vol;
+                        detail::load(psxx + b0, xx); detail::load(psyy + b0, yy); detail::load(psxy + b0, xy);
+                        detail::load(pszz + b0, zz); detail::load(pvol + b0, vol);
+                        trial(*gconsts[g], xx, yy, xy, zz, vol, e, rc, rs);
+                        detail::store(psxx + b0, xx); detail::store(psyy + b0, yy); detail::store(psxy + b0, xy);
+                        detail::store(pszz + b0, zz); detail::store(pvol + b0, vol);
+                    } else {  // points of two materials
+                        for (int l = 0; l < 4; ++l) trial_one(b0 + l);
+                    }
                     columns_rows(c, ci, cj);
                     const v4i n1 = cj * (mx + 1) + ci, n3 = n1 + (mx + 1);  // node(ci, cj); n2 = n1 + 1, n4 = n3 + 1
                     v4d umx, umy;
-                    detail::StrainLanes e;
-                    if (one_cell(c)) {  // one cell (while runs are long): its values once
+                    if (one) {
                         const int a = n1[0], b = n3[0];
                         double mean_x, mean_y;
                         mean_of_four(ux[a], ux[a + 1], ux[b], ux[b + 1], mean_x); mean_of_four(uy[a], uy[a + 1], uy[b], uy[b + 1], mean_y);
                         umx = v4d{mean_x, mean_x, mean_x, mean_x}; umy = v4d{mean_y, mean_y, mean_y, mean_y};
-                        e = strain_lane(c[0]);
                     } else {
                         const v4d ux1 = {ux[n1[0]], ux[n1[1]], ux[n1[2]], ux[n1[3]]}, ux2 = {ux[n1[0] + 1], ux[n1[1] + 1], ux[n1[2] + 1], ux[n1[3] + 1]};
                         const v4d ux3 = {ux[n3[0]], ux[n3[1]], ux[n3[2]], ux[n3[3]]}, ux4 = {ux[n3[0] + 1], ux[n3[1] + 1], ux[n3[2] + 1], ux[n3[3] + 1]};
                         const v4d uy1 = {uy[n1[0]], uy[n1[1]], uy[n1[2]], uy[n1[3]]}, uy2 = {uy[n1[0] + 1], uy[n1[1] + 1], uy[n1[2] + 1], uy[n1[3] + 1]};
                         const v4d uy3 = {uy[n3[0]], uy[n3[1]], uy[n3[2]], uy[n3[3]]}, uy4 = {uy[n3[0] + 1], uy[n3[1] + 1], uy[n3[2] + 1], uy[n3[3] + 1]};
                         mean_of_four(ux1, ux2, ux3, ux4, umx); mean_of_four(uy1, uy2, uy3, uy4, umy);
-                        e = strain_lanes(b0);
                     }
                     const v4d xi = __builtin_convertvector(ci, v4d) * L, yj = __builtin_convertvector(cj, v4d) * L;  // ci L, cj L
                     v4d x0, y0, x, y, ddx, ddy;
@@ -4544,22 +4540,21 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     v4i ni = __builtin_convertvector(x * invL, v4i), nj = __builtin_convertvector(y * invL, v4i);
                     ni = ni < mx1 ? ni : mx1; nj = nj < my1 ? nj : my1;  // std::min(m - 1, int(x / L))
                     const v4i cn = nj * mx + ni;  // cell(ni, nj)
-                    int g;
-                    if (one_cell(cn) && owned(cn[0]) && one_group_of_four(b0, g)) {
-                        // all four in one cell (the usual case while runs are long): its sums in
-                        // registers, the four added in point order as deposit() adds them
-                        std::memcpy(pcell + b0, &cn, sizeof cn);
-                        v4d vol, sxx, syy, sxy;
-                        detail::load(pvol + b0, vol); detail::load(psxx + b0, sxx); detail::load(psyy + b0, syy); detail::load(psxy + b0, sxy);
-                        CellSums sums = cell_sums(std::size_t(cn[0]));
-                        sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, sxx, syy, sxy, t.mass);  // eq. 7, 8
-                        store_sums(std::size_t(cn[0]), sums);
+                    std::memcpy(pcell + b0, &cn, sizeof cn);
+                    if (one_cell(cn)) {
                         landed_in(cn[0], ni[0]);
-                        continue;
+                    } else {
+                        for (int l = 0; l < 4; ++l) landed_in(cn[l], ni[l]);
                     }
-                    for (int l = 0; l < 4; ++l) deposit(b0 + l, cn[l], ni[l]);
+                    if (one_group) {
+                        const double gm = groups_[std::size_t(g)].mass;
+                        for (int l = 0; l < 4; ++l) t.mass += gm;
+                    } else {
+                        for (int l = 0; l < 4; ++l) t.mass += groups_[pgroup[b0 + l]].mass;
+                    }
                 }
                 for (; b0 < b1; ++b0) {  // the last one to three points of the chunk: the reference's steps
+                    trial_one(b0);
                     const int c = pcell[b0];
                     const CellStrain& ce = strain_[std::size_t(c)];
                     const double x0 = px[b0], y0 = py[b0];
@@ -4569,6 +4564,35 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                     px[b0] = x; py[b0] = y;
                     land_one(b0, x, y);
                 }
+            };
+            // The block's last pass: eq. 7 and 8, each point (not departed) added to the sums of
+            // the cell it landed in, in point order, or listed when that cell is another chunk's.
+            auto land_block = [&](long b0, const long b1) LPFDM_INLINE {
+                auto deposit = [&](long q, int cn) LPFDM_INLINE {
+                    if (cn < 0) return;  // left the lattice
+                    const Group& gr = groups_[pgroup[q]];
+                    if (owned(cn)) add_to_cell(std::size_t(cn), gr.mass, std::min(pvol[q], gr.vol0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
+                    else p_.listed[std::size_t(pt.list_at + pt.listed++)] = std::int32_t(q);  // another chunk's cell
+                };
+                for (; b0 + 4 <= b1; b0 += 4) {
+                    using detail::v4d;
+                    v4i cn;
+                    std::memcpy(&cn, pcell + b0, sizeof cn);
+                    int g;
+                    if (one_cell(cn) && owned(cn[0]) && one_group_of_four(b0, g)) {
+                        // all four in one cell (the usual case while runs are long): its sums in
+                        // registers, the four added in point order as deposit() adds them
+                        v4d vol, sxx, syy, sxy;
+                        detail::load(pvol + b0, vol); detail::load(psxx + b0, sxx); detail::load(psyy + b0, syy); detail::load(psxy + b0, sxy);
+                        CellSums sums = cell_sums(std::size_t(cn[0]));
+                        double landed = 0;  // (move_block counted the mass landed)
+                        sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, sxx, syy, sxy, landed);  // eq. 7, 8
+                        store_sums(std::size_t(cn[0]), sums);
+                        continue;
+                    }
+                    for (int l = 0; l < 4; ++l) deposit(b0 + l, cn[l]);
+                }
+                for (; b0 < b1; ++b0) deposit(b0, pcell[b0]);
             };
             auto consult_timed = [&](long b0, long b1) LPFDM_INLINE {
                 if (profiling_) {  // two clock reads a block of about 256 points
@@ -4584,9 +4608,9 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             for (long b0 = k0; b0 < k1;) {
                 long b1 = std::min(k1, b0 + kConsultBlock);
                 if (no_user_groups_) {  // four points at a time across runs
-                    trial_block(b0, b1);
+                    move_block(b0, b1);
                     consult_timed(b0, b1);
-                    motion_block(b0, b1);
+                    land_block(b0, b1);
                     b0 = b1;  // the next block may start inside a run: a run split in two adds the same sums
                     continue;
                 }
