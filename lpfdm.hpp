@@ -4404,8 +4404,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
             // wall, whose points stop_at_edges holds one by one; a point leaving the lattice;
             // four points of two materials) and on whether the four share a cell. Trial and
             // motion in one pass read each four's strain records once (in two passes, the
-            // trial's and the motion's, the flow's last 400 steps took 11 % longer in this
-            // loop, its first 400 steps 7 %). The same
+            // trial's and the motion's, the point phase of the flow's last 400 steps took
+            // 11 % longer, of its first 400 steps 7 %: decks/bench_flow.deck, one thread). The same
             // functions on the same values as the runs, point by point, and each point added to
             // the sums of the cell it lands in (eq. 7, 8) in point order, as there: the same bits.
             const double inv_mx = 1.0 / mx;
