@@ -1108,6 +1108,16 @@ LPFDM_INLINE inline int lane_signs(const v2m& a) { return __builtin_ia32_movmskp
 LPFDM_INLINE inline void halves(const v4m& m, v2m& lo, v2m& hi) { std::memcpy(&lo, &m, sizeof lo); std::memcpy(&hi, reinterpret_cast<const char*>(&m) + sizeof lo, sizeof hi); }
 // True when every lane of a comparison's mask is set.
 LPFDM_INLINE inline bool all_lanes(const v4m& m) { v2m lo, hi; halves(m, lo, hi); return lane_signs(lo & hi) == 3; }
+// The strains (xx, yy, xy, yx) of four cells in the lanes, from the first four doubles
+// of each cell's record (r0 .. r3: xx yy xy yx, one cell each).
+LPFDM_INLINE inline void transpose_strains(const v4d& r0, const v4d& r1, const v4d& r2, const v4d& r3, v4d& xx, v4d& yy, v4d& xy, v4d& yx) {
+    const v4d t0 = LPFDM_SHUFFLE(r0, r1, 0, 4, 2, 6), t1 = LPFDM_SHUFFLE(r0, r1, 1, 5, 3, 7);  // xx xy, yy yx of 0 1
+    const v4d t2 = LPFDM_SHUFFLE(r2, r3, 0, 4, 2, 6), t3 = LPFDM_SHUFFLE(r2, r3, 1, 5, 3, 7);  // of 2 3
+    xx = LPFDM_SHUFFLE(t0, t2, 0, 1, 4, 5); xy = LPFDM_SHUFFLE(t0, t2, 2, 3, 6, 7);
+    yy = LPFDM_SHUFFLE(t1, t3, 0, 1, 4, 5); yx = LPFDM_SHUFFLE(t1, t3, 2, 3, 6, 7);
+}
+// Bit l set when lane l of a comparison's mask is.
+LPFDM_INLINE inline int lane_bits(const v4m& m) { v2m lo, hi; halves(m, lo, hi); return lane_signs(lo) | lane_signs(hi) << 2; }
 // True when no lane of a comparison's mask is set.
 LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { v2m lo, hi; halves(m, lo, hi); return lane_signs(lo | hi) == 0; }
 // a = |v| lane by lane (the sign bit cleared, as std::fabs does).
@@ -4958,6 +4968,7 @@ inline void Simulation::compensate() {
     // restated in lanes, the same operations on the same numbers. Otherwise (the
     // border of the strained box, a number not finite) the four nodes go one at a time.
     auto shift_row = [&](int j, auto wide) LPFDM_INLINE {
+        [[maybe_unused]] const bool below_ok = j > st.j0 && j < st.j1;  // rows j - 1 and j of cells strained
         detail::sweep(nr.i0, nr.i1, wide, [&](int i, auto tag) LPFDM_INLINE {
             using T = typename decltype(tag)::type;
             if constexpr (std::is_same_v<T, double>) {
@@ -4973,42 +4984,74 @@ inline void Simulation::compensate() {
                 const v4d zero{};
                 const v4m idle = ((ux == zero) & (uy == zero)) | (mp == zero);
                 if (detail::all_lanes(idle)) return;
-                const v4d fxs = (double(i) + v4d{0, 1, 2, 3}) - ux * invL, fys = double(j) - uy * invL;  // i + l is exact
-                // The floor as shift takes it: int() truncates (as the conversion of the lanes
-                // does), then one less below a negative number that is not whole.
-                const v4d tx = __builtin_convertvector(__builtin_convertvector(fxs, v4i), v4d);
-                const v4d ty = __builtin_convertvector(__builtin_convertvector(fys, v4i), v4d);
-                const v4d one = zero + 1, ci = fxs < tx ? tx - one : tx, cj = fys < ty ? ty - one : ty;
-                // On an edge (fxs or fys whole), the cell below or to the left as well.
-                const v4m hx = fxs == ci, hy = fys == cj;
-                const v4d ci0 = hx ? ci - one : ci, cj0 = hy ? cj - one : cj;
-                const v4m strained = (ci0 >= double(st.i0)) & (cj0 >= double(st.j0)) & (ci < double(st.i1)) & (cj < double(st.j1));
-                if (!detail::all_lanes(idle | strained)) {
-                    for (int l = 0; l < 4; ++l) shift(i + l, j);
-                    return;
-                }
-                // The strains (xx, yy, xy, yx) of cells c + d (d = 1, mx, mx + 1 where the lane's
-                // mask m is set, else 0), one record a lane, transposed; lanes that keep their
-                // increment read cell 0.
-                const v4d c = idle ? zero : cj0 * double(mx) + ci0;
-                v4d exx, eyy, exy, eyx;
-                auto cells = [&](const v4m& m, double d, v4d& xx, v4d& yy, v4d& xy, v4d& yx) LPFDM_INLINE {
-                    const v4d at = m ? c + d : c;
-                    v4d r0, r1, r2, r3;
-                    detail::load(&cs[int(at[0])].xx, r0); detail::load(&cs[int(at[1])].xx, r1);
-                    detail::load(&cs[int(at[2])].xx, r2); detail::load(&cs[int(at[3])].xx, r3);
-                    const v4d t0 = LPFDM_SHUFFLE(r0, r1, 0, 4, 2, 6), t1 = LPFDM_SHUFFLE(r0, r1, 1, 5, 3, 7);  // xx xy, yy yx of 0 1
-                    const v4d t2 = LPFDM_SHUFFLE(r2, r3, 0, 4, 2, 6), t3 = LPFDM_SHUFFLE(r2, r3, 1, 5, 3, 7);  // of 2 3
-                    xx = LPFDM_SHUFFLE(t0, t2, 0, 1, 4, 5); xy = LPFDM_SHUFFLE(t0, t2, 2, 3, 6, 7);
-                    yy = LPFDM_SHUFFLE(t1, t3, 0, 1, 4, 5); yx = LPFDM_SHUFFLE(t1, t3, 2, 3, 6, 7);
+                auto compensate_lanes = [&](const v4d& exx, const v4d& eyy, const v4d& exy, const v4d& eyx) LPFDM_INLINE {
+                    v4d sx = ux, sy = uy;
+                    compensate_increment(sx, sy, exx, eyy, exy, eyx);  // eq. 12a, 12b
+                    detail::store(ux_n + n, idle ? ux : sx);
+                    detail::store(uy_n + n, idle ? uy : sy);
                 };
-                cells(v4m{}, 0, exx, eyy, exy, eyx);
+                const v4d X = double(i) + v4d{0, 1, 2, 3}, Y = zero + double(j);  // i + l is exact
+                const v4d fxs = X - ux * invL, fys = Y - uy * invL;
+                // Each lane's cell (ci0, cj0) as strain_at finds it, as an index into the
+                // strains, and whether x_node - du_node lies on a vertical (hx) or horizontal
+                // (hy) cell edge, where the mean of that cell and the next takes its place.
+                int at[4];
+                v4m hx, hy;
+                const v4d h = zero + 0.5;
+                if (i > st.i0 && i + 4 <= st.i1 && below_ok &&
+                    detail::all_lanes(idle | ((fxs > X - h) & (fxs < X + h) & (fys > Y - h) & (fys < Y + h)))) {
+                    // The usual group: each moving lane's x_node - du_node within half a cell
+                    // of its node, so in or on the edges of the node's four cells, and those
+                    // strained for every lane (the box tested once). strain_at's floor is then
+                    // one comparison: cell (i + l - 1, j - 1), one to the right where fxs > i + l,
+                    // one up where fys > j. (An idle lane takes one of those cells too.)
+                    const int right = detail::lane_bits(fxs > X), up = detail::lane_bits(fys > Y);
+                    const int c00 = (j - 1) * mx + i - 1;
+                    auto cell_of = [&](int l) LPFDM_INLINE { return c00 + l + ((right >> l) & 1) + ((up >> l) & 1) * mx; };
+                    hx = fxs == X; hy = fys == Y;
+                    if (detail::none_of_lanes((hx | hy) & ~idle)) {  // one cell a lane: no mean to take
+                        v4d r0, r1, r2, r3;
+                        detail::load(&cs[cell_of(0)].xx, r0); detail::load(&cs[cell_of(1)].xx, r1);
+                        detail::load(&cs[cell_of(2)].xx, r2); detail::load(&cs[cell_of(3)].xx, r3);
+                        v4d exx, eyy, exy, eyx;
+                        detail::transpose_strains(r0, r1, r2, r3, exx, eyy, exy, eyx);
+                        compensate_lanes(exx, eyy, exy, eyx);
+                        return;
+                    }
+                    for (int l = 0; l < 4; ++l) at[l] = cell_of(l);
+                } else {
+                    // The floor as shift takes it: int() truncates (as the conversion of the lanes
+                    // does), then one less below a negative number that is not whole.
+                    const v4d tx = __builtin_convertvector(__builtin_convertvector(fxs, v4i), v4d);
+                    const v4d ty = __builtin_convertvector(__builtin_convertvector(fys, v4i), v4d);
+                    const v4d one = zero + 1, ci = fxs < tx ? tx - one : tx, cj = fys < ty ? ty - one : ty;
+                    // On an edge (fxs or fys whole), the cell below or to the left as well.
+                    hx = fxs == ci; hy = fys == cj;
+                    const v4d ci0 = hx ? ci - one : ci, cj0 = hy ? cj - one : cj;
+                    const v4m strained = (ci0 >= double(st.i0)) & (cj0 >= double(st.j0)) & (ci < double(st.i1)) & (cj < double(st.j1));
+                    if (!detail::all_lanes(idle | strained)) {
+                        for (int l = 0; l < 4; ++l) shift(i + l, j);
+                        return;
+                    }
+                    const v4d c = idle ? zero : cj0 * double(mx) + ci0;  // lanes that keep their increment read cell 0
+                    for (int l = 0; l < 4; ++l) at[l] = int(c[l]);
+                }
+                // The strains (xx, yy, xy, yx) of cells at + d (d = 1, mx, mx + 1 where the
+                // lane's bit of m is set, else 0), one record a lane, transposed.
+                v4d exx, eyy, exy, eyx;
+                auto cells = [&](int m, int d, v4d& xx, v4d& yy, v4d& xy, v4d& yx) LPFDM_INLINE {
+                    v4d r0, r1, r2, r3;
+                    detail::load(&cs[at[0] + (m & 1) * d].xx, r0); detail::load(&cs[at[1] + ((m >> 1) & 1) * d].xx, r1);
+                    detail::load(&cs[at[2] + ((m >> 2) & 1) * d].xx, r2); detail::load(&cs[at[3] + ((m >> 3) & 1) * d].xx, r3);
+                    detail::transpose_strains(r0, r1, r2, r3, xx, yy, xy, yx);
+                };
+                cells(0, 0, exx, eyy, exy, eyx);
                 const v4m edge = (hx | hy) & ~idle;
                 if (!detail::none_of_lanes(edge)) {  // the mean of two or four cells, as shift takes it
                     v4d xx = 0 + exx, yy = 0 + eyy, xy = 0 + exy, yx = 0 + eyx, bxx, byy, bxy, byx;
-                    auto add = [&](const v4m& m, double d) LPFDM_INLINE {
+                    auto add = [&](const v4m& m, int d) LPFDM_INLINE {
                         if (detail::none_of_lanes(m)) return;
-                        cells(m, d, bxx, byy, bxy, byx);
+                        cells(detail::lane_bits(m), d, bxx, byy, bxy, byx);
                         xx = m ? xx + bxx : xx; yy = m ? yy + byy : yy; xy = m ? xy + bxy : xy; yx = m ? yx + byx : yx;
                     };
                     add(edge & hx, 1);
@@ -5017,10 +5060,7 @@ inline void Simulation::compensate() {
                     const v4d iw = hx & hy ? zero + 0.25 : zero + 0.5;
                     exx = edge ? xx * iw : exx; eyy = edge ? yy * iw : eyy; exy = edge ? xy * iw : exy; eyx = edge ? yx * iw : eyx;
                 }
-                v4d sx = ux, sy = uy;
-                compensate_increment(sx, sy, exx, eyy, exy, eyx);  // eq. 12a, 12b
-                detail::store(ux_n + n, idle ? ux : sx);
-                detail::store(uy_n + n, idle ? uy : sy);
+                compensate_lanes(exx, eyy, exy, eyx);
 #endif
             }
         });

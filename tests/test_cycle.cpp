@@ -289,12 +289,14 @@ TEST_CASE("eq. 12: a node that gained mass takes its old neighbours' mean increm
 }
 
 TEST_CASE("eq. 12 four nodes per AVX2 register: the one-node numbers, bit for bit, on edges and borders too") {
-    // Random increments of five kinds: none (the node keeps it), a zero component or one
+    // Random increments of six kinds: none (the node keeps it), a zero component or one
     // far below the node's coordinate's last digit (x_node - du_node on the edge of two or
-    // four cells), and the general case, of both signs. The blocks touch the lattice's
-    // left and bottom borders, so that some x_node - du_node fall outside the strained
-    // cells (those four nodes go one at a time); the nodes of the gap between them have no
-    // mass, and keep any increment.
+    // four cells), the general case within half a cell, of both signs (the lanes' usual
+    // groups, whose cell is found by one comparison), and half a cell to one and a half
+    // in x, y or both (a cell beyond the node's four: the lanes' floor). The blocks touch
+    // the lattice's left and bottom borders, so that some x_node - du_node fall outside
+    // the strained cells (those four nodes go one at a time); the nodes of the gap
+    // between them have no mass, and keep any increment.
     if (!Simulation::have_wide()) return;
     Scene s = block_scene(16, 10, 1.0, {0, 0, 6, 7});
     s.clusters.push_back({1, {9, 0, 13, 7}, 2, {}});
@@ -302,19 +304,22 @@ TEST_CASE("eq. 12 four nodes per AVX2 register: the one-node numbers, bit for bi
     narrow.set_wide(false);
     wide.step(); narrow.step();
     Random r{2024};
-    int kinds[5] = {0, 0, 0, 0, 0};
+    int kinds[6] = {0, 0, 0, 0, 0, 0};
     for (int round = 0; round < 20; ++round) {
         std::vector<double> dx(wide.du_x().size()), dy(dx.size());
         for (std::size_t n = 0; n < dx.size(); ++n) {
-            const int kind = std::min(4, int(8 * r.uniform()));
-            const double a = 0.9 * r.uniform() - 0.45, b = 0.9 * r.uniform() - 0.45;  // |du| < L/2
+            const int draw = int(10 * r.uniform()), kind = draw < 4 ? draw : draw < 8 ? 4 : 5;
+            auto beyond = [&] { return (r.uniform() < 0.5 ? -1 : 1) * (0.5 + r.uniform()); };  // L/2 <= |du| < 3L/2
+            const int which = int(3 * r.uniform());  // kind 5: x, y or both beyond half a cell
+            const double a = kind == 5 && which != 1 ? beyond() : 0.9 * r.uniform() - 0.45;
+            const double b = kind == 5 && which != 0 ? beyond() : 0.9 * r.uniform() - 0.45;
             const double t = r.uniform() < 0.5 ? 1e-19 : -1e-19;
             switch (kind) {
             case 0: dx[n] = 0; dy[n] = 0; break;
             case 1: dx[n] = 0; dy[n] = b; break;
             case 2: dx[n] = a; dy[n] = 0; break;
             case 3: dx[n] = t; dy[n] = -t; break;
-            default: dx[n] = a; dy[n] = b; break;
+            default: dx[n] = a; dy[n] = b; break;  // kinds 4 and 5
             }
             ++kinds[kind];
         }
