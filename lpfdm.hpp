@@ -4689,6 +4689,13 @@ inline void Simulation::reorder_points() {
     const std::size_t n = p_.size();
     const std::int32_t* cell = p_.cell.data();
     const std::int32_t* id = p_.id.data();
+    parts_known_ = false;  // advance_parted's chunks were ranges of the old order
+    // Already in order, by cell and by id within each cell (no point has changed cell since
+    // the last sort: a scene at rest, or one that has not yet moved): the new order would
+    // be the old one, and nothing is moved. (bench_peer: 33 of its 40 sorts.)
+    bool in_order = true;
+    for (std::size_t k = 1; k < n && in_order; ++k) in_order = cell[k - 1] < cell[k] || (cell[k - 1] == cell[k] && id[k - 1] < id[k]);
+    if (in_order) return;
     std::fill(cell_count_.begin(), cell_count_.end(), 0);
     for (std::size_t k = 0; k < n; ++k) ++cell_count_[std::size_t(cell[k]) + 1];
     for (std::size_t c = 1; c < cell_count_.size(); ++c) cell_count_[c] += cell_count_[c - 1];
@@ -4720,7 +4727,6 @@ inline void Simulation::reorder_points() {
         LPFDM_OMP(omp parallel for schedule(static) num_threads(team_) if (threads))
         for (long k = 0; k < long(n); ++k) std::memcpy(a + k, buf + std::size_t(k) * sizeof(T), sizeof(T));
     });
-    parts_known_ = false;  // advance_parted's chunks were ranges of the old order
 }
 
 // eq. 7 (cell mass) and eq. 8 (stress smeared over the cell, sum V sigma / L^2; kept
