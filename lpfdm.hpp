@@ -3771,12 +3771,13 @@ inline void Simulation::cell_strains() {
             const v4d d = LPFDM_SHUFFLE(xy, yx, 0, 4, 2, 6), e = LPFDM_SHUFFLE(xy, yx, 1, 5, 3, 7);  // xy yx
             const v4d p = LPFDM_SHUFFLE(rc, rs, 0, 4, 2, 6), q = LPFDM_SHUFFLE(rc, rs, 1, 5, 3, 7);  // rc rs
             const v4d c1 = LPFDM_SHUFFLE(b, e, 0, 1, 4, 5), c3 = LPFDM_SHUFFLE(b, e, 2, 3, 6, 7);  // xx yy xy yx of cells 1, 3
-            const v4d out[6] = {LPFDM_SHUFFLE(a, d, 0, 1, 4, 5), LPFDM_SHUFFLE(p, c1, 0, 1, 4, 5),
-                                LPFDM_SHUFFLE(c1, q, 2, 3, 4, 5), LPFDM_SHUFFLE(a, d, 2, 3, 6, 7),
-                                LPFDM_SHUFFLE(p, c3, 2, 3, 4, 5), LPFDM_SHUFFLE(c3, q, 2, 3, 6, 7)};
             static_assert(sizeof(CellStrain) == 6 * sizeof(double), "six doubles, no padding");
             double* const at = reinterpret_cast<double*>(cs + c);
-            for (int k = 0; k < 6; ++k) detail::store(at + 4 * k, out[k]);
+            // Six stores of their own (an array of the six, stored in a loop, went through
+            // the stack: GCC wrote it there and copied it out in halves).
+            detail::store(at, v4d(LPFDM_SHUFFLE(a, d, 0, 1, 4, 5))); detail::store(at + 4, v4d(LPFDM_SHUFFLE(p, c1, 0, 1, 4, 5)));
+            detail::store(at + 8, v4d(LPFDM_SHUFFLE(c1, q, 2, 3, 4, 5))); detail::store(at + 12, v4d(LPFDM_SHUFFLE(a, d, 2, 3, 6, 7)));
+            detail::store(at + 16, v4d(LPFDM_SHUFFLE(p, c3, 2, 3, 4, 5))); detail::store(at + 20, v4d(LPFDM_SHUFFLE(c3, q, 2, 3, 6, 7)));
 #endif
         }
         if (hourglass) {  // the checkerboard part h = (+1, -1, -1, +1)/4 that eq. 5 cannot see
