@@ -8,10 +8,13 @@ LIBS      = -lfmt
 OUT      ?= out
 SAN_OPT  ?= -O1
 SAN       = $(SAN_OPT) -g1 -fsanitize=address,undefined,float-cast-overflow -fno-omit-frame-pointer -fno-sanitize-recover=all
-PACKAGES  = libeigen3-dev libfmt-dev doctest-dev gnuplot-nox
+# Debian packages: the program needs fmt only; the pictures gnuplot; the unit tests Eigen
+# (an independent eigen-solver) and doctest.
+PACKAGES  = libfmt-dev
+PICTURE_PACKAGES = gnuplot-nox
 TESTS     = $(wildcard tests/test_*.cpp)
 
-.PHONY: all deps test-deps test demo quake figures verify fuzz bench clean help
+.PHONY: all deps picture-deps test-deps test demo quake figures verify fuzz bench clean help
 all: lpfdm
 
 help:
@@ -26,11 +29,11 @@ help:
 	@echo "make clean    remove what the build made"
 
 # Missing Debian packages are installed when running as root; otherwise the exact
-# command is printed and the build stops. The tests also need clang and its libFuzzer
+# command is printed and the build stops. The tests also need Eigen and doctest, clang and its libFuzzer
 # runtime (the fuzzing smoke of the deck reader) and OpenMP runtime (Clang's warnings,
 # tests/check_warnings.sh), cmake and pkg-config (the CMake package), python3-numpy and
 # python3-pandas (the point tables and histories read by both).
-TEST_PACKAGES = clang libclang-rt-14-dev libomp-dev cmake pkg-config python3-numpy python3-pandas
+TEST_PACKAGES = libeigen3-dev doctest-dev clang libclang-rt-14-dev libomp-dev cmake pkg-config python3-numpy python3-pandas
 define install_missing
 missing=""; for p in $(1); do \
   dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "ok installed" || missing="$$missing $$p"; \
@@ -46,8 +49,10 @@ fi
 endef
 deps:
 	@$(call install_missing,$(PACKAGES))
+picture-deps:
+	@$(call install_missing,$(PACKAGES) $(PICTURE_PACKAGES))
 test-deps:
-	@$(call install_missing,$(PACKAGES) $(TEST_PACKAGES))
+	@$(call install_missing,$(PACKAGES) $(PICTURE_PACKAGES) $(TEST_PACKAGES))
 
 lpfdm: lpfdm.cpp lpfdm.hpp | deps
 	$(CXX) $(WARN) $(CXXFLAGS) $(OMP) -o $@ lpfdm.cpp $(LIBS)
@@ -71,16 +76,16 @@ build/o2/unit.cpp: FORCE
 build/san/unit.cpp: FORCE
 	$(call unity,$@,$(SAN_GROUP))
 
-build/o2/unit.o: build/o2/unit.cpp $(TESTS) tests/common.hpp lpfdm.hpp | deps
+build/o2/unit.o: build/o2/unit.cpp $(TESTS) tests/common.hpp lpfdm.hpp | test-deps
 	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) -c -o $@ $<
-build/o2/%.o: tests/%.cpp | deps
+build/o2/%.o: tests/%.cpp | test-deps
 	@mkdir -p build/o2
 	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) -c -o $@ $<
 
 build/san/test_deck.o: SAN_OPT = -O0
-build/san/unit.o: build/san/unit.cpp $(SAN_GROUP) tests/common.hpp lpfdm.hpp | deps
+build/san/unit.o: build/san/unit.cpp $(SAN_GROUP) tests/common.hpp lpfdm.hpp | test-deps
 	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) -c -o $@ $<
-build/san/%.o: tests/%.cpp lpfdm.hpp | deps
+build/san/%.o: tests/%.cpp lpfdm.hpp | test-deps
 	@mkdir -p build/san
 	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) -c -o $@ $<
 
@@ -98,7 +103,7 @@ test: | test-deps
 	@$(MAKE) --no-print-directory -j$$(nproc) build/tests build/tests-san lpfdm build/lpfdm-san
 	@bash tests/run.sh
 
-demo: lpfdm
+demo: lpfdm | picture-deps
 	@mkdir -p $(OUT)
 	./lpfdm -o $(OUT) decks/cliff.deck
 	gnuplot -e "in='$(OUT)/cliff_points.txt'; out='$(OUT)/cliff.png'; title='Cliff failure (Fig. 5)'; frame=-1" tools/snapshot.gp
@@ -106,7 +111,7 @@ demo: lpfdm
 	@echo "pictures: $(OUT)/cliff.png $(OUT)/cliff.gif"
 
 # The cliff of Fig. 5 standing under its own weight, then shaken down (SHAKE; decks/README.md).
-quake: lpfdm
+quake: lpfdm | picture-deps
 	@mkdir -p $(OUT)
 	./lpfdm -o $(OUT) decks/quake_cliff.deck
 	gnuplot -e "in='$(OUT)/quake_cliff_points.txt'; out='$(OUT)/quake_cliff.png'; title='Cliff shaken down'; frame=-1" tools/snapshot.gp
@@ -114,7 +119,7 @@ quake: lpfdm
 	@echo "pictures: $(OUT)/quake_cliff.png $(OUT)/quake_cliff.gif"
 
 # Verification ladder (resolutions, points per cell) against closed-form references.
-verify: lpfdm
+verify: lpfdm | picture-deps
 	@mkdir -p $(OUT)
 	bash tools/verify.sh ./lpfdm $(OUT)
 	VERIFY_MAPPING=SMOOTH VERIFY_APPEND=1 bash tools/verify.sh ./lpfdm $(OUT) column psc footing
@@ -130,7 +135,7 @@ fuzz: | deps
 	bash tools/fuzz.sh $(FUZZ_SECONDS)
 
 # The paper's three experiments (Figs. 4-6) and their pictures.
-figures: lpfdm
+figures: lpfdm | picture-deps
 	@mkdir -p $(OUT)
 	./lpfdm -q -o $(OUT) decks/psc.deck
 	./lpfdm -q -o $(OUT) decks/cliff.deck
