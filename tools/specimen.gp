@@ -13,7 +13,9 @@
 #   frame   frame for the right panel, -1 = last frame          default -1
 #   title   overall title                                       default ''
 #   epmax   top of the colour scale for ep (plastic shear strain) default 0.5
-#   ptsize  dot size (gnuplot pointsize)                        default 0.3
+#   ptsize  dot size (gnuplot pointsize; 1 is a dot 6 px across)
+#           default: 0.85 of the points' spacing in frame 0, so that the
+#           specimen reads as a surface and a shear band as a band
 #   size    canvas size in pixels "W,H"  default: 1200 wide, height to fit
 #
 # Both panels share one set of axis ranges (the extent of the shown
@@ -25,7 +27,6 @@ if (!exists("mat"))    mat = 1
 if (!exists("frame"))  frame = -1
 if (!exists("title"))  title = ''
 if (!exists("epmax"))  epmax = 0.5
-if (!exists("ptsize")) ptsize = 0.3
 if (!exists("L")) {
     exit error "specimen.gp: set the cell size L in m, e.g. -e \"L=0.01\""
 }
@@ -70,6 +71,19 @@ if (!exists("size")) {
     size = sprintf("1200,%d", (h < 300) ? 300 : (h > 1800) ? 1800 : int(h))
 }
 H = real(size[strstrt(size, ",") + 1:])   # canvas height in px
+W = real(size[1:strstrt(size, ",") - 1])  # canvas width in px
+
+# Dot size: 0.85 of the spacing of the shown material's points in frame 0
+# (the most common gap between neighbouring distinct x or y of the points
+# as made), at the panels' scale [px per L], a pngcairo point size 1 being
+# a dot 6 px across.
+if (!exists("ptsize")) {
+    gap = real(system(sprintf("awk -v m=%d 'BEGIN {b = 0} /^[ \t]*$/ {nb++; next} {if (nb >= 2) b++; nb = 0} b > 0 {exit} /^[ \t]*[-+.0-9]/ && int($9) == m {print \"x\", $1; print \"y\", $2}' '%s' | sort -k1,1 -k2,2g -u | awk '{if ($1 == p) {g = $2 - v; if (g > 1e-9 * ((v < 0 ? -v : v) + 1)) c[sprintf(\"%%.3g\", g)]++} p = $1; v = $2} END {for (k in c) if (c[k] > n) {n = c[k]; s = k} print (n > 0) ? s : 0}'", mat, in))) / L
+    px = 0.35 * W / (xhi - xlo + 2 * pad)
+    if ((H - mtop - mbot) / (yhi - ylo + 2 * pad) < px) { px = (H - mtop - mbot) / (yhi - ylo + 2 * pad) }
+    ptsize = (gap > 0) ? 0.85 * gap * px / 6.0 : 0.5
+    ptsize = (ptsize < 0.25) ? 0.25 : (ptsize > 5) ? 5 : ptsize
+}
 
 set terminal pngcairo size @size enhanced font 'DejaVu Sans,11'
 set output out
