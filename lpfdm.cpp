@@ -244,7 +244,7 @@ int main(int argc, char** argv) {
     if (!opt.deck.empty()) {
         diags = lpfdm::load_file(opt.deck, text);
         if (diags.empty()) diags = lpfdm::parse_deck_text(text, opt.deck, scene, &unread);
-        else unread.grid = unread.step = unread.materials = unread.clusters = unread.motion = true;
+        else unread.all();
         // (a file that is no deck, or no text, sets nothing: its --set would only echo that)
         const bool loaded = !(unread.grid && unread.step && unread.materials && unread.clusters);
         for (const auto& kv : opt.settings) {

@@ -679,10 +679,10 @@ inline std::string joined(const std::vector<std::string>& names) {
     for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
     return list;
 }
-// " (did you mean X?)" when one of candidates is close to what was written (case aside):
-// one edit away (two for words of more than four letters; a swap of neighbours is one
-// edit), or what was written begins it; else "".
-inline std::string did_you_mean(const std::string& written, const std::vector<std::string>& candidates) {
+// The one of candidates close to what was written (case aside): one edit away (two for
+// words of more than four letters; a swap of neighbours is one edit), or what was written
+// begins it; else "".
+inline std::string nearest_name(const std::string& written, const std::vector<std::string>& candidates) {
     std::string w;
     for (char ch : written) w += char(std::toupper(static_cast<unsigned char>(ch)));
     auto distance = [](const std::string& a, const std::string& b) {  // optimal string alignment
@@ -704,6 +704,11 @@ inline std::string did_you_mean(const std::string& written, const std::vector<st
         const int dd = w.size() >= 3 && u.compare(0, w.size(), w) == 0 ? 1 : distance(w, u);
         if (dd < best_d) { best_d = dd; best = c; }
     }
+    return best;
+}
+// " (did you mean X?)" with X the nearest_name, or "".
+inline std::string did_you_mean(const std::string& written, const std::vector<std::string>& candidates) {
+    const std::string best = nearest_name(written, candidates);
     return best.empty() ? "" : " (did you mean " + best + "?)";
 }
 // The names of every card.
@@ -1754,9 +1759,12 @@ inline std::string apply_setting(Scene& s, const std::string& key_in, double v) 
 struct Unread {
     bool grid = false;       // GRID bad or missing: no lattice to place anything on
     bool step = false;       // STEP bad or missing: no dt, no number of steps
-    bool materials = false;  // a MATERIAL card bad, or an unknown card (a misspelt MATERIAL?)
+    bool materials = false;  // a MATERIAL card bad, or an unknown card near it or near no card (a misspelt MATERIAL?)
     bool clusters = false;   // a CLUSTER card bad, or none at all (the reader said so)
     bool motion = false;     // a MOTION or ADVECT card bad: which pair was meant is unknown
+    bool mapping = false;    // a MAPPING card bad: ADVECT FLIP's need of MAPPING SMOOTH is not checked
+    bool fixes = false;      // a FIX card bad: whether SHAKE moves fixed nodes is not checked
+    void all() { grid = step = materials = clusters = motion = mapping = fixes = true; }  // nothing read
 };
 
 namespace detail {
@@ -1974,7 +1982,7 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
     for (const Shake& k : s.shakes) {
         bool held = false;
         for (const Fix& f : s.fixes) held |= (f.dirs & k.dir) != 0;
-        if (!k.compliant && !held)
+        if (!k.compliant && !held && !unread.fixes)
             err(k.pos, std::string("SHAKE ") + (k.dir == kFixX ? "X" : "Y") + " moves the nodes fixed in " + (k.dir == kFixX ? "X" : "Y") +
                            ", and no FIX card holds that direction (or make it COMPLIANT: through an absorbing base)");
     }
@@ -1990,7 +1998,7 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
     if (s.advect == Advect::Points && s.motion == Motion::Paper && !unread.motion)
         err(s.advect_pos, "ADVECT POINTS needs MOTION CENTRE or BILINEAR: carried from eq. 7a/7b about node [1], the increments grow without bound");
     if (s.advect == Advect::Flip) {  // see Simulation::flip_transfer
-        if (s.mapping != Mapping::Smooth) err(s.advect_pos, "ADVECT FLIP needs MAPPING SMOOTH: the points' increments go to the lattice, and its change back, by their squares' weights");
+        if (s.mapping != Mapping::Smooth && !unread.mapping) err(s.advect_pos, "ADVECT FLIP needs MAPPING SMOOTH: the points' increments go to the lattice, and its change back, by their squares' weights");
         if (s.motion != Motion::Bilinear && s.motion != Motion::Default)
             err(s.advect_pos, "ADVECT FLIP needs MOTION BILINEAR (the default with MAPPING SMOOTH): the points move by the field their increments are interpolated from");
         // Measured (tests/README.md): the ground's and the dashpots' changes reach the points
@@ -6203,17 +6211,29 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
     Unread& u = unread ? *unread : none;
     u = Unread();
     if (text.find_first_not_of(" \t\r\n\f\v") == std::string::npos) {
-        u.grid = u.step = u.materials = u.clusters = u.motion = true;
+        u.all();
         return one_error(file, 1, 1, "the deck is empty");
     }
     Lexed lx = lex(text, file, d);
     if (!d.empty()) {  // not text, or its last card cut: nothing is read
-        u.grid = u.step = u.materials = u.clusters = u.motion = true;
+        u.all();
         return d;
     }
     bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_mapping = false, have_hourglass = false, have_advect = false, have_reorder = false;
     Pos last{file, 1, 1};
     int cluster_cards = 0;
+    // The cards with errors leave unchecked what depends on them (Unread); an unknown card
+    // counts as the card it is nearest to (misspelt), and one near none as a MATERIAL.
+    std::vector<std::string> misspelt;  // the cards the unknown cards are nearest to
+    auto unread_card = [&](const std::string& card) {
+        u.grid |= card == "GRID";
+        u.step |= card == "STEP";
+        u.materials |= card == "MATERIAL";
+        u.clusters |= card == "CLUSTER";
+        u.motion |= card == "MOTION" || card == "ADVECT";
+        u.mapping |= card == "MAPPING";
+        u.fixes |= card == "FIX";
+    };
     for (std::size_t ci = 0; ci < lx.cards.size() && !have_end; ++ci) {
         const auto& toks = lx.cards[ci];
         CardReader r(toks, d);
@@ -6430,25 +6450,24 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             have_end = true;
             sc.end_pos = kp;
         } else {
-            r.fail(kp, "unknown card '" + toks[0].text + "'" + did_you_mean(toks[0].text, card_names()));
-            u.materials = true;  // perhaps a MATERIAL misspelt: its clusters are not "undefined"
+            const std::string meant = nearest_name(toks[0].text, card_names());
+            r.fail(kp, "unknown card '" + toks[0].text + "'" + (meant.empty() ? "" : " (did you mean " + meant + "?)"));
+            misspelt.push_back(meant);
+            unread_card(meant.empty() ? "MATERIAL" : meant);  // (a MATERIAL misspelt: its clusters are not "undefined")
             continue;
         }
         r.finish();
-        if (!r.ok()) {
-            u.grid |= kw == "GRID";
-            u.step |= kw == "STEP";
-            u.materials |= kw == "MATERIAL";
-            u.clusters |= kw == "CLUSTER";
-            u.motion |= kw == "MOTION" || kw == "ADVECT";
-        }
+        if (!r.ok()) unread_card(kw);
     }
     u.grid |= !have_grid;
     u.step |= !have_step;
     u.clusters |= cluster_cards == 0;
-    if (!have_grid) d.push_back({last, "no GRID card: the lattice is not defined"});
-    if (!have_step) d.push_back({last, "no STEP card: the time step and the number of steps are not defined"});
-    if (have_grid && cluster_cards == 0) d.push_back({sc.grid_pos, "no CLUSTER card: the scene holds no material"});
+    // A card missing from the whole deck, after the last card (after every card that may
+    // have caused it); not when an unknown card is nearest to it: that card is the problem.
+    auto no_card_near = [&](const char* card) { return std::find(misspelt.begin(), misspelt.end(), card) == misspelt.end(); };
+    if (!have_grid && no_card_near("GRID")) d.push_back({last, "no GRID card: the lattice is not defined"});
+    if (!have_step && no_card_near("STEP")) d.push_back({last, "no STEP card: the time step and the number of steps are not defined"});
+    if (have_grid && cluster_cards == 0 && no_card_near("CLUSTER")) d.push_back({last, "no CLUSTER card: the scene holds no material"});
     return d;
 }
 

@@ -742,10 +742,55 @@ TEST_CASE("deck error: output files: one name per card, no directory") {
     CHECK_ONE_ERROR(plus("OUTPUT HISTORY .."), 5, 16, "the file name must not contain a directory");
 }
 
+// Once wrong: a misspelt card was followed by what it left missing ("no CLUSTER card" at
+// the GRID line, before the misspelt card). A card missing from the deck is not reported
+// when an unknown card is nearest to it, and the scene's checks that depend on a card
+// with an error (a misspelt FIX: SHAKE's fixed nodes; a misspelt MAPPING: ADVECT FLIP's
+// need of MAPPING SMOOTH) are left out.
+TEST_CASE("deck error: a misspelt card is reported alone, not also the card it leaves missing") {
+    CHECK_ONE_ERROR(kGrid + kMaterial + "CLUSTR 1 0 0 2 2\n" + kStep, 3, 1, "unknown card 'CLUSTR' (did you mean CLUSTER?)");
+    CHECK_ONE_ERROR("GIRD 4 4 1\n" + kMaterial + kCluster + kStep, 1, 1, "unknown card 'GIRD' (did you mean GRID?)");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "STPE 1E-4 10\n", 4, 1, "unknown card 'STPE' (did you mean STEP?)");
+    CHECK_ONE_ERROR(kBase + "MAPING SMOOTH\nADVECT FLIP\n", 5, 1, "unknown card 'MAPING' (did you mean MAPPING?)");
+    CHECK_ONE_ERROR(kBase + "MAPPING SMOTH\nADVECT FLIP\n", 5, 9, "unknown mapping 'SMOTH'");
+    Scene s;
+    CHECK(has(listing(read_text(kBase + "ADVECT FLIP\n", s)), "ADVECT FLIP needs MAPPING SMOOTH"));  // without the card's error
+    // A misspelt FIX card, or one with an error, and a SHAKE card whose record is fine: one message.
+    const std::string dir = "build/test_deck_motion";
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir + "/m.txt") << "0 0\n0.1 1\n";
+    auto shaken = [&](const std::string& fix) {
+        Scene t;
+        return lpfdm::read_deck_text(kBase + fix + "SHAKE X FILE=m.txt\n", dir + "/t.deck", t);
+    };
+    Diagnostics d = shaken("FIXX XY 0 0 4 0\n");
+    INFO(listing(d));
+    REQUIRE(d.size() == 1);
+    CHECK(has(d[0].message, "unknown card 'FIXX' (did you mean FIX?)"));
+    d = shaken("FIX Q 0 0 4 0\n");
+    INFO(listing(d));
+    REQUIRE(d.size() == 1);
+    CHECK(has(d[0].message, "unknown direction 'Q'"));
+    CHECK(has(listing(shaken("")), "no FIX card holds that direction"));  // without the FIX card's error
+}
+
+// A card near no card name may be anything: what is missing is still reported, but after
+// the unknown card, at the last card.
+TEST_CASE("deck error: a card missing from the deck is reported after the cards") {
+    Scene s;
+    const Diagnostics d = read_text(kGrid + "XYZZY 1\n" + kMaterial + kStep, s);
+    INFO(listing(d));
+    REQUIRE(d.size() == 2);
+    CHECK(d[0].pos.line == 2);
+    CHECK(has(d[0].message, "unknown card 'XYZZY'"));
+    CHECK(d[1].pos.line == 4);
+    CHECK(has(d[1].message, "no CLUSTER card"));
+}
+
 TEST_CASE("deck error: no GRID, no STEP or no CLUSTER card") {
     CHECK_ONE_ERROR(kMaterial + kCluster + kStep + "END\n", 4, 1, "no GRID card");
     CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "END\n", 4, 1, "no STEP card");
-    CHECK_ONE_ERROR(kGrid + kMaterial + kStep, 1, 1, "no CLUSTER card");
+    CHECK_ONE_ERROR(kGrid + kMaterial + kStep, 3, 1, "no CLUSTER card");  // after the cards, as the others
     // Only comments: both missing cards are named.
     Scene s;
     const Diagnostics d = read_text("* nothing but comments\n! and more\n", s);
@@ -1139,6 +1184,8 @@ TEST_CASE("a misspelt card, parameter or --set key is named with the closest one
     CHECK(read_text(plus("FOO 1 2"), s)[0].message.find("did you mean") == std::string::npos);  // nothing close
     CHECK(lpfdm::did_you_mean("dampng", lpfdm::card_names()) == " (did you mean DAMPING?)");
     CHECK(lpfdm::did_you_mean("XYZZY", lpfdm::card_names()).empty());
+    CHECK(lpfdm::nearest_name("clustr", lpfdm::card_names()) == "CLUSTER");
+    CHECK(lpfdm::nearest_name("XYZZY", lpfdm::card_names()).empty());
     lpfdm::Scene t = read_ok(plus("DAMPING 0.5"));
     CHECK(lpfdm::apply_setting(t, "DAMPING.ALPAH", 0.1).find("(did you mean ALPHA?)") != std::string::npos);
     CHECK(lpfdm::apply_setting(t, "DAMPNIG.ALPHA", 0.1).find("(did you mean DAMPING?)") != std::string::npos);
