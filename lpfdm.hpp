@@ -217,6 +217,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -641,6 +642,16 @@ inline bool in_range(const DeckKey& k, double v, bool unset = false) {
 inline bool key_ok(const DeckKey& k, double v, const Scene& s, std::size_t index, bool unset = false) {
     if (std::strcmp(k.name, "PSI") == 0 && std::strcmp(k.card, "MATERIAL") == 0 && !(v <= s.materials[index].phi_deg)) return false;
     return in_range(k, v, unset);
+}
+// x in the fewest significant digits that read back as x (0.1 as "0.1", 6 as "6"): a
+// number of the deck as it was written, in a message.
+inline std::string shortest(double x) {
+    char b[32];
+    for (int p = 1; p <= 17; ++p) {
+        std::snprintf(b, sizeof b, "%.*g", p, x);
+        if (std::strtod(b, nullptr) == x) break;
+    }
+    return b;
 }
 // The message for a value v outside key k's range: "<subject> must lie in [lo, hi)".
 inline std::string range_message(const DeckKey& k, double v) {
@@ -1910,7 +1921,22 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
         if (!lattice) continue;
         if (c.box.x0 > c.box.x1 || c.box.y0 > c.box.y1) { err(c.pos, "the box needs x0 <= x1 and y0 <= y1"); continue; }
         if (c.box.x0 < -tol || c.box.y0 < -tol || c.box.x1 > X + tol || c.box.y1 > Y + tol) {
-            err(c.pos, "the cluster box reaches outside the lattice [0, " + std::to_string(X) + "] x [0, " + std::to_string(Y) + "] m");
+            // Each edge crossed, the box's numbers as the deck writes them (the shortest
+            // form that reads back the same), the lattice's to ten digits.
+            auto ten = [](double x) {
+                char b[32];
+                std::snprintf(b, sizeof b, "%.10g", x);
+                return std::string(b);
+            };
+            std::string past;
+            auto edge = [&](bool out, const char* field, double v, const char* name, const char* axis, double at) {
+                if (out) past += (past.empty() ? "" : "; ") + std::string(field) + " = " + shortest(v) + " m is past its " + name + " edge " + axis + " = " + ten(at) + " m";
+            };
+            edge(c.box.x0 < -tol, "x0", c.box.x0, "left", "x", 0.0);
+            edge(c.box.x1 > X + tol, "x1", c.box.x1, "right", "x", X);
+            edge(c.box.y0 < -tol, "y0", c.box.y0, "bottom", "y", 0.0);
+            edge(c.box.y1 > Y + tol, "y1", c.box.y1, "top", "y", Y);
+            err(c.pos, "the cluster box reaches outside the lattice: " + past + " (the lattice is [0, " + ten(X) + "] x [0, " + ten(Y) + "] m)");
             continue;
         }
         int ci0, ci1, cj0, cj1;
@@ -1949,9 +1975,12 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
             detail::node_span(w.box.y0, w.box.y1, s.cell_m, s.my, j0, j1);
             if ((i1 > i0) == (j1 > j0)) err(w.pos, "a SMOOTH wall is one line of nodes, a row or a column (it is driven across that line)");
         }
-        if (!unread.step && std::isfinite(w.vx) && std::isfinite(w.vy) && s.dt_s > 0 && std::hypot(w.vx, w.vy) * s.dt_s > 0.1 * s.cell_m)
-            err(w.pos, "the wall moves " + std::to_string(std::hypot(w.vx, w.vy) * s.dt_s / s.cell_m) +
-                           " cells per step; at most 0.1 is allowed (lower the speed or the time step)");
+        if (!unread.step && std::isfinite(w.vx) && std::isfinite(w.vy) && s.dt_s > 0 && std::hypot(w.vx, w.vy) * s.dt_s > 0.1 * s.cell_m) {
+            char buf[120];
+            std::snprintf(buf, sizeof buf, "the wall moves %.3g cells per step; at most 0.1 is allowed (lower the speed or the time step)",
+                          std::hypot(w.vx, w.vy) * s.dt_s / s.cell_m);
+            err(w.pos, buf);
+        }
         for (const auto& f : s.fixes) {
             const Box i{std::max(w.box.x0, f.box.x0), std::max(w.box.y0, f.box.y0), std::min(w.box.x1, f.box.x1), std::min(w.box.y1, f.box.y1)};
             if (node_count(i) > 0) { err(w.pos, "the wall's nodes include fixed nodes (FIX at line " + std::to_string(f.pos.line) + ")"); break; }

@@ -688,7 +688,7 @@ TEST_CASE("deck error: walls that select no node, hold fixed nodes or move too f
     // 0.1 cell per step is allowed, more is not: L = 1 m, dt = 1e-4 s.
     read_ok(plus("WALL 1 4 1 4 4 -1000 0"));
     CHECK_ONE_ERROR(plus("WALL 1 4 1 4 4 -1001 0"), 5, 1, "at most 0.1 is allowed");
-    CHECK_ONE_ERROR(plus("WALL 1 4 1 4 4 800 800"), 5, 1, "the wall moves 0.113137 cells per step");
+    CHECK_ONE_ERROR(plus("WALL 1 4 1 4 4 800 800"), 5, 1, "the wall moves 0.113 cells per step;");
     CHECK_ONE_ERROR(kBase + "WALL 1 4 1 4 4 -1 0\nWALL 1 0 1 0 4 1 0\n", 6, 1, "wall 1 is defined twice");
     CHECK_ONE_ERROR(plus("WALL 0 4 1 4 4 -1 0"), 5, 6, "wall id must lie in [1, 65535]");
 }
@@ -740,6 +740,24 @@ TEST_CASE("deck error: output files: one name per card, no directory") {
     CHECK_ONE_ERROR(plus("OUTPUT POINTS out/a.txt"), 5, 15, "the file name must not contain a directory");
     CHECK_ONE_ERROR(plus("OUTPUT POINTS ../a.txt"), 5, 15, "the file name must not contain a directory");
     CHECK_ONE_ERROR(plus("OUTPUT HISTORY .."), 5, 16, "the file name must not contain a directory");
+}
+
+// Once wrong: a cluster outside the lattice was told as "[0, 4.000000] x [0, 4.000000] m",
+// without the edge it crosses. Each edge crossed is named, with the box's number as the
+// deck writes it and the lattice's extent.
+TEST_CASE("deck error: a cluster outside the lattice names each edge it crosses") {
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4.5 4"), 5, 1,
+                    "the cluster box reaches outside the lattice: x1 = 4.5 m is past its right edge x = 4 m (the lattice is [0, 4] x [0, 4] m)");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 -1 0 2 2"), 5, 1, "x0 = -1 m is past its left edge x = 0 m (the lattice is [0, 4] x [0, 4] m)");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 0 -0.25 2 2"), 5, 1, "y0 = -0.25 m is past its bottom edge y = 0 m");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 0 0 2 7"), 5, 1, "y1 = 7 m is past its top edge y = 4 m");
+    // Two edges in one message; 40 x 20 cells of 0.1 m: the extent as 4 and 2, not 4.000000000000001.
+    CHECK_ONE_ERROR("GRID 40 20 0.1\n" + kMaterial + "CLUSTER 1 -0.5 0 2 2.5\nSTEP 1E-5 10\n", 3, 1,
+                    "x0 = -0.5 m is past its left edge x = 0 m; y1 = 2.5 m is past its top edge y = 2 m (the lattice is [0, 4] x [0, 2] m)");
+    Scene s;
+    const Diagnostics d = read_text(plus("CLUSTER 1 0 0 6 2"), s);
+    REQUIRE(d.size() == 1);
+    CHECK(d[0].message.find("000000") == std::string::npos);  // no %f
 }
 
 // Once wrong: a misspelt card was followed by what it left missing ("no CLUSTER card" at
