@@ -6382,7 +6382,13 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
                 sc.shakes[at].file = file_tok->text;
                 Diagnostics md = read_motion(path, sc.shakes[at]);
                 if (!md.empty()) {
-                    if (md[0].pos.line == 0) md[0].pos = file_tok->pos, md[0].message += " ('" + path + "')";  // the file itself: at the card
+                    if (md[0].pos.line == 0) {  // the file itself: at the card, naming the path tried
+                        md[0].pos = file_tok->pos;
+                        const std::string the = "the motion file";
+                        const std::size_t named = md[0].message.find(the);
+                        if (named != std::string::npos) md[0].message.insert(named + the.size(), " '" + path + "'");
+                        if (!name.is_absolute()) md[0].message += " (a relative FILE= is read from the deck's directory)";
+                    }
                     r.fail(md[0].pos, md[0].message);
                 }
             }

@@ -805,6 +805,21 @@ TEST_CASE("deck error: a card missing from the deck is reported after the cards"
     CHECK(has(d[1].message, "no CLUSTER card"));
 }
 
+// Once wrong: a missing motion file was named at the end, in parentheses after the
+// system's message. The message names the path tried where it names the file.
+TEST_CASE("deck error: a motion file that cannot be opened is named by the path tried") {
+    auto shake = [](const std::string& file, const std::string& deck) {
+        Scene s;
+        return listing(lpfdm::read_deck_text(kBase + "FIX XY 0 0 4 0\nSHAKE X FILE=" + file + "\n", deck, s));
+    };
+    CHECK(shake("nowhere.txt", "no-such-dir/t.deck") ==
+          "no-such-dir/t.deck:6:14: error: cannot open the motion file 'no-such-dir/nowhere.txt': No such file or directory "
+          "(a relative FILE= is read from the deck's directory)\n");
+    // Beside a deck in the current directory; an absolute path as written, without the note.
+    CHECK(has(shake("no-such-file.txt", "t.deck"), "t.deck:6:14: error: cannot open the motion file 'no-such-file.txt': "));
+    CHECK(shake("/no-such-dir/m.txt", "t.deck") == "t.deck:6:14: error: cannot open the motion file '/no-such-dir/m.txt': No such file or directory\n");
+}
+
 TEST_CASE("deck error: no GRID, no STEP or no CLUSTER card") {
     CHECK_ONE_ERROR(kMaterial + kCluster + kStep + "END\n", 4, 1, "no GRID card");
     CHECK_ONE_ERROR(kGrid + kMaterial + kCluster + "END\n", 4, 1, "no STEP card");
