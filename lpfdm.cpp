@@ -158,10 +158,46 @@ int main(int argc, char** argv) {
             if (option_value(o) == c) return std::string("--") + o.name;
         return std::string("-") + char(c);
     };
+    auto takes_value = [&](const std::string& name) {  // whether option --name or -x takes a value
+        for (const OptionSpec& o : kOptions)
+            if (name == std::string("--") + o.name || (o.brief && name == std::string("-") + o.brief)) return o.arg != nullptr;
+        return false;
+    };
+    // A long option is written in full: getopt_long would take any unambiguous beginning
+    // (--thread for --threads), silently, and a beginning that names one option today may
+    // name two once another is added. A beginning, or a misspelling, is refused with the
+    // option meant.
+    auto unknown_option = [&](const std::string& bare) {
+        const std::string near = lpfdm::nearest_name(bare, names);
+        bool beginning = false;
+        for (const OptionSpec& o : kOptions) {
+            const std::string full = std::string("--") + o.name;
+            beginning |= bare.size() > 2 && full.size() > bare.size() && full.compare(0, bare.size(), bare) == 0;
+        }
+        const std::string note = beginning ? "options are written in full" : "";
+        if (near.empty()) return "unknown option '" + bare + "'" + (note.empty() ? "" : " (" + note + ")");
+        return "unknown option '" + bare + "' (did you mean " + near + "?" + (note.empty() ? "" : " " + note) + ")";
+    };
+    auto option_name = [](const char* word) {  // "--name" of "--name=value"
+        const std::string w = word;
+        return w.substr(0, w.find('='));
+    };
+    // The word after an unknown option, when it may be the option's value (the option it is
+    // nearest to takes one, or it is near none): not the deck, when a deck is named too.
+    std::vector<const char*> maybe_values;
     opterr = 0;
     for (;;) {
-        const int c = getopt_long(argc, argv, shorts.c_str(), longs.data(), nullptr);
+        int li = -1;
+        const int c = getopt_long(argc, argv, shorts.c_str(), longs.data(), &li);
         if (c == -1) break;
+        if (li >= 0) {  // a long option (getopt_long set li): as typed, up to '='
+            const bool apart = optarg && optind >= 2 && optarg == argv[optind - 1];  // its value the next word
+            const std::string as = option_name(argv[optind - (apart ? 2 : 1)]);
+            if (as != std::string("--") + longs[std::size_t(li)].name) {
+                cli_errors.push_back(unknown_option(as));  // (its value, if any, read and set aside)
+                continue;
+            }
+        }
         long long v = 0;
         const char* arg = optarg;
         switch (c) {
@@ -216,22 +252,39 @@ int main(int argc, char** argv) {
             }
             break;
         }
-        case ':':
-            cli_errors.push_back(spelled(optopt) + " needs a value");
+        case ':': {  // (argv[optind - 1]: the option, the last word)
+            const std::string word = optind > 0 && optind <= argc ? argv[optind - 1] : "";
+            if (word.rfind("--", 0) == 0 && option_name(word.c_str()) != spelled(optopt)) cli_errors.push_back(unknown_option(option_name(word.c_str())));
+            else cli_errors.push_back(spelled(optopt) + " needs a value");
             break;
+        }
         default: {  // '?': an unknown, ambiguous or misspelt option, or a flag given a value
             const std::string word = optind > 0 && optind <= argc ? argv[optind - 1] : "";
             if (word.rfind("--", 0) == 0) {
-                const std::string bare = word.substr(0, word.find('='));
-                if (word.find('=') != std::string::npos && optopt) cli_errors.push_back(bare + " takes no value");
-                else cli_errors.push_back("unknown option '" + bare + "'" + lpfdm::did_you_mean(bare, names));
+                const std::string bare = option_name(word.c_str());
+                if (word.find('=') != std::string::npos && optopt && bare == spelled(optopt)) {
+                    cli_errors.push_back(bare + " takes no value");
+                } else {
+                    cli_errors.push_back(unknown_option(bare));
+                    const std::string near = lpfdm::nearest_name(bare, names);
+                    if (word.find('=') == std::string::npos && optind < argc && argv[optind][0] != '-' && (near.empty() || takes_value(near)))
+                        maybe_values.push_back(argv[optind]);
+                }
             } else {
                 cli_errors.push_back(std::string("unknown option '-") + char(optopt) + "'" + lpfdm::did_you_mean(std::string("-") + char(optopt), names));
             }
         }
         }
     }
-    for (int a = optind; a < argc; ++a) decks.push_back(argv[a]);
+    // The words left are the deck, but for the values of unknown options (--stesp 10 DECK):
+    // those are set aside when a deck is named too, or when they name no file (--stesp 10).
+    std::vector<const char*> words(argv + optind, argv + argc);
+    auto is_value = [&](const char* w) {
+        struct stat st;
+        return std::find(maybe_values.begin(), maybe_values.end(), w) != maybe_values.end() && (words.size() > 1 || stat(w, &st) != 0);
+    };
+    for (const char* w : words)
+        if (!is_value(w)) decks.push_back(w);
     if (decks.size() > 1) cli_errors.push_back("one deck, please: " + std::to_string(decks.size()) + " are named");
     if (decks.empty()) cli_errors.push_back("no deck given");
     if (decks.size() == 1) opt.deck = decks[0];

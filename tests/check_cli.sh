@@ -86,6 +86,52 @@ expect "two decks" 2 -q "$deck" "$deck" && says "two decks" "one deck, please"
 expect "--set of a card the deck lacks, with a deck error" 2 -q --set WALL9.VX=1 tests/decks/bad_several.deck && \
     says "--set of a card the deck lacks, with a deck error" "no WALL with id 9"
 
+# --- a misspelt option: told once, with the option meant; its value is not read as a second
+#     deck, and the deck is checked all the same ---
+nothing_written() { if [ -z "$(ls "$out")" ]; then ok; else fail "$1" "files written: $(ls "$out")"; fi; }
+errors() {  # errors NAME N: the last run printed N errors
+    local n
+    n=$(grep -c 'error: ' "$err")
+    if [ "$n" -eq "$2" ]; then ok; else fail "$1" "$n errors, expected $2: $(tr '\n' '|' <"$err")"; fi
+}
+expect "misspelt option" 2 -q --stesp 10 tests/decks/bad_unknown_card.deck && {
+    says "misspelt option" "lpfdm: error: unknown option '--stesp' (did you mean --steps?)"
+    says "misspelt option" "tests/decks/bad_unknown_card.deck:6:1: error: unknown card 'FOO'"
+    errors "misspelt option" 2
+    nothing_written "misspelt option"
+}
+expect "misspelt option, good deck" 2 -q --stesp 10 "$deck" && { errors "misspelt option, good deck" 1; nothing_written "misspelt option, good deck"; }
+expect "misspelt option, value apart from the deck" 2 -q "$deck" --stesp=10 && errors "misspelt option, value apart from the deck" 1
+expect "misspelt option, no deck" 2 -q --stesp 10 && says "misspelt option, no deck" "no deck given"
+expect "unknown option, value and deck" 2 -q --frobnicate 3 "$deck" && { says "unknown option, value and deck" "unknown option '--frobnicate'"; errors "unknown option, value and deck" 1; }
+
+# --- a long option is written in full: a beginning of one (--thread) is refused, with the option meant ---
+for form in "--thread 2" "--thread=2" "--thr 2" "--ker scalar"; do
+    name=${form%%[ =]*}
+    # shellcheck disable=SC2086
+    expect "$form" 2 -q -n 2 $form "$deck" || continue
+    full=$(case $name in --thr*) echo --threads ;; *) echo --kernel ;; esac)
+    says "$form" "lpfdm: error: unknown option '$name' (did you mean $full? options are written in full)"
+    errors "$form" 1
+    nothing_written "$form"
+done
+expect "--qui=1" 2 -q "$deck" --qui=1 && says "--qui=1" "unknown option '--qui' (did you mean --quiet? options are written in full)"
+expect "--thread, last" 2 -q "$deck" --thread && says "--thread, last" "unknown option '--thread' (did you mean --threads? options are written in full)"
+
+# --- the deck's messages: a misspelt card alone (not also the card it leaves missing), a
+#     cluster past an edge of the lattice, a motion file by the path tried ---
+printf 'GRID 4 4 1\nMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nCLUSTR 1 0 0 2 2\nSTEP 1E-4 10\n' >"$tmp/clustr.deck"
+expect "misspelt card" 2 -q "$tmp/clustr.deck" && {
+    says "misspelt card" "clustr.deck:3:1: error: unknown card 'CLUSTR' (did you mean CLUSTER?)"
+    errors "misspelt card" 1
+}
+expect "cluster outside" 2 -q tests/decks/bad_cluster_outside.deck && \
+    says "cluster outside" "bad_cluster_outside.deck:5:1: error: the cluster box reaches outside the lattice: x1 = 6 m is past its right edge x = 4 m (the lattice is [0, 4] x [0, 4] m)"
+mkdir -p "$tmp/quake"
+printf 'GRID 4 4 1\nMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nCLUSTER 1 0 0 2 2\nFIX XY 0 0 4 0\nSHAKE X FILE=motion.txt\nSTEP 1E-4 10\n' >"$tmp/quake/shake.deck"
+expect "missing motion file" 2 -q "$tmp/quake/shake.deck" && \
+    says "missing motion file" "shake.deck:5:14: error: cannot open the motion file '$tmp/quake/motion.txt': No such file or directory (a relative FILE= is read from the deck's directory)"
+
 # --- warnings: to stderr, exit status 0, the run made; --strict: errors, exit 2, nothing written ---
 expect "cliff --steps 100" 0 -q --steps 100 decks/cliff.deck && says "cliff --steps 100" "decks/cliff.deck:23:1: warning: EVERY 500 is more than the 100 steps"
 rows=$(sed 1d "$out/cliff_history.txt" | grep -v '^#' | grep -c .)  # (line 1: the column names)
