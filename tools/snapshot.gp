@@ -119,7 +119,7 @@ if (floor(y1 / tic) - ceil(y0 / tic) < 1) {
 sc = scale(mb)
 pw = sc * (x1 - x0); ph = sc * (y1 - y0)
 if (!exists("size")) {
-    W = max(480, ceil(pw) + ml + mr); H = max(360, ceil(ph) + mt + mb)
+    W = max(480, ceil(pw - 0.01) + ml + mr); H = max(360, ceil(ph - 0.01) + mt + mb)
     size = sprintf("%d,%d", W, H)
 }
 px0 = ml + (W - ml - mr - pw) / 2.0
