@@ -428,7 +428,7 @@ TEST_CASE("quake: the motion file's problems are reported at its own line and co
     motion("good.txt", "# t a\n0, 0\n0.1, 1   # a comment\n\n0.2 0\n");
     motion("crlf.txt", "\xEF\xBB\xBF# a byte order mark, CR LF\r\n0 0\r\n0.1 1\r\n0.2 0\r\n");
     motion("cr.txt", "# old Mac line ends\r0 0\r0.1 1\r0.2 0\r");
-    CHECK(first("SHAKE X FILE=nowhere.txt") == "build/quake_motion/t.deck:6:14: error: cannot open the motion file: No such file or directory ('build/quake_motion/nowhere.txt')");
+    CHECK(first("SHAKE X FILE=nowhere.txt") == "build/quake_motion/t.deck:6:14: error: cannot open the motion file 'build/quake_motion/nowhere.txt': No such file or directory (a relative FILE= is read from the deck's directory)");
     CHECK(first("SHAKE X FILE=empty.txt") == "build/quake_motion/empty.txt:1:1: error: the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
     CHECK(first("SHAKE X FILE=comments.txt") == "build/quake_motion/comments.txt:1:1: error: the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
     CHECK(first("SHAKE X FILE=one.txt") == "build/quake_motion/one.txt:1:1: error: the motion file holds one sample; a record needs at least two");
@@ -438,8 +438,8 @@ TEST_CASE("quake: the motion file's problems are reported at its own line and co
     CHECK(first("SHAKE X FILE=same.txt") == "build/quake_motion/same.txt:3:1: error: time 0.1 s does not come after the line before's 0.1 s: times must increase");
     CHECK(first("SHAKE X FILE=negative.txt") == "build/quake_motion/negative.txt:1:1: error: time -0.1 s is before 0: the record starts at time 0 or later");
     CHECK(first("SHAKE X FILE=nan.txt") == "build/quake_motion/nan.txt:2:5: error: acceleration: expected a finite number, found 'nan'");
-    CHECK(first("SHAKE X FILE=.") .find("cannot read the motion file: it is a directory") != std::string::npos);
-    CHECK(first("SHAKE X FILE=/dev/zero").find("cannot read the motion file: it is not a regular file") != std::string::npos);
+    CHECK(first("SHAKE X FILE=.") .find("cannot read the motion file 'build/quake_motion/.': it is a directory") != std::string::npos);
+    CHECK(first("SHAKE X FILE=/dev/zero").find("cannot read the motion file '/dev/zero': it is not a regular file") != std::string::npos);
     CHECK(first("SHAKE X FILE=good.txt") == "no error");
     for (const char* name : {"crlf.txt", "cr.txt"}) {
         Scene t;
