@@ -15,7 +15,7 @@ dir=$(mktemp -d); trap 'rm -rf "$dir"' EXIT
 # job N KIND ARG: KIND unit-o2, unit-san, or check (ARG "SCRIPT EXE"); writes $dir/N.log
 # and $dir/N.rc.
 job() {
-    local n=$1 kind=$2 arg=${3:-}
+    local n=$1 kind=$2 arg=${3:-} start=$SECONDS
     case $kind in
         unit-o2) OMP_NUM_THREADS=1 build/tests --no-version=1 ;;
         # the sanitizer build leaves out the [slow] cases; the kernel's own threads stay at one
@@ -24,6 +24,7 @@ job() {
         check) bash ${arg% *} "${arg#* }" ;;
     esac >"$dir/$n.log" 2>&1
     echo $? >"$dir/$n.rc"
+    echo "$((SECONDS - start)) $kind${arg:+ $arg}" >"$dir/$n.time"
 }
 export -f job
 export dir
@@ -65,5 +66,7 @@ for ((k = 3; k <= n; k++)); do
     [ "$(rc_of $k)" -eq 0 ] || [ "$f" -gt 0 ] || f=1
     passed=$((passed + p)); failed=$((failed + f))
 done
+# How long each job took (seconds, longest first): where make test's time goes.
+echo "longest jobs, seconds each ($workers at a time): $(cat "$dir"/*.time 2>/dev/null | sort -rn | head -n 8 | sed 's/ tests\/check_/ /; s/\.sh / /' | paste -sd ';' | sed 's/;/; /g')"
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
