@@ -49,7 +49,8 @@ chmod +x "$copy/lpfdm"
 touch -d '-1 hour' "$copy/lpfdm.cpp" "$copy/lpfdm.hpp"
 
 # blocks FILE: writes $tmp/blocks/K.sh for each ```sh block of FILE, with K.meta holding
-# "LINE<TAB>STEPS<TAB>SKIP-REASON" and K.not the "PREFIX<TAB>REASON" lines.
+# its line, steps and reason to skip (separated by the unit separator, \037, so that an
+# empty field stays a field) and K.not the "PREFIX<TAB>REASON" lines.
 blocks() {
     rm -rf "$tmp/blocks" && mkdir -p "$tmp/blocks"
     awk -v dir="$tmp/blocks" '
@@ -69,7 +70,7 @@ blocks() {
         }
         /^ *```sh *$/ {
             k = sprintf("%03d", ++nk); out = dir "/" k ".sh"; indent = $0; sub(/```.*/, "", indent)
-            printf "%d\t%s\t%s\n", NR, steps, skip > (dir "/" k ".meta"); close(dir "/" k ".meta")
+            printf "%d\037%s\037%s\n", NR, steps, skip > (dir "/" k ".meta"); close(dir "/" k ".meta")
             printf "" > (dir "/" k ".not")
             for (i = 1; i <= nnot; i++) print nots[i] > (dir "/" k ".not")
             close(dir "/" k ".not"); printf "" > out
@@ -99,6 +100,9 @@ copies() {
         !/^ *$/ { want = "" }' "$1")
 }
 
+# What an error looks like in a block's output: GNU style "error:" (lpfdm, the compilers,
+# tools/ensemble), make's "***", a Python traceback; not a column or a word named error.
+errors='error:|\*\*\*|^Traceback'
 notrun=()
 for doc in $docs; do
     [ -f "$doc" ] && copies "$doc"
@@ -107,7 +111,7 @@ for doc in $docs; do
     for meta in "$tmp"/blocks/*.meta; do
         [ -e "$meta" ] || continue
         k=${meta%.meta}
-        IFS=$'\t' read -r line steps skip <"$meta"
+        IFS=$'\037' read -r line steps skip <"$meta"
         where="$doc:$line"
         if [ -n "$skip" ]; then
             notrun+=("$where (whole block): $skip")
@@ -135,10 +139,10 @@ for doc in $docs; do
             fail "$where: exit status $rc after $took s${steps:+ (steps=$steps)}:"
             sed 's/^/    /' "$script"
             tail -n 8 "$tmp/log" | sed 's/^/  | /'
-        elif grep -Eiq '(^|[^a-z_])error([^a-z_]|$)' "$tmp/log"; then
+        elif grep -Eiq "$errors" "$tmp/log"; then
             fail "$where: printed an error${steps:+ (steps=$steps)}:"
             sed 's/^/    /' "$script"
-            grep -Ei -m 3 '(^|[^a-z_])error([^a-z_]|$)' "$tmp/log" | sed 's/^/  | /'
+            grep -Ei -m 3 "$errors" "$tmp/log" | sed 's/^/  | /'
         else
             passed=$((passed + 1))
             echo "ok $where ($took s${steps:+, steps=$steps})"
