@@ -406,6 +406,11 @@ struct Cluster {
     Box box;
     int ppc = 2;  // points per cell along each axis
     Pos pos;
+    // POLYGON: the vertices x1 y1 x2 y2 ... [m], in either orientation, closing by itself
+    // (empty: the box). A cell belongs to it when its centre lies inside or within L/1000
+    // of an edge in x and in y, as a box's centre may lie L/1000 past the box.
+    std::vector<double> polygon = {};
+    std::vector<Pos> polygon_pos = {};  // each coordinate's field in the deck (for messages)
 };
 
 enum : int { kFixX = 1, kFixY = 2 };
@@ -758,6 +763,11 @@ inline std::string deck_help() {
         std::string line = "  " + card_synopsis(c);
         line.resize(std::max<std::size_t>(line.size() + 1, 58), ' ');
         out += line + c.meaning + "\n";
+        if (std::strcmp(c.name, "CLUSTER") == 0) {  // its second form, read by the deck reader
+            line = "  CLUSTER mat POLYGON x1 y1 x2 y2 x3 y3 ... [PPC=2]";
+            line.resize(std::max<std::size_t>(line.size() + 1, 58), ' ');
+            out += line + "the same in the polygon (a centre on an edge counts; & continues the card)\n";
+        }
     }
     out += "--set keys (CARD.KEY; MATERIAL and WALL by id, CLUSTER, FIX, SHAKE and OUTPUT by order from 1):\n";
     for (const DeckCard& c : kDeckCards) {
@@ -1656,6 +1666,191 @@ inline void node_span(double a, double b, double L, int n, int& lo, int& hi) {
     hi = int(std::clamp(std::floor((b + tol) / L), -1.0, double(n)));
 }
 
+// The most vertices a CLUSTER POLYGON may have: its check for a crossing takes n^2 / 2 steps.
+inline constexpr std::size_t kMaxPolygonVertices = 10000;
+
+// The cells a cluster fills, as runs: f(i0, i1, j) for cells i0..i1 of row j, each cell once,
+// rows upwards. A box: the cells whose centres lie in it (cell_span). A polygon: the cells
+// whose centres lie inside it (the even-odd rule along the row of centres) or within L/1000
+// of it in x and in y (the square of half-side L/1000 about the centre touches an edge), so
+// that a centre on an edge counts as inside and a polygon equal to a box fills the box's cells.
+template <class F>
+inline void cluster_cells(const Cluster& c, double L, int mx, int my, const F& f) {
+    if (c.polygon.empty()) {
+        int i0, i1, j0, j1;
+        cell_span(c.box.x0, c.box.x1, L, mx, i0, i1);
+        cell_span(c.box.y0, c.box.y1, L, my, j0, j1);
+        if (i0 <= i1)
+            for (int j = j0; j <= j1; ++j) f(i0, i1, j);
+        return;
+    }
+    const std::vector<double>& v = c.polygon;
+    const std::size_t n = v.size() / 2;
+    if (n < 3) return;
+    const double h = 1e-3 * L;
+    struct Edge { double ax, ay, bx, by, ylo, yhi; };
+    std::vector<Edge> edges;
+    edges.reserve(n);
+    double ylo = kHuge, yhi = -kHuge;
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t m = (k + 1) % n;
+        const double ay = v[2 * k + 1], by = v[2 * m + 1];
+        edges.push_back({v[2 * k], ay, v[2 * m], by, std::min(ay, by), std::max(ay, by)});
+        ylo = std::min(ylo, ay);
+        yhi = std::max(yhi, ay);
+    }
+    std::sort(edges.begin(), edges.end(), [](const Edge& a, const Edge& b) { return a.ylo < b.ylo; });
+    int j0, j1;
+    cell_span(ylo, yhi, L, my, j0, j1);
+    std::vector<double> xs;
+    std::vector<std::pair<int, int>> runs;
+    auto run = [&](double a, double b) {  // the cells whose centres' x lies in [a, b]
+        const int i0 = int(std::clamp(std::ceil(a / L - 0.5), 0.0, double(mx)));
+        const int i1 = int(std::clamp(std::floor(b / L - 0.5), -1.0, double(mx - 1)));
+        if (i0 <= i1) runs.push_back({i0, i1});
+    };
+    for (int j = j0; j <= j1; ++j) {
+        const double yc = (j + 0.5) * L;
+        xs.clear();
+        runs.clear();
+        for (const Edge& e : edges) {
+            if (e.ylo > yc + h) break;
+            if (e.yhi < yc - h) continue;
+            if ((e.ay > yc) != (e.by > yc)) xs.push_back(e.ax + (yc - e.ay) * (e.bx - e.ax) / (e.by - e.ay));
+            double xa = e.ax, xb = e.bx;  // the part of the edge within h of the row
+            if (e.ay != e.by) {
+                double t0 = (yc - h - e.ay) / (e.by - e.ay), t1 = (yc + h - e.ay) / (e.by - e.ay);
+                if (t0 > t1) std::swap(t0, t1);
+                if (t0 > 0) xa = e.ax + t0 * (e.bx - e.ax);
+                if (t1 < 1) xb = e.ax + t1 * (e.bx - e.ax);
+            }
+            run(std::min(xa, xb) - h, std::max(xa, xb) + h);
+        }
+        std::sort(xs.begin(), xs.end());
+        for (std::size_t k = 0; k + 1 < xs.size(); k += 2) run(xs[k], xs[k + 1]);
+        std::sort(runs.begin(), runs.end());
+        for (std::size_t k = 0; k < runs.size();) {
+            int a = runs[k].first, b = runs[k].second;
+            for (++k; k < runs.size() && runs[k].first <= b + 1; ++k) b = std::max(b, runs[k].second);
+            f(a, b, j);
+        }
+    }
+}
+
+// What is wrong with the shape of a polygon (its vertices x1 y1 x2 y2 ...), or "" if
+// nothing; `at` is the index in v of the coordinate to report it at (v.size(): the polygon
+// as a whole). In this order: x y pairs, at least 3 and at most kMaxPolygonVertices of
+// them, no vertex the same as the one before it (the last the same as the first), not all on
+// one line (no area), and no edge touching an earlier one but at a vertex they share (nor
+// running back along it): a polygon that crosses itself is reported at the end of the first
+// edge that does (the edge from the last vertex back to the first: at the last).
+inline std::string polygon_problem(const std::vector<double>& v, std::size_t& at) {
+    const std::size_t n = v.size() / 2;
+    at = v.size();
+    auto name = [](std::size_t k) { return "vertex " + std::to_string(k + 1); };
+    auto point = [&](std::size_t k) { return "(" + shortest(v[2 * k]) + ", " + shortest(v[2 * k + 1]) + ")"; };
+    if (v.size() % 2) {
+        at = v.size() - 1;
+        return name(n) + " has an x but no y: a polygon takes x y pairs (" + std::to_string(v.size()) + " numbers given)";
+    }
+    if (n < 3) return "a polygon needs at least 3 vertices (x y pairs); this one has " + std::to_string(n);
+    if (n > kMaxPolygonVertices) {
+        at = 2 * kMaxPolygonVertices;
+        return "a polygon may have at most " + std::to_string(kMaxPolygonVertices) + " vertices; this one has " + std::to_string(n);
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t m = (k + 1) % n;
+        if (v[2 * k] != v[2 * m] || v[2 * k + 1] != v[2 * m + 1]) continue;
+        if (m == 0) {
+            at = 2 * k;
+            return "the last vertex " + point(k) + " repeats the first: a polygon closes by itself";
+        }
+        at = 2 * m;
+        return name(m) + " " + point(m) + " repeats the vertex before it";
+    }
+    const double ax = v[0], ay = v[1];
+    std::size_t far = 1;
+    for (std::size_t k = 1; k < n; ++k)
+        if (std::hypot(v[2 * k] - ax, v[2 * k + 1] - ay) > std::hypot(v[2 * far] - ax, v[2 * far + 1] - ay)) far = k;
+    const double ux = v[2 * far] - ax, uy = v[2 * far + 1] - ay;
+    bool flat = true;
+    for (std::size_t k = 1; k < n && flat; ++k)
+        flat = std::fabs(ux * (v[2 * k + 1] - ay) - uy * (v[2 * k] - ax)) <= 1e-12 * (ux * ux + uy * uy);
+    if (flat) return "the polygon has no area: its vertices lie on one line";
+    auto orient = [&](std::size_t a, std::size_t b, std::size_t c) {
+        const double d = (v[2 * b] - v[2 * a]) * (v[2 * c + 1] - v[2 * a + 1]) - (v[2 * b + 1] - v[2 * a + 1]) * (v[2 * c] - v[2 * a]);
+        return (d > 0) - (d < 0);
+    };
+    auto between = [&](std::size_t a, std::size_t b, std::size_t c) {  // c, on the line ab, lies on the segment
+        return std::min(v[2 * a], v[2 * b]) <= v[2 * c] && v[2 * c] <= std::max(v[2 * a], v[2 * b]) &&
+               std::min(v[2 * a + 1], v[2 * b + 1]) <= v[2 * c + 1] && v[2 * c + 1] <= std::max(v[2 * a + 1], v[2 * b + 1]);
+    };
+    auto edge = [&](std::size_t k) {
+        const std::size_t m = (k + 1) % n;
+        return m == 0 ? "the edge from " + name(k) + " back to vertex 1" : "the edge from " + name(k) + " to " + name(m);
+    };
+    for (std::size_t k = 1; k < n; ++k) {
+        const std::size_t a = k, b = (k + 1) % n;
+        for (std::size_t e = 0; e < k; ++e) {
+            const std::size_t c = e, d = e + 1;
+            bool meets;
+            if (d == a || (b == c)) {  // neighbours: they meet at their shared vertex; do they overlap?
+                const std::size_t s = d == a ? a : b, p = d == a ? c : d, q = d == a ? b : a;
+                meets = orient(s, p, q) == 0 && (v[2 * p] - v[2 * s]) * (v[2 * q] - v[2 * s]) + (v[2 * p + 1] - v[2 * s + 1]) * (v[2 * q + 1] - v[2 * s + 1]) > 0;
+            } else {
+                const int o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a), o4 = orient(c, d, b);
+                meets = (o1 * o2 < 0 && o3 * o4 < 0) || (o1 == 0 && between(a, b, c)) || (o2 == 0 && between(a, b, d)) ||
+                        (o3 == 0 && between(c, d, a)) || (o4 == 0 && between(c, d, b));
+            }
+            if (!meets) continue;
+            at = 2 * (b == 0 ? a : b);
+            return "the polygon crosses itself: " + edge(k) + " " + (d == a || b == c ? "runs back along " : "meets ") + edge(e);
+        }
+    }
+    return "";
+}
+
+// The cell centre nearest to a polygon (vertices x1 y1 x2 y2 ...; a box: its corners) and
+// its distance from it. A cell centre lies within L of every point of the lattice.
+inline void nearest_centre(const std::vector<double>& v, double L, int mx, int my, double& cx, double& cy, double& dist) {
+    const std::size_t n = v.size() / 2;
+    auto distance = [&](double px, double py) {
+        double best = kHuge;
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::size_t m = (k + 1) % n;
+            const double ax = v[2 * k], ay = v[2 * k + 1], ex = v[2 * m] - ax, ey = v[2 * m + 1] - ay;
+            const double ee = ex * ex + ey * ey;
+            const double t = ee > 0 ? std::clamp(((px - ax) * ex + (py - ay) * ey) / ee, 0.0, 1.0) : 0.0;
+            best = std::min(best, std::hypot(px - ax - t * ex, py - ay - t * ey));
+        }
+        return best;
+    };
+    dist = kHuge;
+    cx = cy = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t m = (k + 1) % n;
+        const double ax = v[2 * k], ay = v[2 * k + 1], bx = v[2 * m], by = v[2 * m + 1];
+        int j0, j1;
+        cell_span(std::min(ay, by) - L, std::max(ay, by) + L, L, my, j0, j1);
+        for (int j = j0; j <= j1; ++j) {
+            const double yc = (j + 0.5) * L;
+            double xa = ax, xb = bx;  // the part of the edge within L of the row
+            if (ay != by) {
+                double t0 = (yc - L - ay) / (by - ay), t1 = (yc + L - ay) / (by - ay);
+                if (t0 > t1) std::swap(t0, t1);
+                if (t0 > 0) xa = ax + t0 * (bx - ax);
+                if (t1 < 1) xb = ax + t1 * (bx - ax);
+            }
+            int i0, i1;
+            cell_span(std::min(xa, xb) - L, std::max(xa, xb) + L, L, mx, i0, i1);
+            for (int i = i0; i <= i1; ++i) {
+                const double px = (i + 0.5) * L, d = distance(px, yc);
+                if (d < dist || (d == dist && (yc < cy || (yc == cy && px < cx)))) { dist = d; cx = px; cy = yc; }
+            }
+        }
+    }
+}
+
 }  // namespace detail
 
 // Stable time step of the lattice. A full lattice is stable up to L / c_p, but a lone
@@ -1752,6 +1947,8 @@ inline std::string apply_setting(Scene& s, const std::string& key_in, double v) 
         const std::vector<std::string> names = key_names(card, model, true);
         return card + " has no parameter " + par + " (it takes " + joined(names) + ")" + did_you_mean(par, names);
     }
+    if (card == "CLUSTER" && !s.clusters[index].polygon.empty() && (par == "X0" || par == "Y0" || par == "X1" || par == "Y1"))
+        return "CLUSTER " + std::to_string(num) + " is a POLYGON: " + par + " is a box's corner, and --set cannot move a polygon's vertices (it takes MAT, PPC)";
     if (model && !(k->models & model))
         return card + " " + std::to_string(num) + " is " + (model == kMohr ? "MOHR" : "ELASTIC") + ": " + par + " is not one of its parameters (" + joined(key_names("MATERIAL", model, false)) + ")";
     if (!in_range(*k, v, true)) return range_message(*k, v);  // before storing: it may not fit the member
@@ -1918,31 +2115,61 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
         const Material* m = s.material(c.mat);
         if (!m && !unread.materials) err(c.pos, "material " + std::to_string(c.mat) + " is not defined");
         keys("CLUSTER", a, c.pos, 0);
+        const bool poly = !c.polygon.empty();
+        auto coord_pos = [&](std::size_t k) { return k < c.polygon_pos.size() ? c.polygon_pos[k] : c.pos; };
+        if (poly) {
+            std::size_t at = 0;
+            const std::string problem = detail::polygon_problem(c.polygon, at);
+            if (!problem.empty()) { err(coord_pos(at), problem); continue; }
+        }
         if (!lattice) continue;
-        if (c.box.x0 > c.box.x1 || c.box.y0 > c.box.y1) { err(c.pos, "the box needs x0 <= x1 and y0 <= y1"); continue; }
-        if (c.box.x0 < -tol || c.box.y0 < -tol || c.box.x1 > X + tol || c.box.y1 > Y + tol) {
-            // Each edge crossed, the box's numbers as the deck writes them (the shortest
-            // form that reads back the same), the lattice's to ten digits.
-            auto ten = [](double x) {
-                char b[32];
-                std::snprintf(b, sizeof b, "%.10g", x);
-                return std::string(b);
-            };
-            std::string past;
-            auto edge = [&](bool out, const char* field, double v, const char* name, const char* axis, double at) {
-                if (out) past += (past.empty() ? "" : "; ") + std::string(field) + " = " + shortest(v) + " m is past its " + name + " edge " + axis + " = " + ten(at) + " m";
-            };
+        if (!poly && (c.box.x0 > c.box.x1 || c.box.y0 > c.box.y1)) { err(c.pos, "the box needs x0 <= x1 and y0 <= y1"); continue; }
+        // Each edge crossed, the numbers as the deck writes them (the shortest form that
+        // reads back the same), the lattice's to ten digits.
+        auto ten = [](double x) {
+            char b[32];
+            std::snprintf(b, sizeof b, "%.10g", x);
+            return std::string(b);
+        };
+        std::string past;
+        std::size_t first_out = std::string::npos;
+        auto edge = [&](bool out, const std::string& field, double v, const char* name, const char* axis, double at) {
+            if (out) past += (past.empty() ? "" : "; ") + field + " = " + shortest(v) + " m is past its " + name + " edge " + axis + " = " + ten(at) + " m";
+        };
+        std::vector<double> corners;  // the polygon, or the box's corners
+        if (poly) {
+            corners = c.polygon;
+            for (std::size_t k = 0; k + 1 < corners.size(); k += 2) {
+                const double x = corners[k], y = corners[k + 1];
+                const std::string vertex = "vertex " + std::to_string(k / 2 + 1) + " ";
+                if ((x < -tol || x > X + tol) && first_out == std::string::npos) first_out = k;
+                if ((y < -tol || y > Y + tol) && first_out == std::string::npos) first_out = k + 1;
+                edge(x < -tol, vertex + "x", x, "left", "x", 0.0);
+                edge(x > X + tol, vertex + "x", x, "right", "x", X);
+                edge(y < -tol, vertex + "y", y, "bottom", "y", 0.0);
+                edge(y > Y + tol, vertex + "y", y, "top", "y", Y);
+            }
+        } else {
+            corners = {c.box.x0, c.box.y0, c.box.x1, c.box.y0, c.box.x1, c.box.y1, c.box.x0, c.box.y1};
             edge(c.box.x0 < -tol, "x0", c.box.x0, "left", "x", 0.0);
             edge(c.box.x1 > X + tol, "x1", c.box.x1, "right", "x", X);
             edge(c.box.y0 < -tol, "y0", c.box.y0, "bottom", "y", 0.0);
             edge(c.box.y1 > Y + tol, "y1", c.box.y1, "top", "y", Y);
-            err(c.pos, "the cluster box reaches outside the lattice: " + past + " (the lattice is [0, " + ten(X) + "] x [0, " + ten(Y) + "] m)");
+        }
+        const char* what = poly ? "polygon" : "box";
+        if (!past.empty()) {
+            err(poly ? coord_pos(first_out) : c.pos, std::string("the cluster ") + what + " reaches outside the lattice: " + past + " (the lattice is [0, " + ten(X) + "] x [0, " + ten(Y) + "] m)");
             continue;
         }
-        int ci0, ci1, cj0, cj1;
-        detail::cell_span(c.box.x0, c.box.x1, s.cell_m, s.mx, ci0, ci1);
-        detail::cell_span(c.box.y0, c.box.y1, s.cell_m, s.my, cj0, cj1);
-        if (ci1 < ci0 || cj1 < cj0) err(c.pos, "the cluster box holds no cell centre");
+        bool any = false;
+        detail::cluster_cells(c, s.cell_m, s.mx, s.my, [&](int, int, int) { any = true; });
+        if (!any) {
+            double cx = 0, cy = 0, dist = 0;
+            detail::nearest_centre(corners, s.cell_m, s.mx, s.my, cx, cy, dist);
+            char b[64];
+            std::snprintf(b, sizeof b, "%.3g", dist);
+            err(c.pos, std::string("the cluster ") + what + " holds no cell centre: the nearest is (" + shortest(cx) + ", " + shortest(cy) + ") m, " + b + " m from it");
+        }
     }
     auto node_count = [&](const Box& b) {
         if (b.x0 > b.x1 || b.y0 > b.y1) return -1L;
@@ -2951,18 +3178,21 @@ inline double count_points(const Scene& s) {
     // Per cell the last cluster wins; count by scanning the clusters' cell ranges.
     const long cells = long(s.mx) * s.my;
     if (cells > 50'000'000L) {  // too large to scan; an upper bound is enough for the memory check
-        for (const auto& c : s.clusters) n += (c.box.x1 - c.box.x0) * (c.box.y1 - c.box.y0) / (s.cell_m * s.cell_m) * c.ppc * c.ppc;
+        for (const auto& c : s.clusters) {
+            double cells_in = (c.box.x1 - c.box.x0) * (c.box.y1 - c.box.y0) / (s.cell_m * s.cell_m);
+            if (!c.polygon.empty()) {
+                cells_in = 0;
+                detail::cluster_cells(c, s.cell_m, s.mx, s.my, [&](int i0, int i1, int) { cells_in += i1 - i0 + 1; });
+            }
+            n += cells_in * c.ppc * c.ppc;
+        }
         return n;
     }
     std::vector<int> owner(std::size_t(cells), -1);
-    for (std::size_t ci = 0; ci < s.clusters.size(); ++ci) {
-        const auto& c = s.clusters[ci];
-        int i0, i1, j0, j1;
-        detail::cell_span(c.box.x0, c.box.x1, s.cell_m, s.mx, i0, i1);
-        detail::cell_span(c.box.y0, c.box.y1, s.cell_m, s.my, j0, j1);
-        for (int j = j0; j <= j1; ++j)
+    for (std::size_t ci = 0; ci < s.clusters.size(); ++ci)
+        detail::cluster_cells(s.clusters[ci], s.cell_m, s.mx, s.my, [&](int i0, int i1, int j) {
             for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * s.mx + i] = int(ci);
-    }
+        });
     for (int o : owner) if (o >= 0) n += double(s.clusters[o].ppc) * s.clusters[o].ppc;
     return n;
 }
@@ -3070,14 +3300,10 @@ inline void Simulation::setup() {
 
 inline void Simulation::create_points() {
     std::vector<int> owner(std::size_t(mx_) * my_, -1);
-    for (std::size_t ci = 0; ci < sc_.clusters.size(); ++ci) {
-        const auto& c = sc_.clusters[ci];
-        int i0, i1, j0, j1;
-        detail::cell_span(c.box.x0, c.box.x1, L_, mx_, i0, i1);
-        detail::cell_span(c.box.y0, c.box.y1, L_, my_, j0, j1);
-        for (int j = j0; j <= j1; ++j)
+    for (std::size_t ci = 0; ci < sc_.clusters.size(); ++ci)
+        detail::cluster_cells(sc_.clusters[ci], L_, mx_, my_, [&](int i0, int i1, int j) {
             for (int i = i0; i <= i1; ++i) owner[std::size_t(cell(i, j))] = int(ci);
-    }
+        });
     // Groups: one per (material, ppc); masses quantised so that sums are exact.
     std::vector<std::pair<int, int>> keys;  // (material index, ppc)
     std::vector<double> count;
@@ -5418,16 +5644,15 @@ inline void Simulation::setup_dynamics() {
         if (k.baseline) detail::baseline_trend(k, dt, g.c0, g.c1);
     }
     // The material each edge cell's points were made of (the last cluster holding its centre).
-    auto material_of = [&](int i, int j) -> const Material* {
-        const Material* m = nullptr;
-        for (const Cluster& c : sc_.clusters) {
-            int i0, i1, j0, j1;
-            detail::cell_span(c.box.x0, c.box.x1, L_, mx_, i0, i1);
-            detail::cell_span(c.box.y0, c.box.y1, L_, my_, j0, j1);
-            if (i >= i0 && i <= i1 && j >= j0 && j <= j1) m = sc_.material(c.mat);
-        }
-        return m;
-    };
+    std::vector<const Material*> made_of;  // per cell, for the edges that absorb
+    if (edges) {
+        made_of.assign(std::size_t(mx_) * my_, nullptr);
+        for (const Cluster& c : sc_.clusters)
+            detail::cluster_cells(c, L_, mx_, my_, [&](int i0, int i1, int j) {
+                for (int i = i0; i <= i1; ++i) made_of[std::size_t(cell(i, j))] = sc_.material(c.mat);
+            });
+    }
+    auto material_of = [&](int i, int j) { return made_of[std::size_t(cell(i, j))]; };
     std::vector<std::int32_t> slot_of(std::size_t(mx_ + 1) * (my_ + 1), -1);
     // Edge e: its cells (i, j) = start + k step, k < count, and each cell's two nodes on the edge.
     struct Edge { int bit, i, j, di, dj, count; bool horizontal; };
@@ -6089,9 +6314,10 @@ public:
     };
     // The positional fields of card (kDeckKeys, in order) into scene object `index` of sc,
     // each checked against its range.
-    void fields(const char* card, Scene& sc, std::size_t index) {
+    // With `only`, that field alone.
+    void fields(const char* card, Scene& sc, std::size_t index, const char* only = nullptr) {
         for (const DeckKey& k : kDeckKeys) {
-            if (k.param || std::strcmp(k.card, card) != 0 || !ok_) continue;
+            if (k.param || std::strcmp(k.card, card) != 0 || !ok_ || (only && std::strcmp(k.name, only) != 0)) continue;
             const Token* t = peek();
             const double v = k.whole ? double(integer(k.what, long(k.lo), long(k.hi))) : real(k.what);
             if (!ok_) return;
@@ -6306,9 +6532,33 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
         } else if (kw == "CLUSTER") {
             ++cluster_cards;
             sc.clusters.emplace_back();
-            sc.clusters.back().pos = kp;
-            r.fields("CLUSTER", sc, sc.clusters.size() - 1);
-            r.parameters("CLUSTER", 0, sc, sc.clusters.size() - 1);
+            const std::size_t at = sc.clusters.size() - 1;
+            sc.clusters[at].pos = kp;
+            if (toks.size() > 2 && upper(toks[2].text) == "POLYGON") {
+                // CLUSTER mat POLYGON x1 y1 x2 y2 x3 y3 ...: numbers up to the parameters.
+                r.fields("CLUSTER", sc, at, "MAT");
+                const Token* word = r.field("POLYGON");
+                Cluster& c = sc.clusters[at];
+                while (r.ok() && r.more_positional()) {
+                    const std::size_t k = c.polygon.size();
+                    const std::string what = "vertex " + std::to_string(k / 2 + 1) + (k % 2 ? " y" : " x");
+                    const Token* t = r.field(what.c_str());
+                    double v = 0;
+                    if (t && r.number(*t, what.c_str(), v)) {
+                        c.polygon.push_back(v);
+                        c.polygon_pos.push_back(t->pos);
+                    }
+                }
+                const std::size_t n = c.polygon.size();
+                if (r.ok() && (n % 2 || n < 6 || n / 2 > kMaxPolygonVertices)) {  // the count; the shape is validate()'s
+                    std::size_t bad = 0;
+                    const std::string problem = polygon_problem(c.polygon, bad);
+                    r.fail(bad < n ? c.polygon_pos[bad] : word->pos, problem);
+                }
+            } else {
+                r.fields("CLUSTER", sc, at);
+            }
+            r.parameters("CLUSTER", 0, sc, at);
             if (!r.ok()) sc.clusters.pop_back();
         } else if (kw == "FIX") {
             Fix f;
