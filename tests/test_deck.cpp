@@ -158,6 +158,194 @@ TEST_CASE("deck: CLUSTER takes a material, a box and PPC=2 unless given") {
     CHECK(b.pos.line == 4);
 }
 
+// ============================================================ POLYGON ===
+
+namespace {
+// The cells (j mx + i) cluster k of s fills, in order.
+std::vector<int> cells_of(const Scene& s, std::size_t k) {
+    std::vector<int> v;
+    lpfdm::detail::cluster_cells(s.clusters.at(k), s.cell_m, s.mx, s.my, [&](int i0, int i1, int j) {
+        for (int i = i0; i <= i1; ++i) v.push_back(j * s.mx + i);
+    });
+    return v;
+}
+// The cells a whole scene's clusters fill, each once, in order.
+std::vector<int> all_cells(const Scene& s) {
+    std::vector<char> in(std::size_t(s.mx) * s.my, 0);
+    for (std::size_t k = 0; k < s.clusters.size(); ++k)
+        for (int c : cells_of(s, k)) in[std::size_t(c)] = 1;
+    std::vector<int> v;
+    for (std::size_t c = 0; c < in.size(); ++c)
+        if (in[c]) v.push_back(int(c));
+    return v;
+}
+}  // namespace
+
+TEST_CASE("deck: CLUSTER mat POLYGON x1 y1 x2 y2 ... takes the vertices, their places and PPC") {
+    const Scene s = read_ok(kGrid + kMaterial + "CLUSTER 1 polygon 0 0 2 0 2 2 0 2 PPC=3\n" + kStep);
+    REQUIRE(s.clusters.size() == 1);
+    const lpfdm::Cluster& c = s.clusters[0];
+    CHECK(c.mat == 1);
+    CHECK(c.ppc == 3);
+    CHECK(c.polygon == std::vector<double>{0, 0, 2, 0, 2, 2, 0, 2});
+    REQUIRE(c.polygon_pos.size() == 8);
+    CHECK(c.polygon_pos[2].line == 3);
+    CHECK(c.polygon_pos[2].col == 23);
+    CHECK(lpfdm::count_points(s) == 4 * 9);
+}
+
+// A centre on an edge of the polygon (or within L/1000 of it in x and in y) counts as
+// inside, as a box's does: a polygon with a box's corners, in either orientation and
+// starting at any corner, fills the box's cells, also where its edges pass through
+// centres, lie a thousandth of a cell from them, or the box is a line.
+TEST_CASE("deck: a POLYGON with a box's corners fills exactly the box's cells, in either orientation") {
+    const char* boxes[] = {"0 0 4 4", "0.5 0.5 1.5 1.5", "0.25 0.25 2.75 1.75", "0.2495 0.5 1.7505 3.2", "0.2515 0.5 1.7485 3.2",
+                           "1 1 3 1.25", "0 0 2.3 0.9", "1.25 0.25 1.5 3.75"};
+    for (const char* b : boxes) {
+        double x0, y0, x1, y1;
+        REQUIRE(std::sscanf(b, "%lf %lf %lf %lf", &x0, &y0, &x1, &y1) == 4);
+        auto num = [](double v) { return lpfdm::shortest(v); };
+        const std::string X0 = num(x0), Y0 = num(y0), X1 = num(x1), Y1 = num(y1);
+        const std::string ccw = X0 + " " + Y0 + " " + X1 + " " + Y0 + " " + X1 + " " + Y1 + " " + X0 + " " + Y1;
+        const std::string cw = X1 + " " + Y1 + " " + X1 + " " + Y0 + " " + X0 + " " + Y0 + " " + X0 + " " + Y1;
+        const Scene box = read_ok("GRID 8 8 0.5\n" + kMaterial + "CLUSTER 1 " + b + "\n" + kStep);
+        const Scene p1 = read_ok("GRID 8 8 0.5\n" + kMaterial + "CLUSTER 1 POLYGON " + ccw + "\n" + kStep);
+        const Scene p2 = read_ok("GRID 8 8 0.5\n" + kMaterial + "CLUSTER 1 POLYGON " + cw + "\n" + kStep);
+        INFO("box " << b);
+        CHECK(!cells_of(box, 0).empty());
+        CHECK(cells_of(p1, 0) == cells_of(box, 0));
+        CHECK(cells_of(p2, 0) == cells_of(box, 0));
+        CHECK(lpfdm::count_points(p1) == lpfdm::count_points(box));
+    }
+}
+
+TEST_CASE("deck: a concave POLYGON (an L) fills the cells whose centres lie inside it") {
+    const Scene s = read_ok(kGrid + kMaterial + "CLUSTER 1 POLYGON 0 0 4 0 4 1 1 1 1 4 0 4 PPC=1\n" + kStep);
+    // Row 0 whole, then column 0: the centres (1.5, 1.5) ... lie outside the notch's edges.
+    CHECK(cells_of(s, 0) == std::vector<int>{0, 1, 2, 3, 4, 8, 12});
+    // The same L clockwise, from another vertex.
+    const Scene t = read_ok(kGrid + kMaterial + "CLUSTER 1 POLYGON 1 4 1 1 4 1 4 0 0 0 0 4 PPC=1\n" + kStep);
+    CHECK(cells_of(t, 0) == cells_of(s, 0));
+    // An edge through a row of centres takes them: the notch's corner at (1.5, 1.5).
+    const Scene u = read_ok(kGrid + kMaterial + "CLUSTER 1 POLYGON 0 0 4 0 4 1.5 1.5 1.5 1.5 4 0 4 PPC=1\n" + kStep);
+    CHECK(cells_of(u, 0) == std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 12, 13});
+}
+
+// decks/quake_slope.deck's slope, once a staircase of 13 boxes: the face from (12, 0) to
+// (6, 6) passes through the centres of the cells the staircase ended with, so the
+// polygon fills the same cells; and the staircase's own outline (50 vertices, over
+// continuation lines) fills them too.
+TEST_CASE("deck: a 45 degree POLYGON fills the staircase of boxes it replaced; 50 vertices over & lines") {
+    std::string boxes = "CLUSTER 1 0 0 6 6\n";
+    for (int j = 0; j < 12; ++j)
+        boxes += "CLUSTER 1 6 " + lpfdm::shortest(0.5 * j) + " " + lpfdm::shortest(11.75 - 0.5 * j) + " " + lpfdm::shortest(0.5 * j + 0.5) + "\n";
+    const std::string grid = "GRID 40 16 0.5\n" + kMaterial;
+    const Scene stairs = read_ok(grid + boxes + kStep);
+    const Scene slope = read_ok(grid + "CLUSTER 1 POLYGON 0 0  12 0  6 6  0 6\n" + kStep);
+    CHECK(all_cells(stairs).size() == 144 + 78);
+    CHECK(cells_of(slope, 0) == all_cells(stairs));
+    // The outline, a step of 0.5 m per row, up 24 rows of a finer lattice: 50 vertices,
+    // 4 to a line.
+    std::vector<double> v = {0, 0, 12, 0};
+    for (int j = 0; j < 24; ++j) {
+        const double y = 0.25 * (j + 1), x = 12 - 0.25 * j;
+        v.insert(v.end(), {x, y, x - 0.25, y});
+    }
+    v.back() = 6;  // the last step's top, x = 6
+    v.insert(v.end(), {0, 6});
+    v.erase(v.end() - 4, v.end() - 2);  // (6, 6) follows (6.25, 6): one vertex, not two
+    REQUIRE(v.size() == 100);
+    std::string card = "CLUSTER 1 POLYGON";
+    for (std::size_t k = 0; k < v.size(); ++k) card += (k % 8 == 0 ? " &\n  " : " ") + lpfdm::shortest(v[k]);
+    std::string fine_boxes = "CLUSTER 1 0 0 6 6\n";
+    for (int j = 0; j < 24; ++j)
+        fine_boxes += "CLUSTER 1 6 " + lpfdm::shortest(0.25 * j) + " " + lpfdm::shortest(12 - 0.25 * j) + " " + lpfdm::shortest(0.25 * j + 0.25) + "\n";
+    const std::string fine = "GRID 80 32 0.25\n" + kMaterial;
+    const Scene outline = read_ok(fine + card + "\n" + kStep);
+    REQUIRE(outline.clusters.size() == 1);
+    CHECK(outline.clusters[0].polygon == v);
+    CHECK(outline.clusters[0].polygon_pos.back().line == 3 + 13);  // the 13th continuation line
+    CHECK(cells_of(outline, 0) == all_cells(read_ok(fine + fine_boxes + kStep)));
+}
+
+TEST_CASE("deck: a later cluster replaces an earlier one in a cell, polygon or box") {
+    const std::string mats = "MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nMATERIAL 2 ELASTIC E=5E7 NU=0.3 RHO=1000\n";
+    auto materials = [](const Scene& s) {  // the material id of each cell's points, by cell
+        lpfdm::Simulation sim(s);
+        std::vector<int> m(std::size_t(s.mx * s.my), 0);
+        const lpfdm::Points& p = sim.points();
+        for (std::size_t k = 0; k < p.x.size(); ++k)
+            m[std::size_t(int(p.y[k] / s.cell_m) * s.mx + int(p.x[k] / s.cell_m))] = s.materials[std::size_t(sim.groups()[p.group[k]].mat_index)].id;
+        return m;
+    };
+    const Scene a = read_ok(kGrid + mats + "CLUSTER 1 0 0 4 4\nCLUSTER 2 POLYGON 0 0 4 0 0 4\n" + kStep);
+    const Scene b = read_ok(kGrid + mats + "CLUSTER 2 POLYGON 0 0 4 0 0 4\nCLUSTER 1 1 1 4 4\n" + kStep);
+    CHECK(lpfdm::count_points(a) == 64);
+    CHECK(materials(a) == std::vector<int>{2, 2, 2, 2, 2, 2, 2, 1, 2, 2, 1, 1, 2, 1, 1, 1});
+    CHECK(materials(b) == std::vector<int>{2, 2, 2, 2, 2, 1, 1, 1, 2, 1, 1, 1, 2, 1, 1, 1});
+}
+
+TEST_CASE("deck error: a POLYGON's count of numbers, at the word POLYGON or the odd number") {
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 2 2"), 5, 11, "a polygon needs at least 3 vertices (x y pairs); this one has 2");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON PPC=2"), 5, 11, "a polygon needs at least 3 vertices (x y pairs); this one has 0");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 2 0 2 2 0 PPC=2"), 5, 31, "vertex 4 has an x but no y: a polygon takes x y pairs (7 numbers given)");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 2 0 2 x"), 5, 29, "vertex 3 y: expected a number, found 'x'");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 2 0 2 2 PCC=2"), 5, 31, "unknown parameter 'PCC'");
+    CHECK_ONE_ERROR(plus("CLUSTER 9 POLYGON 0 0 2 0 2 2"), 5, 1, "material 9 is not defined");
+}
+
+TEST_CASE("deck error: a POLYGON's vertex repeated, no area, crossing itself: at the vertex") {
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 2 0 2 0 2 2"), 5, 27, "vertex 3 (2, 0) repeats the vertex before it");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 2 0 2 2 0 2 0 0"), 5, 35, "the last vertex (0, 0) repeats the first: a polygon closes by itself");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 1 1 3 3"), 5, 1, "the polygon has no area: its vertices lie on one line");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 3 0 1 0"), 5, 1, "the polygon has no area");
+    // A bow tie: the edge from vertex 3 to vertex 4 crosses the first; at vertex 4's x, on its line.
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 1 1 3 3 &\n  3 1 1 3"), 6, 7,
+                    "the polygon crosses itself: the edge from vertex 3 to vertex 4 meets the edge from vertex 1 to vertex 2");
+    // Where it first crosses: the end of the first edge that meets an earlier one.
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 4 0 4 3 1 3 1 1 3 4"), 5, 39,
+                    "the polygon crosses itself: the edge from vertex 5 to vertex 6 meets the edge from vertex 3 to vertex 4");
+    // Only the edge back from the last vertex to the first crosses: at the last vertex.
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 2 0 2 3 3 3 3 1"), 5, 35,
+                    "the polygon crosses itself: the edge from vertex 5 back to vertex 1 meets the edge from vertex 2 to vertex 3");
+    // Touching at a vertex is meeting; running back along an edge too.
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 4 0 2 2 4 4 0 4 2 2"), 5, 39, "the polygon crosses itself");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 4 0 4 2 4 1 0 3"), 5, 31, "the edge from vertex 3 to vertex 4 runs back along the edge from vertex 2 to vertex 3");
+    // A vertex in the middle of a straight edge is no crossing.
+    CHECK(cells_of(read_ok(plus("CLUSTER 1 POLYGON 0 0 1 0 2 0 2 2 0 2")), 1) == cells_of(read_ok(kBase), 0));
+}
+
+TEST_CASE("deck error: a POLYGON reaching outside the lattice names each vertex and edge, at the first vertex past it") {
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 2 0 6 2 0 2"), 5, 27,
+                    "the cluster polygon reaches outside the lattice: vertex 3 x = 6 m is past its right edge x = 4 m (the lattice is [0, 4] x [0, 4] m)");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 2 -0.5 2 2 -1 5"), 5, 25,
+                    "vertex 2 y = -0.5 m is past its bottom edge y = 0 m; vertex 4 x = -1 m is past its left edge x = 0 m; vertex 4 y = 5 m is past its top edge y = 4 m");
+    read_ok(plus("CLUSTER 1 POLYGON 0 0 4.0009 0 4 4"));  // a thousandth of a cell past it: inside
+}
+
+TEST_CASE("deck error: a box or POLYGON holding no cell centre names the nearest one") {
+    CHECK_ONE_ERROR(plus("CLUSTER 1 0 0 0.4 4"), 5, 1, "the cluster box holds no cell centre: the nearest is (0.5, 0.5) m, 0.1 m from it");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 2.6 2.7 2.9 3.3"), 5, 1, "the cluster box holds no cell centre: the nearest is (2.5, 2.5) m, 0.224 m from it");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 1 1 1 3"), 5, 1, "the cluster box holds no cell centre: the nearest is (0.5, 1.5) m, 0.5 m from it");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 1.6 4 1.6 4 1.9 0 1.9"), 5, 1,
+                    "the cluster polygon holds no cell centre: the nearest is (0.5, 1.5) m, 0.1 m from it");
+    // A triangle between the centres (1.5, 1.5), (2.5, 1.5) and (1.5, 2.5): nearest the first.
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 1.6 1.55 2.3 1.55 1.6 2.2"), 5, 1, "the nearest is (1.5, 1.5) m, 0.112 m from it");
+}
+
+TEST_CASE("apply_setting: CLUSTERn.PPC and .MAT on a POLYGON; its corners are not a box's") {
+    lpfdm::Scene s = read_ok(plus("CLUSTER 1 POLYGON 0 0 4 0 0 4"));
+    CHECK(lpfdm::apply_setting(s, "CLUSTER2.PPC", 3).empty());
+    CHECK(s.clusters[1].ppc == 3);
+    CHECK(lpfdm::apply_setting(s, "CLUSTER2.MAT", 1).empty());
+    CHECK(lpfdm::apply_setting(s, "CLUSTER2.X0", 1) ==
+          "CLUSTER 2 is a POLYGON: X0 is a box's corner, and --set cannot move a polygon's vertices (it takes MAT, PPC)");
+    CHECK(lpfdm::apply_setting(s, "CLUSTER2.Y1", 1).find("is a POLYGON") != std::string::npos);
+    CHECK(lpfdm::apply_setting(s, "CLUSTER1.Y1", 3).empty());  // the box beside it
+    CHECK(s.clusters[0].box.y1 == 3);
+    CHECK(lpfdm::validate(s).empty());
+}
+
 TEST_CASE("deck: FIX X, Y and XY hold the nodes of a box in that direction") {
     const Scene s = read_ok(kBase + "FIX X 0 0 0 4\nFIX Y 4 0 4 4\nFIX XY 0 0 4 0\nFIX YX 0 4 4 4\n");
     REQUIRE(s.fixes.size() == 4);
@@ -250,6 +438,8 @@ TEST_CASE("deck: every card of the deck language (decks/README.md) in one scene"
         "MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=1900 PHI=35 C=1E3 PSI=5 TENSION=500 SOFTEN=0.5 SCATTER=0.2\n"
         "CLUSTER 1 0 0 20 2\n"
         "CLUSTER 2 0 2 10 8 PPC=3\n"
+        "CLUSTER 2 POLYGON 10 2 14 2 &\n"
+        "  10 6 PPC=3\n"
         "FIX X  0 0 0 12\n"
         "FIX Y  20 0 20 12\n"
         "FIX XY 0 0 20 0\n"
@@ -263,11 +453,12 @@ TEST_CASE("deck: every card of the deck language (decks/README.md) in one scene"
         "END\n");
     CHECK(s.title == "Sand heap pushed by a wall");
     CHECK(s.materials.size() == 2);
-    CHECK(s.clusters.size() == 2);
+    CHECK(s.clusters.size() == 3);
+    CHECK(s.clusters[2].polygon.size() == 6);
     CHECK(s.fixes.size() == 3);
     CHECK(s.walls.size() == 1);
     CHECK(s.outputs.size() == 2);
-    CHECK(s.end_pos.line == 17);
+    CHECK(s.end_pos.line == 19);
 }
 
 // ======================================================= lexical rules ===
