@@ -23,7 +23,7 @@ help:
 	@echo "make test     unit tests (-O2 and ASan+UBSan) and deck tests"
 	@echo "make quake    build and run the cliff brought down by an earthquake, draw $(OUT)/quake_cliff.png and $(OUT)/quake_cliff.gif"
 	@echo "make figures  run the paper's three scenes and draw them into $(OUT)/"
-	@echo "make verify   verification ladder (both mappings, and ADVECT FLIP, for column, PSC, footing): out/verify.tsv, work-precision and convergence plots"
+	@echo "make verify   the unit tests tagged [verify], then the verification ladder (both mappings, and ADVECT FLIP, for column, PSC, footing): out/verify.tsv, work-precision and convergence plots"
 	@echo "make fuzz     fuzz the deck reader with libFuzzer (FUZZ_SECONDS, default 1800)"
 	@echo "make bench    particle-steps/s on the benchmark scenes (two of them whole runs), 1 and 2 threads, against the reference kernel"
 	@echo "make clean    remove what the build made"
@@ -119,7 +119,9 @@ quake: lpfdm | picture-deps
 	@echo "pictures: $(OUT)/quake_cliff.png $(OUT)/quake_cliff.gif"
 
 # Verification ladder (resolutions, points per cell) against closed-form references.
-verify: lpfdm | picture-deps
+# The unit tests tagged [verify] first: finer or longer versions of make test's cases.
+verify: lpfdm build/tests | picture-deps
+	OMP_NUM_THREADS=1 build/tests --no-version=1 --test-case='*[verify]*'
 	@mkdir -p $(OUT)
 	bash tools/verify.sh ./lpfdm $(OUT)
 	VERIFY_MAPPING=SMOOTH VERIFY_APPEND=1 bash tools/verify.sh ./lpfdm $(OUT) column psc footing
