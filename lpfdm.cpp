@@ -314,7 +314,7 @@ int main(int argc, char** argv) {
         if (opt.seed >= 0) scene.seed = std::uint64_t(opt.seed);
         const lpfdm::Diagnostics v = lpfdm::validate(scene, unread);
         diags.insert(diags.end(), v.begin(), v.end());
-        if (!unread.grid && scene.mx > 0 && scene.my > 0 && scene.cell_m > 0) {
+        if (v.empty() && !unread.grid && scene.mx > 0 && scene.my > 0 && scene.cell_m > 0) {  // (a scene validate refused may not be counted)
             const double points = lpfdm::count_points(scene);
             const double need = lpfdm::estimate_bytes(scene, points), have = physical_memory_bytes();
             if (have > 0 && need > 0.8 * have)

@@ -648,12 +648,14 @@ inline bool key_ok(const DeckKey& k, double v, const Scene& s, std::size_t index
     if (std::strcmp(k.name, "PSI") == 0 && std::strcmp(k.card, "MATERIAL") == 0 && !(v <= s.materials[index].phi_deg)) return false;
     return in_range(k, v, unset);
 }
-// x in the fewest significant digits that read back as x (0.1 as "0.1", 6 as "6"): a
-// number of the deck as it was written, in a message.
+// x in the fewest digits that read back as x (0.1 as "0.1", 6 as "6", 20 as "20", not
+// "2e+01"): a number of the deck as it was written, in a message. Exponents only outside
+// [1e-4, 1e15).
 inline std::string shortest(double x) {
-    char b[32];
-    for (int p = 1; p <= 17; ++p) {
-        std::snprintf(b, sizeof b, "%.*g", p, x);
+    char b[48];
+    const bool plain = x == 0 || (std::fabs(x) >= 1e-4 && std::fabs(x) < 1e15);
+    for (int p = plain ? 0 : 1; p <= 17; ++p) {
+        std::snprintf(b, sizeof b, plain ? "%.*f" : "%.*g", p, x);
         if (std::strtod(b, nullptr) == x) break;
     }
     return b;
@@ -1705,6 +1707,7 @@ inline void cluster_cells(const Cluster& c, double L, int mx, int my, const F& f
     std::vector<double> xs;
     std::vector<std::pair<int, int>> runs;
     auto run = [&](double a, double b) {  // the cells whose centres' x lies in [a, b]
+        if (std::isnan(a) || std::isnan(b)) return;  // (a polygon of huge numbers, refused by validate)
         const int i0 = int(std::clamp(std::ceil(a / L - 0.5), 0.0, double(mx)));
         const int i1 = int(std::clamp(std::floor(b / L - 0.5), -1.0, double(mx - 1)));
         if (i0 <= i1) runs.push_back({i0, i1});
