@@ -6,6 +6,12 @@
 
 #include <doctest/doctest.h>
 
+#include <filesystem>
+#include <string>
+#include <system_error>
+
+#include <unistd.h>
+
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180;  // radians per degree
@@ -17,6 +23,19 @@ constexpr double kDeg = kPi / 180;  // radians per degree
 // comparison of the tests is this one. The comparison is strict, so approx(0) passes
 // nothing, not even 0: where a value may be zero, .scale(s) gives the floor s.
 inline doctest::Approx approx(double v) { return doctest::Approx(v).scale(0); }
+
+// A directory name of this test process's own, "build/NAME.PID": make test runs the -O2
+// and the sanitizer builds of the unit tests at once, and two runs writing the same files
+// would read each other's.
+// OwnDir made is that directory, created; gone with the object.
+inline std::string own_dir(const std::string& name) { return "build/" + name + "." + std::to_string(::getpid()); }
+struct OwnDir {
+    std::string path;
+    explicit OwnDir(const std::string& name) : path(own_dir(name)) { std::filesystem::create_directories(path); }
+    ~OwnDir() { std::error_code e; std::filesystem::remove_all(path, e); }
+    OwnDir(const OwnDir&) = delete;
+    OwnDir& operator=(const OwnDir&) = delete;
+};
 }  // namespace
 
 #endif

@@ -14,6 +14,8 @@
 #include <functional>
 #include <string>
 
+#include <unistd.h>
+
 namespace {
 
 using lpfdm::Diagnostics;
@@ -1601,7 +1603,7 @@ TEST_CASE("restart: a state file whose points do not fit the scene is refused, c
     std::size_t yielded = 0;
     for (std::uint8_t y : sim.points().yielded) yielded += y;
     REQUIRE(yielded > 0);
-    const std::filesystem::path dir = std::filesystem::temp_directory_path() / "lpfdm_test_state";
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("lpfdm_test_state." + std::to_string(::getpid()));  // (the two builds of make test run at once)
     std::filesystem::create_directories(dir);
     const std::string good = (dir / "good.state").string(), bad = (dir / "bad.state").string();
     std::FILE* f = std::fopen(good.c_str(), "wb");

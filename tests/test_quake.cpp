@@ -405,8 +405,8 @@ TEST_CASE("quake: an absorbing edge released at START keeps a column at rest und
 }
 
 TEST_CASE("quake: the motion file's problems are reported at its own line and column") {
-    const std::string dir = "build/quake_motion";
-    std::filesystem::create_directories(dir);
+    const OwnDir own("quake_motion");
+    const std::string& dir = own.path;
     auto motion = [&](const std::string& name, const std::string& text) {
         std::ofstream(dir + "/" + name) << text;
     };
@@ -428,17 +428,17 @@ TEST_CASE("quake: the motion file's problems are reported at its own line and co
     motion("good.txt", "# t a\n0, 0\n0.1, 1   # a comment\n\n0.2 0\n");
     motion("crlf.txt", "\xEF\xBB\xBF# a byte order mark, CR LF\r\n0 0\r\n0.1 1\r\n0.2 0\r\n");
     motion("cr.txt", "# old Mac line ends\r0 0\r0.1 1\r0.2 0\r");
-    CHECK(first("SHAKE X FILE=nowhere.txt") == "build/quake_motion/t.deck:6:14: error: cannot open the motion file 'build/quake_motion/nowhere.txt': No such file or directory (a relative FILE= is read from the deck's directory)");
-    CHECK(first("SHAKE X FILE=empty.txt") == "build/quake_motion/empty.txt:1:1: error: the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
-    CHECK(first("SHAKE X FILE=comments.txt") == "build/quake_motion/comments.txt:1:1: error: the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
-    CHECK(first("SHAKE X FILE=one.txt") == "build/quake_motion/one.txt:1:1: error: the motion file holds one sample; a record needs at least two");
-    CHECK(first("SHAKE X FILE=word.txt") == "build/quake_motion/word.txt:2:5: error: acceleration: expected a finite number, found 'abc'");
-    CHECK(first("SHAKE X FILE=three.txt") == "build/quake_motion/three.txt:2:7: error: expected two numbers, time [s] and acceleration [m/s^2]; this line has 3");
-    CHECK(first("SHAKE X FILE=back.txt") == "build/quake_motion/back.txt:3:1: error: time 0.1 s does not come after the line before's 0.2 s: times must increase");
-    CHECK(first("SHAKE X FILE=same.txt") == "build/quake_motion/same.txt:3:1: error: time 0.1 s does not come after the line before's 0.1 s: times must increase");
-    CHECK(first("SHAKE X FILE=negative.txt") == "build/quake_motion/negative.txt:1:1: error: time -0.1 s is before 0: the record starts at time 0 or later");
-    CHECK(first("SHAKE X FILE=nan.txt") == "build/quake_motion/nan.txt:2:5: error: acceleration: expected a finite number, found 'nan'");
-    CHECK(first("SHAKE X FILE=.") .find("cannot read the motion file 'build/quake_motion/.': it is a directory") != std::string::npos);
+    CHECK(first("SHAKE X FILE=nowhere.txt") == dir + "/t.deck:6:14: error: cannot open the motion file '" + dir + "/nowhere.txt': No such file or directory (a relative FILE= is read from the deck's directory)");
+    CHECK(first("SHAKE X FILE=empty.txt") == dir + "/empty.txt:1:1: error: the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
+    CHECK(first("SHAKE X FILE=comments.txt") == dir + "/comments.txt:1:1: error: the motion file holds no samples (two numbers a line: time [s], acceleration [m/s^2])");
+    CHECK(first("SHAKE X FILE=one.txt") == dir + "/one.txt:1:1: error: the motion file holds one sample; a record needs at least two");
+    CHECK(first("SHAKE X FILE=word.txt") == dir + "/word.txt:2:5: error: acceleration: expected a finite number, found 'abc'");
+    CHECK(first("SHAKE X FILE=three.txt") == dir + "/three.txt:2:7: error: expected two numbers, time [s] and acceleration [m/s^2]; this line has 3");
+    CHECK(first("SHAKE X FILE=back.txt") == dir + "/back.txt:3:1: error: time 0.1 s does not come after the line before's 0.2 s: times must increase");
+    CHECK(first("SHAKE X FILE=same.txt") == dir + "/same.txt:3:1: error: time 0.1 s does not come after the line before's 0.1 s: times must increase");
+    CHECK(first("SHAKE X FILE=negative.txt") == dir + "/negative.txt:1:1: error: time -0.1 s is before 0: the record starts at time 0 or later");
+    CHECK(first("SHAKE X FILE=nan.txt") == dir + "/nan.txt:2:5: error: acceleration: expected a finite number, found 'nan'");
+    CHECK(first("SHAKE X FILE=.") .find("cannot read the motion file '" + dir + "/.': it is a directory") != std::string::npos);
     CHECK(first("SHAKE X FILE=/dev/zero").find("cannot read the motion file '/dev/zero': it is not a regular file") != std::string::npos);
     CHECK(first("SHAKE X FILE=good.txt") == "no error");
     for (const char* name : {"crlf.txt", "cr.txt"}) {
@@ -520,8 +520,8 @@ TEST_CASE("quake: a warning when the ground moves more than a quarter cell (the 
     // A record of constant acceleration 0.1 m/s^2 for 10 s, a run of 4 s: the ground moves
     // 0.1 (4)^2 / 2 = 0.8 m, 0.8 of a cell. BASELINE takes the whole record off (a constant
     // is a trend): no motion, no warning.
-    const std::string dir = "build/quake_motion";
-    std::filesystem::create_directories(dir);
+    const OwnDir own("quake_motion");
+    const std::string& dir = own.path;
     std::ofstream(dir + "/drift.txt") << "0 0.1\n10 0.1\n";
     const std::string deck = "GRID 8 20 1.0\nMATERIAL 1 ELASTIC E=5E7 NU=0.25 RHO=2000\nCLUSTER 1 2 0 6 20\nFIX XY 0 0 8 0\nSTEP 2E-3 2000\n";
     for (const bool baseline : {false, true}) {
@@ -586,8 +586,8 @@ TEST_CASE("quake: with a rigid base, side dashpots act on the motion relative to
 TEST_CASE("quake: a long record costs its samples once, not once a step") {
     // 100 000 samples (100 s at 1 ms) with BASELINE and a short run: the record's cursor
     // moves forward with the time asked; scanning from the first sample every step took 96 s.
-    const std::string dir = "build/quake_motion";
-    std::filesystem::create_directories(dir);
+    const OwnDir own("quake_motion");
+    const std::string& dir = own.path;
     {
         std::ofstream f(dir + "/long.txt");
         for (int k = 0; k <= 100000; ++k) f << k * 1e-3 << " " << std::sin(k * 1e-3 * 2 * kPi) << "\n";
