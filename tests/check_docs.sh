@@ -35,11 +35,12 @@ fail() { echo "FAIL docs $1"; failed=$((failed + 1)); }
 
 tmp=$(mktemp -d) || exit 2
 trap 'rm -rf "$tmp"' EXIT
-# The copy: the project as a checkout has it (no build/ or out/), ./lpfdm the program
-# under test, newer than its sources so that make takes it as built.
+# The copy: the project's own files as a checkout has them (no build directory, no
+# outputs), ./lpfdm the program under test, newer than its sources so that make takes it
+# as built.
 copy=$tmp/lpfdm
 mkdir -p "$copy"
-tar --exclude=./build --exclude=./out --exclude=./.git --exclude=./lpfdm -cf - . | tar -xf - -C "$copy" || exit 2
+tar -cf - Makefile CMakeLists.txt lpfdm.cpp lpfdm.hpp README.md LICENSE decks tests tools | tar -xf - -C "$copy" || exit 2
 cat >"$copy/lpfdm" <<EOF
 #!/bin/sh
 # The program under test; DOCS_STEPS shortens the run (a later --steps still wins).
@@ -123,12 +124,17 @@ for doc in $docs; do
         awk -v nots="$k.not" -v where="$where" -v list="$k.list" '
             BEGIN { while ((getline l < nots) > 0) { n++; split(l, a, "\t"); pre[n] = a[1]; why[n] = a[2] } }
             {
-                if (!cont) { drop = 0; for (i = 1; i <= n; i++) if (index($0, pre[i]) == 1) { drop = 1; printf "%s: %s: %s\n", where, pre[i], why[i] > list } }
+                if (!cont) { drop = 0; for (i = 1; i <= n; i++) if (index($0, pre[i]) == 1) { drop = 1; used[i] = 1; printf "%s: %s: %s\n", where, pre[i], why[i] > list } }
                 cont = /\\$/
                 if (!drop) print
-            }' "$k.sh" >"$script"
+            }
+            END { for (i = 1; i <= n; i++) if (!used[i]) printf "%s\n", pre[i] > (list ".unused") }' "$k.sh" >"$script"
+        if [ -s "$k.list.unused" ]; then  # a marker that leaves out nothing: the line it meant now runs, or is gone
+            fail "$where: no line of the block begins with $(sed 's/.*/"&"/' "$k.list.unused" | paste -sd ' ')"
+        fi
         [ -s "$k.list" ] && while IFS= read -r l; do notrun+=("$l"); done <"$k.list"
         if ! grep -qv '^[[:space:]]*\(#.*\)\{0,1\}$' "$script"; then
+            [ -s "$k.list" ] || notrun+=("$where (whole block): it holds no command")
             continue  # every line of it listed as not run
         fi
         start=$SECONDS

@@ -7,8 +7,8 @@
 #      floor, where a value may be zero, is written with .scale(s) at the comparison.
 #      doctest::Approx, an Approx( of the doctest namespace, and a `using` of it are
 #      refused outside tests/common.hpp;
-#   2. `make lpfdm` installs only what the program needs (fmt): the Makefile's PACKAGES,
-#      the list its `deps` installs, is libfmt-dev alone.
+#   2. `make lpfdm` installs only what the program needs (fmt): the recipe of `deps`, as
+#      `make -n` prints it, checks for and installs libfmt-dev alone.
 # The rules are tested on themselves: a line of each kind written into a copy must be
 # found.
 #
@@ -46,9 +46,18 @@ if [ "$n_bad" -eq 3 ] && [ "$n_good" -eq 0 ]; then passed=$((passed + 1)); else
     fail "the Approx rule finds $n_bad of 3 bad lines and $n_good good ones"
 fi
 
-packages=$(make -s -p -n -f Makefile deps 2>/dev/null | sed -nE 's/^PACKAGES *:?= *//p' | head -n 1)
+# deps_of MAKEFILE: the packages the recipe of its `deps` (what `make lpfdm` runs first)
+# checks for and installs, as make would run it.
+deps_of() { make -s -n -f "$1" deps 2>/dev/null | grep -o 'for p in [^;]*;' | head -n 1 | sed -E 's/^for p in +//; s/ *;$//'; }
+packages=$(deps_of Makefile)
 if [ "$packages" = "libfmt-dev" ]; then passed=$((passed + 1)); else
     fail "make lpfdm installs '$packages', where the program needs only libfmt-dev"
+fi
+# the rule sees a deps that installs more
+sed 's/^\(\tdeps\|\t@$(call install_missing,$(PACKAGES))\)$/\t@$(call install_missing,$(PACKAGES) $(PICTURE_PACKAGES))/' Makefile >"$tmp/Makefile"
+more=$(deps_of "$tmp/Makefile")
+if [ "$more" = "libfmt-dev gnuplot-nox" ]; then passed=$((passed + 1)); else
+    fail "the package rule does not see a deps that installs gnuplot too (it read '$more')"
 fi
 
 echo "lint: $passed passed, $failed failed"
