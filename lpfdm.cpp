@@ -7,6 +7,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -300,9 +301,15 @@ int main(int argc, char** argv) {
         else unread.all();
         // (a file that is no deck, or no text, sets nothing: its --set would only echo that)
         const bool loaded = !(unread.grid && unread.step && unread.materials && unread.clusters);
+        // A key of a card the reader could not read (CLUSTER1.PPC of a deck whose CLUSTER is
+        // misspelt) is the card's error, reported at the card, not a second one here.
+        auto unread_card = [&](const std::string& key) {
+            auto is = [&](const char* card) { return key.compare(0, std::strlen(card), card) == 0; };
+            return (is("CLUSTER") && unread.clusters) || (is("MATERIAL") && unread.materials) || (is("FIX") && unread.fixes);
+        };
         for (const auto& kv : opt.settings) {
             const std::string e = loaded ? lpfdm::apply_setting(scene, kv.first, kv.second) : "";
-            if (!e.empty()) cli_errors.push_back("--set " + kv.first + ": " + e);
+            if (!e.empty() && !(e.compare(0, 12, "there is no ") == 0 && unread_card(kv.first))) cli_errors.push_back("--set " + kv.first + ": " + e);
         }
         if (opt.refine > 1) {
             if (long(scene.mx) * opt.refine > 1'000'000 || long(scene.my) * opt.refine > 1'000'000)

@@ -125,6 +125,12 @@ expect "misspelt card" 2 -q "$tmp/clustr.deck" && {
     says "misspelt card" "clustr.deck:3:1: error: unknown card 'CLUSTR' (did you mean CLUSTER?)"
     errors "misspelt card" 1
 }
+# a --set of the card it misspells is that card's error, not one of its own
+expect "misspelt card, --set" 2 -q --set CLUSTER1.PPC=4 "$tmp/clustr.deck" && {
+    says "misspelt card, --set" "clustr.deck:3:1: error: unknown card 'CLUSTR' (did you mean CLUSTER?)"
+    errors "misspelt card, --set" 1
+}
+expect "--set of a card not there" 2 -q --set CLUSTER2.PPC=4 decks/column.deck && says "--set of a card not there" "--set CLUSTER2.PPC: there is no CLUSTER number 2"
 expect "cluster outside" 2 -q tests/decks/bad_cluster_outside.deck && \
     says "cluster outside" "bad_cluster_outside.deck:5:1: error: the cluster box reaches outside the lattice: x1 = 6 m is past its right edge x = 4 m (the lattice is [0, 4] x [0, 4] m)"
 mkdir -p "$tmp/quake"
