@@ -58,7 +58,7 @@ mkdir -p build/fuzz/corpus build/fuzz/crashes build/fuzz/seeds
 exe=build/fuzz_deck
 if [ ! -x "$exe" ] || [ tests/fuzz_deck.cpp -nt "$exe" ] || [ lpfdm.hpp -nt "$exe" ]; then
     echo "fuzz: building $exe with $cxx"
-    "$cxx" -std=c++17 -g -O1 -fno-omit-frame-pointer \
+    "$cxx" -std=c++17 -g1 -O1 -fno-omit-frame-pointer \
         -fsanitize=fuzzer,address,undefined,float-cast-overflow -fno-sanitize-recover=all \
         -o "$exe" tests/fuzz_deck.cpp -lfmt || exit 1
 fi
