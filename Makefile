@@ -99,8 +99,9 @@ build/lpfdm-san: lpfdm.cpp lpfdm.hpp | deps
 	@mkdir -p build
 	$(CXX) $(WARN) -Werror $(SAN) $(OMP) -o $@ lpfdm.cpp $(LIBS)
 
+# tests/run.sh builds the four programs as jobs of its queue, beside the checks that need
+# only ./lpfdm.
 test: | test-deps
-	@$(MAKE) --no-print-directory -j$$(nproc) build/tests build/tests-san lpfdm build/lpfdm-san
 	@bash tests/run.sh
 
 demo: lpfdm | picture-deps

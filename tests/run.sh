@@ -1,38 +1,54 @@
 #!/usr/bin/env bash
-# Runs every test of `make test`: unit tests at -O2 and under ASan+UBSan, then the
-# deck-level checks with both builds of the program. Ends with "N passed, N failed".
+# Builds and runs every test of `make test`: the unit tests at -O2 and under ASan+UBSan,
+# and the deck-level checks with both builds of the program. Ends with "N passed, N failed".
 #
-# The runs are jobs on one queue, taken by as many workers as cores (at least two), each
-# worker the next job when its last is done, the longest first (check_cmake.sh with its own
-# CMake build, then the two unit runs). The checks differ in length a hundredfold and some
-# run for one build only: one fixed lane per build, as before, left a core idle for
-# minutes. The logs are printed afterwards, in a fixed order.
+# The four builds (./lpfdm, build/lpfdm-san, build/tests, build/tests-san) and the runs are
+# jobs on one queue, taken by as many workers as cores (at least two), each worker the
+# next job when its last is done: the builds first, the longest soonest, then the runs,
+# the longest first (check_cmake.sh with its own CMake build, then the two unit runs). A
+# run waits for the build it needs, and the checks that need only ./lpfdm start while the
+# test builds compile: built by one make before the runs, the builds left a core idle for
+# a minute or two while the last of them compiled. The checks differ in length a
+# hundredfold and some run for one build only: one fixed lane per build, as before, left a
+# core idle for minutes. The logs are printed afterwards, in a fixed order.
 set -u
 cd "$(dirname "$0")/.."
 passed=0 failed=0
 dir=$(mktemp -d); trap 'rm -rf "$dir"' EXIT
 
-# job N KIND ARG: KIND unit-o2, unit-san, or check (ARG "SCRIPT EXE"); writes $dir/N.log
-# and $dir/N.rc.
+# built TARGET: waits for the build job of TARGET to end; true when it built. A build
+# writes $dir/built.NAME (its exit status) when it ends.
+built() {
+    local t=${1#./}
+    local mark=$dir/built.${t//\//_}
+    while [ ! -e "$mark" ]; do sleep 1; done
+    [ "$(cat "$mark")" = 0 ] || { echo "the build of $1 failed (its log is printed below)"; return 1; }
+}
+# job N KIND ARG: KIND build (ARG a make target), unit-o2, unit-san, or check (ARG "SCRIPT
+# EXE"); writes $dir/N.log and $dir/N.rc.
 job() {
-    local n=$1 kind=$2 arg=${3:-} start=$SECONDS
+    local n=$1 kind=$2 arg=${3:-} start=$SECONDS rc
     case $kind in
+        # each target by one make, so that no two write the same file
+        build) make --no-print-directory "$arg"; rc=$?; echo $rc >"$dir/built.${arg//\//_}"; [ $rc = 0 ] ;;
         # the cases tagged [verify] are make verify's: a case without it checks the same at a coarser size
-        unit-o2) OMP_NUM_THREADS=1 build/tests --no-version=1 --test-case-exclude='*[verify]*' ;;
+        unit-o2) built build/tests && OMP_NUM_THREADS=1 build/tests --no-version=1 --test-case-exclude='*[verify]*' ;;
         # the sanitizer build leaves out the [slow] cases; the kernel's own threads stay at one
-        unit-san) OMP_NUM_THREADS=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+        unit-san) built build/tests-san && OMP_NUM_THREADS=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
                       build/tests-san --no-version=1 --test-case-exclude='*[slow]*' ;;
-        check) bash ${arg% *} "${arg#* }" ;;
+        check) built "${arg#* }" && bash ${arg% *} "${arg#* }" ;;
     esac >"$dir/$n.log" 2>&1
     echo $? >"$dir/$n.rc"
     echo "$((SECONDS - start)) $kind${arg:+ $arg}" >"$dir/$n.time"
 }
-export -f job
+export -f job built
 export dir
 
 # Jobs 1 and 2 are the unit runs, then every tests/check_*.sh with each build of the program
-# (./lpfdm, then build/lpfdm-san); the queue takes check_cmake.sh with ./lpfdm first (with its
-# own CMake build, the longest), then the unit runs, then the others in that order.
+# (./lpfdm, then build/lpfdm-san), then the four builds. The queue takes the builds first:
+# ./lpfdm (half a minute) and the sanitizer tests (the longest), the -O2 tests, check_cmake.sh
+# with ./lpfdm (its own CMake build, the longest run), the sanitizer program, then the unit
+# runs and the others in the order above.
 n=0 list=()
 add() { n=$((n + 1)); list+=("$n $1${2:+ $2}"); }
 add unit-o2
@@ -40,11 +56,22 @@ add unit-san
 for exe in ./lpfdm build/lpfdm-san; do
     for script in tests/check_*.sh; do add check "$script $exe"; done
 done
-first=$(printf '%s\n' "${list[@]}" | grep -m 1 ' check tests/check_cmake.sh ./lpfdm$')
+builds=$n
+for target in lpfdm build/tests-san build/tests build/lpfdm-san; do add build "$target"; done
+cmake_job=$(printf '%s\n' "${list[@]}" | grep -m 1 ' check tests/check_cmake.sh ./lpfdm$')
 workers=$(nproc 2>/dev/null || echo 2)
 [ "$workers" -ge 2 ] || workers=2
-{ [ -n "$first" ] && echo "$first"; printf '%s\n' "${list[@]}" | grep -vxF "${first:-none}"; } |
-    xargs -P "$workers" -L 1 bash -c 'job "$1" "$2" "${*:3}"' _
+{
+    printf '%s\n' "${list[@]:builds:3}"
+    [ -n "$cmake_job" ] && echo "$cmake_job"
+    printf '%s\n' "${list[@]:builds+3}"
+    printf '%s\n' "${list[@]:0:builds}" | grep -vxF "${cmake_job:-none}"
+} | xargs -P "$workers" -L 1 bash -c 'job "$1" "$2" "${*:3}"' _
+
+# A build that failed: its compiler's messages first.
+for ((k = builds + 1; k <= n; k++)); do
+    [ "$(cat "$dir/$k.rc" 2>/dev/null)" = 0 ] || { echo "== the build of ${list[k - 1]#* build }:"; tail -n 40 "$dir/$k.log"; failed=$((failed + 1)); }
+done
 
 count() {  # $1: label, $2: log; adds doctest's "test cases" totals
     local line p f
@@ -59,7 +86,7 @@ cat "$dir/1.log"; count "unit (-O2)" "$dir/1.log"; [ "$(rc_of 1)" -eq 0 ] || fai
 tail -n 30 "$dir/2.log"; count "unit (ASan+UBSan)" "$dir/2.log"; [ "$(rc_of 2)" -eq 0 ] || failed=$((failed + (failed == 0)))
 # Program-level checks: each, given the program, ends with "NAME: N passed, M failed"; in the
 # order of the queue (the plain build's, then the sanitizer build's).
-for ((k = 3; k <= n; k++)); do
+for ((k = 3; k <= builds; k++)); do
     tail -n 40 "$dir/$k.log"
     line=$(grep -E '^[A-Za-z_-]+: [0-9]+ passed, [0-9]+ failed$' "$dir/$k.log" | tail -1)
     p=$(sed -E 's/^[A-Za-z_-]+: ([0-9]+) passed.*/\1/' <<<"$line"); f=$(sed -E 's/.* ([0-9]+) failed$/\1/' <<<"$line")
