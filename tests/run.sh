@@ -53,8 +53,10 @@ n=0 list=()
 add() { n=$((n + 1)); list+=("$n $1${2:+ $2}"); }
 add unit-o2
 add unit-san
+# (the longest checks first: the fuzzing smoke and the documents' commands)
+scripts=$(ls tests/check_*.sh | awk '/check_(fuzz|docs)\.sh$/ { print; next } { rest = rest $0 "\n" } END { printf "%s", rest }')
 for exe in ./lpfdm build/lpfdm-san; do
-    for script in tests/check_*.sh; do add check "$script $exe"; done
+    for script in $scripts; do add check "$script $exe"; done
 done
 builds=$n
 for target in lpfdm build/tests-san build/tests build/lpfdm-san; do add build "$target"; done
