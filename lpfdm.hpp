@@ -2078,6 +2078,68 @@ inline std::string record_problem(const Shake& k) {
     return "";
 }
 
+namespace detail {
+// Where cluster c of scene s (a well-formed box or polygon on a lattice) falls short: a box
+// with its corners swapped, a part past the lattice's edges (each edge named, the numbers
+// as the deck writes them), or no cell centre inside (the nearest named). The message, or
+// "" when it fills cells; `where` its place in the deck (a polygon's coordinate past an
+// edge, else the card).
+inline std::string cluster_place_problem(const Scene& s, const Cluster& c, Pos& where) {
+    const double X = s.mx * s.cell_m, Y = s.my * s.cell_m, tol = 1e-3 * s.cell_m;
+    const bool poly = !c.polygon.empty();
+    auto coord_pos = [&](std::size_t k) { return k < c.polygon_pos.size() ? c.polygon_pos[k] : c.pos; };
+    if (!poly && (c.box.x0 > c.box.x1 || c.box.y0 > c.box.y1)) { where = c.pos; return "the box needs x0 <= x1 and y0 <= y1"; }
+    // Each edge crossed, the numbers as the deck writes them (the shortest form that
+    // reads back the same), the lattice's to ten digits.
+    auto ten = [](double x) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.10g", x);
+        return std::string(b);
+    };
+    std::string past;
+    std::size_t first_out = std::string::npos;
+    auto edge = [&](bool out, const std::string& field, double v, const char* name, const char* axis, double at) {
+        if (out) past += (past.empty() ? "" : "; ") + field + " = " + shortest(v) + " m is past its " + name + " edge " + axis + " = " + ten(at) + " m";
+    };
+    std::vector<double> corners;  // the polygon, or the box's corners
+    if (poly) {
+        corners = c.polygon;
+        for (std::size_t k = 0; k + 1 < corners.size(); k += 2) {
+            const double x = corners[k], y = corners[k + 1];
+            const std::string vertex = "vertex " + std::to_string(k / 2 + 1) + " ";
+            if ((x < -tol || x > X + tol) && first_out == std::string::npos) first_out = k;
+            if ((y < -tol || y > Y + tol) && first_out == std::string::npos) first_out = k + 1;
+            edge(x < -tol, vertex + "x", x, "left", "x", 0.0);
+            edge(x > X + tol, vertex + "x", x, "right", "x", X);
+            edge(y < -tol, vertex + "y", y, "bottom", "y", 0.0);
+            edge(y > Y + tol, vertex + "y", y, "top", "y", Y);
+        }
+    } else {
+        corners = {c.box.x0, c.box.y0, c.box.x1, c.box.y0, c.box.x1, c.box.y1, c.box.x0, c.box.y1};
+        edge(c.box.x0 < -tol, "x0", c.box.x0, "left", "x", 0.0);
+        edge(c.box.x1 > X + tol, "x1", c.box.x1, "right", "x", X);
+        edge(c.box.y0 < -tol, "y0", c.box.y0, "bottom", "y", 0.0);
+        edge(c.box.y1 > Y + tol, "y1", c.box.y1, "top", "y", Y);
+    }
+    const char* what = poly ? "polygon" : "box";
+    if (!past.empty()) {
+        where = poly ? coord_pos(first_out) : c.pos;
+        return std::string("the cluster ") + what + " reaches outside the lattice: " + past + " (the lattice is [0, " + ten(X) + "] x [0, " + ten(Y) + "] m)";
+    }
+    bool any = false;
+    detail::cluster_cells(c, s.cell_m, s.mx, s.my, [&](int, int, int) { any = true; });
+    if (!any) {
+        double cx = 0, cy = 0, dist = 0;
+        detail::nearest_centre(corners, s.cell_m, s.mx, s.my, cx, cy, dist);
+        char b[64];
+        std::snprintf(b, sizeof b, "%.3g", dist);
+        where = c.pos;
+        return std::string("the cluster ") + what + " holds no cell centre: the nearest is (" + shortest(cx) + ", " + shortest(cy) + ") m, " + b + " m from it";
+    }
+    return "";
+}
+}  // namespace detail
+
 // Everything that would make a scene unrunnable, with the card each problem came from.
 // All problems are reported, not the first; what `unread` names is not checked again.
 inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
@@ -2126,53 +2188,8 @@ inline Diagnostics validate(const Scene& s, const Unread& unread = Unread()) {
             if (!problem.empty()) { err(coord_pos(at), problem); continue; }
         }
         if (!lattice) continue;
-        if (!poly && (c.box.x0 > c.box.x1 || c.box.y0 > c.box.y1)) { err(c.pos, "the box needs x0 <= x1 and y0 <= y1"); continue; }
-        // Each edge crossed, the numbers as the deck writes them (the shortest form that
-        // reads back the same), the lattice's to ten digits.
-        auto ten = [](double x) {
-            char b[32];
-            std::snprintf(b, sizeof b, "%.10g", x);
-            return std::string(b);
-        };
-        std::string past;
-        std::size_t first_out = std::string::npos;
-        auto edge = [&](bool out, const std::string& field, double v, const char* name, const char* axis, double at) {
-            if (out) past += (past.empty() ? "" : "; ") + field + " = " + shortest(v) + " m is past its " + name + " edge " + axis + " = " + ten(at) + " m";
-        };
-        std::vector<double> corners;  // the polygon, or the box's corners
-        if (poly) {
-            corners = c.polygon;
-            for (std::size_t k = 0; k + 1 < corners.size(); k += 2) {
-                const double x = corners[k], y = corners[k + 1];
-                const std::string vertex = "vertex " + std::to_string(k / 2 + 1) + " ";
-                if ((x < -tol || x > X + tol) && first_out == std::string::npos) first_out = k;
-                if ((y < -tol || y > Y + tol) && first_out == std::string::npos) first_out = k + 1;
-                edge(x < -tol, vertex + "x", x, "left", "x", 0.0);
-                edge(x > X + tol, vertex + "x", x, "right", "x", X);
-                edge(y < -tol, vertex + "y", y, "bottom", "y", 0.0);
-                edge(y > Y + tol, vertex + "y", y, "top", "y", Y);
-            }
-        } else {
-            corners = {c.box.x0, c.box.y0, c.box.x1, c.box.y0, c.box.x1, c.box.y1, c.box.x0, c.box.y1};
-            edge(c.box.x0 < -tol, "x0", c.box.x0, "left", "x", 0.0);
-            edge(c.box.x1 > X + tol, "x1", c.box.x1, "right", "x", X);
-            edge(c.box.y0 < -tol, "y0", c.box.y0, "bottom", "y", 0.0);
-            edge(c.box.y1 > Y + tol, "y1", c.box.y1, "top", "y", Y);
-        }
-        const char* what = poly ? "polygon" : "box";
-        if (!past.empty()) {
-            err(poly ? coord_pos(first_out) : c.pos, std::string("the cluster ") + what + " reaches outside the lattice: " + past + " (the lattice is [0, " + ten(X) + "] x [0, " + ten(Y) + "] m)");
-            continue;
-        }
-        bool any = false;
-        detail::cluster_cells(c, s.cell_m, s.mx, s.my, [&](int, int, int) { any = true; });
-        if (!any) {
-            double cx = 0, cy = 0, dist = 0;
-            detail::nearest_centre(corners, s.cell_m, s.mx, s.my, cx, cy, dist);
-            char b[64];
-            std::snprintf(b, sizeof b, "%.3g", dist);
-            err(c.pos, std::string("the cluster ") + what + " holds no cell centre: the nearest is (" + shortest(cx) + ", " + shortest(cy) + ") m, " + b + " m from it");
-        }
+        Pos where = c.pos;
+        if (const std::string p = detail::cluster_place_problem(s, c, where); !p.empty()) err(where, p);
     }
     auto node_count = [&](const Box& b) {
         if (b.x0 > b.x1 || b.y0 > b.y1) return -1L;
@@ -6459,6 +6476,31 @@ inline Diagnostics read_motion(const std::string& path, Shake& k) {
     return {};
 }
 
+// The rest of a card `CLUSTER mat POLYGON x1 y1 x2 y2 x3 y3 ...` after its material: the
+// numbers up to the parameters, each with its place; a count that makes no polygon is the
+// card's error (the shape is validate()'s).
+namespace detail {
+inline void read_polygon(CardReader& r, Cluster& c) {
+    const Token* word = r.field("POLYGON");
+    while (r.ok() && r.more_positional()) {
+        const std::size_t k = c.polygon.size();
+        const std::string what = "vertex " + std::to_string(k / 2 + 1) + (k % 2 ? " y" : " x");
+        const Token* t = r.field(what.c_str());
+        double v = 0;
+        if (t && r.number(*t, what.c_str(), v)) {
+            c.polygon.push_back(v);
+            c.polygon_pos.push_back(t->pos);
+        }
+    }
+    const std::size_t n = c.polygon.size();
+    if (r.ok() && (n % 2 || n < 6 || n / 2 > kMaxPolygonVertices)) {
+        std::size_t bad = 0;
+        const std::string problem = polygon_problem(c.polygon, bad);
+        r.fail(bad < n ? c.polygon_pos[bad] : word->pos, problem);
+    }
+}
+}  // namespace detail
+
 // Parses a deck (decks/README.md) into scene: every card, field and parameter checked, each
 // problem reported with file:line:column (the first problem of each card). The scene as a
 // whole is checked by validate(), told by *unread what the cards with errors left out.
@@ -6538,26 +6580,8 @@ inline Diagnostics parse_deck_text(const std::string& text, const std::string& f
             const std::size_t at = sc.clusters.size() - 1;
             sc.clusters[at].pos = kp;
             if (toks.size() > 2 && upper(toks[2].text) == "POLYGON") {
-                // CLUSTER mat POLYGON x1 y1 x2 y2 x3 y3 ...: numbers up to the parameters.
                 r.fields("CLUSTER", sc, at, "MAT");
-                const Token* word = r.field("POLYGON");
-                Cluster& c = sc.clusters[at];
-                while (r.ok() && r.more_positional()) {
-                    const std::size_t k = c.polygon.size();
-                    const std::string what = "vertex " + std::to_string(k / 2 + 1) + (k % 2 ? " y" : " x");
-                    const Token* t = r.field(what.c_str());
-                    double v = 0;
-                    if (t && r.number(*t, what.c_str(), v)) {
-                        c.polygon.push_back(v);
-                        c.polygon_pos.push_back(t->pos);
-                    }
-                }
-                const std::size_t n = c.polygon.size();
-                if (r.ok() && (n % 2 || n < 6 || n / 2 > kMaxPolygonVertices)) {  // the count; the shape is validate()'s
-                    std::size_t bad = 0;
-                    const std::string problem = polygon_problem(c.polygon, bad);
-                    r.fail(bad < n ? c.polygon_pos[bad] : word->pos, problem);
-                }
+                detail::read_polygon(r, sc.clusters[at]);
             } else {
                 r.fields("CLUSTER", sc, at);
             }
