@@ -35,7 +35,7 @@ struct OptionSpec {
     const char* arg;  // the value's name, or nullptr for a flag
     const char* help; // lines after the first are indented under it
 };
-constexpr int kSeed = 256, kStrict = 257, kNoAvx2 = 258, kRestart = 259, kNoAvx512 = 260;  // getopt values of the options without a short form
+constexpr int kSeed = 256, kStrict = 257, kNoAvx2 = 258, kRestart = 259;  // getopt values of the options without a short form
 const OptionSpec kOptions[] = {
     {"output", 'o', "DIR", "write the output files into DIR (created; default: the current directory)"},
     {"steps", 'n', "N", "run N steps instead of the deck's"},
@@ -53,8 +53,6 @@ const OptionSpec kOptions[] = {
     {"strict", 0, nullptr, "warnings are errors: a deck that draws one stops with exit status 2"},
     {"profile", 'p', nullptr, "print the time of each phase of the cycle, peak memory and bytes per point"},
     {"no-avx2", 0, nullptr, "the same as --kernel scalar"},
-    {"no-avx512", 0, nullptr, "the Mohr-Coulomb consult four points per AVX2 register, not eight per AVX-512 register\n"
-                              "where the processor has it (the same output)"},
     {"quiet", 'q', nullptr, "no progress line and no summary"},
     {"help", 'h', nullptr, "this text"},
     {"version", 'V', nullptr, "the version"},
@@ -62,7 +60,7 @@ const OptionSpec kOptions[] = {
 int option_value(const OptionSpec& o) {
     if (o.brief) return o.brief;
     const std::string n = o.name;
-    return n == "seed" ? kSeed : n == "strict" ? kStrict : n == "restart" ? kRestart : n == "no-avx512" ? kNoAvx512 : kNoAvx2;
+    return n == "seed" ? kSeed : n == "strict" ? kStrict : n == "restart" ? kRestart : kNoAvx2;
 }
 
 // The usage text: the synopsis, each option from kOptions, the exit status.
@@ -95,7 +93,7 @@ struct Options {
     std::string deck, outdir = ".", restart;
     long refine = 1, steps = 0;
     long long seed = -1;
-    bool quiet = false, profile = false, strict = false, avx512 = true;
+    bool quiet = false, profile = false, strict = false;
     lpfdm::Kernel kernel = lpfdm::Kernel::Fast;
     long threads = 0;
     std::vector<std::pair<std::string, double>> settings;
@@ -175,6 +173,8 @@ int main(int argc, char** argv) {
             const std::string full = std::string("--") + o.name;
             beginning |= bare.size() > 2 && full.size() > bare.size() && full.compare(0, bare.size(), bare) == 0;
         }
+        if (bare == "--no-avx512")  // retired: the consult runs four points per AVX2 register everywhere
+            return std::string("--no-avx512 is retired: the Mohr-Coulomb consult takes four points per AVX2 register on every processor (the same output as before); leave the option out");
         const std::string note = beginning ? "options are written in full" : "";
         if (near.empty()) return "unknown option '" + bare + "'" + (note.empty() ? "" : " (" + note + ")");
         return "unknown option '" + bare + "' (did you mean " + near + "?" + (note.empty() ? "" : " " + note) + ")";
@@ -208,7 +208,6 @@ int main(int argc, char** argv) {
         case 'p': opt.profile = true; break;
         case kStrict: opt.strict = true; break;
         case kNoAvx2: opt.kernel = lpfdm::Kernel::Scalar; break;
-        case kNoAvx512: opt.avx512 = false; break;
         case 'o':
             if (!*arg) cli_errors.push_back("-o needs a directory");
             else opt.outdir = arg;
@@ -362,7 +361,6 @@ int main(int argc, char** argv) {
 #endif
     lpfdm::Simulation sim(scene, opt.kernel);
     sim.set_profiling(opt.profile);
-    if (!opt.avx512) sim.set_wide512(false);
     lpfdm::RunInfo run;
     run.deck = opt.deck;
     run.deck_digest = lpfdm::fnv1a64(text);
@@ -584,12 +582,12 @@ int main(int argc, char** argv) {
         getrusage(RUSAGE_SELF, &ru);
         double total = 0;
         for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
-        const bool ref = sim.kernel() == lpfdm::Kernel::Reference;  // asked for, or ADVECT FLIP's
-        const char* lanes = ref ? (opt.kernel == lpfdm::Kernel::Reference ? "the reference cycle" : "the reference cycle (ADVECT FLIP's only kernel)")
+        const bool ref = sim.kernel() == lpfdm::Kernel::Reference;  // asked for, or the scene's modes ask it (Modes::why)
+        const std::string reference = *sim.modes().why ? std::string("the reference cycle (") + sim.modes().why + ")" : "the reference cycle";
+        const char* lanes = ref ? reference.c_str()
                             : !sim.wide() ? "points, cells and nodes one at a time"
                             : sim.scene().motion == lpfdm::Motion::Centre && sim.scene().advect == lpfdm::Advect::Eq12 && sim.scene().mapping == lpfdm::Mapping::Paper
-                                ? (sim.wide512() && sim.return_updates() > 0 ? "points, cells and nodes four per AVX2 register, the Mohr-Coulomb consult eight per AVX-512 register"
-                                                                   : "points, cells and nodes four per AVX2 register")
+                                ? "points, cells and nodes four per AVX2 register"
                                 : "cells and nodes four per AVX2 register, points one at a time";
         std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, %s\n", ref ? 1 : nthreads,
                     double(ru.ru_maxrss) / 1024.0, sim.bytes_per_point(), lanes);
@@ -601,8 +599,8 @@ int main(int argc, char** argv) {
                         1e9 * sim.return_seconds() / double(sim.return_updates()), sim.return_updates());
     }
     if (!opt.quiet)
-        std::printf("lpfdm: %ld steps, %zu points, %.3f s, %.3g particle-steps/s; mass inside %.9g, outflow %.9g, initial %.9g kg/m\n",
+        std::printf("lpfdm: %ld steps, %zu points, %.3f s, %.3g particle-steps/s; mass inside %.9g, outflow %.9g, initial %.9g kg/m; kernel %s%s%s%s\n",
                     sim.step_count(), sim.points().size(), wall, wall > 0 ? particle_steps / wall : 0.0, sim.mass_inside(), sim.mass_outflow(),
-                    sim.mass_initial());
+                    sim.mass_initial(), run.kernel.c_str(), *sim.modes().why ? " (" : "", sim.modes().why, *sim.modes().why ? ")" : "");
     return status;
 }

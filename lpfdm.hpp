@@ -26,17 +26,13 @@
 //   Reference  Simulation::step_reference: the plain cycle, every cell, point and node,
 //              one value at a time, one thread. Read this one: it is the definition.
 //   Fast       (default) the same cycle on the occupied cells only, by threads (OpenMP,
-//              -fopenmp) and four values per AVX2 register when the processor has it;
-//              with AVX-512 too, the Mohr-Coulomb consult eight points per register
-//              (Simulation::set_wide512(false) keeps four).
+//              -fopenmp) and four values per AVX2 register when the processor has it.
 //   Scalar     Fast without AVX2.
 //   All give the same numbers, bit for bit, on every deck (tests/test_reference.cpp).
 //
 // CONFIGURATION (define before including)
 //   LPFDM_NO_IO    leave out the deck reader and the writers (then no fmt is needed)
-//   LPFDM_NO_WIDE  leave out the AVX2 version and the AVX-512 consult (so does any build
-//                  with -mfma or -mavx512f)
-//   LPFDM_NO_AVX512  never take the AVX-512 consult (needed with Clang -ffp-contract=fast)
+//   LPFDM_NO_WIDE  leave out the AVX2 version (so does any build with -mfma or -mavx512f)
 //
 // THE PAPER'S EQUATIONS, AND THE FUNCTION THAT COMPUTES EACH
 //   eq. 5a-5d  cell strain increments from nodal increments     cell_strain (MAPPING SMOOTH:
@@ -207,7 +203,6 @@
 //   * Stability: dt must not exceed L sqrt(rho / ((M + lambda)(1 + alpha))), M = K + 4G/3,
 //     lambda = K - 2G/3: below L / c_p, the limit of a full lattice, because a lone cell
 //     has a faster mode and local damping stiffens the fastest one (see stable_dt).
-#ifndef LPFDM_LANES  // (the end of this file: what namespace detail reads twice)
 #ifndef LPFDM_HPP
 #define LPFDM_HPP
 
@@ -273,20 +268,6 @@
 #define LPFDM_WIDE 1
 #else
 #define LPFDM_WIDE 0
-#endif
-// With it, the Mohr-Coulomb consult of the AVX2 point loop (the elastic test and the plastic
-// return) has a third version, eight points per register, built for AVX-512 (F, VL, DQ) and
-// taken when the processor has it (Simulation::have_wide512): the same text as the four-lane
-// one, read twice (detail::lanes4 and detail::lanes8, the end of this file). AVX-512 brings
-// fused multiply-add with it, which the compiler would use on a * b + c: those functions
-// are built without contraction (GCC: the optimize attribute, whatever -ffp-contract says;
-// Clang: the pragma below, for the whole header, which Clang disregards under
-// -ffp-contract=fast: with that option, define LPFDM_NO_AVX512, and the program never
-// takes this version). LPFDM_AVX512: the attribute of those functions.
-#if defined(__clang__)
-#define LPFDM_AVX512 target("avx2,avx512f,avx512vl,avx512dq")
-#else
-#define LPFDM_AVX512 target("avx2,avx512f,avx512vl,avx512dq"), optimize("fp-contract=off")
 #endif
 // Clang contracts a * b + c into a fused multiply-add by default (-ffp-contract=on), and
 // rewrites such expressions even for a processor without one: the AVX2 lanes then differ
@@ -1150,10 +1131,6 @@ LPFDM_INLINE inline int lane_bits(const v4m& m) { v2m lo, hi; halves(m, lo, hi);
 LPFDM_INLINE inline bool none_of_lanes(const v4m& m) { v2m lo, hi; halves(m, lo, hi); return lane_signs(lo | hi) == 0; }
 // a = |v| lane by lane (the sign bit cleared, as std::fabs does).
 LPFDM_INLINE inline void abs_of(const v4d& v, v4d& a) { a = v4d(v4m(v) & 0x7fffffffffffffffLL); }
-// Eight doubles (and eight lane masks): AVX-512 registers inside a function built for
-// LPFDM_AVX512 (the Mohr-Coulomb consult's second width, detail::lanes8).
-typedef double v8d __attribute__((vector_size(64)));
-typedef long long v8m __attribute__((vector_size(64)));
 #endif
 LPFDM_INLINE inline void abs_of(double v, double& a) { a = std::fabs(v); }
 }  // namespace detail
@@ -1586,19 +1563,6 @@ LPFDM_INLINE inline void add_four(v4d& acc, const v4d& vol, const v4d& sxx, cons
 }
 // The strain increments of eq. 5a-5d of four cells (four points' cells) in the lanes.
 struct StrainLanes { v4d xx, yy, xy, yx; };
-// The Mohr-Coulomb consult of elastic trials in the lanes of a vector, four (AVX2) and
-// eight (AVX-512): one text, the end of this file, read twice here, once into namespace
-// lanes4 and once into lanes8, each time with the attribute of its instruction set. Not a
-// template of the vector type: GCC builds a function's vector comparisons for the
-// instruction set of that function before inlining it, so a template without AVX-512,
-// inlined into a function with it, compared eight lanes one by one (the consult took 26 ns
-// a point-update instead of 10 in the flow's last steps).
-// LPFDM_SELF: this file (__FILE_NAME__ where the compiler has it: whatever its name).
-#if defined(__FILE_NAME__)
-#define LPFDM_SELF __FILE_NAME__
-#else
-#define LPFDM_SELF "lpfdm.hpp"
-#endif
 // The point arrays the consult in lanes reads and writes.
 struct ConsultArrays {
     double *sxx, *syy, *sxy, *szz;
@@ -1608,37 +1572,385 @@ struct ConsultArrays {
     std::uint8_t* yielded;
     double *plastic_shear, *plastic_work;
 };
-#define LPFDM_LANES 4
-namespace lanes4 {
-#include LPFDM_SELF
-}  // namespace lanes4
-#undef LPFDM_LANES
-#define LPFDM_LANES 8
-namespace lanes8 {
-#include LPFDM_SELF
-}  // namespace lanes8
-#undef LPFDM_LANES
-using MohrLanes = lanes4::Found;
-using MohrLanes8 = lanes8::Found;
-// The lanes' functions as functions of their own, for the tests: four lanes (built for
-// AVX2) and eight (built for AVX-512; call them only where Simulation::have_wide512()).
+namespace lanes {
+// eq. 6's elastic test and plastic return of N elastic trials at once, in the lanes of a
+// vector V of N doubles (M: its mask, all ones or zero in a lane): mohr_inside and
+// mohr_coulomb_correct's closed-form shear return and the first two sets of its search,
+// with the same operations in the same order as those compute them one stress at a time
+// (std::min(a, b) is b < a ? b : a, std::max(a, b) a < b ? b : a), so the lanes they settle
+// get the same numbers bit for bit. Four lanes: AVX2 registers. Every function here and
+// every lambda is built for AVX2 (LPFDM_LANE): a compiler lowers the vector code of a
+// function built for less, lane by lane.
+using V = v4d;
+using M = v4m;
+#define LPFDM_LANE __attribute__((always_inline, target("avx2")))
+constexpr int N = 4;
+// bit l of lane l, and byte l of a word of N bytes (all ones) in lane l
+constexpr M kLaneBit = {1, 2, 4, 8}, kLaneByte = {0xff, 0xff00, 0xff0000, 0xff000000};
+// bit l: lane l's sign bit (of a mask: lane l set)
+LPFDM_LANE inline int bits(const M& m) {
+    return __builtin_ia32_movmskpd256(v4d(m));
+}
+// r = sqrt(x) in each lane (correctly rounded, as std::sqrt)
+LPFDM_LANE inline void sqrt_of(const V& x, V& r) {
+    r = __builtin_ia32_sqrtpd256(x);
+}
+// m: lane l set where bit l of `b` is (bits' inverse)
+LPFDM_LANE inline void lane_mask(int b, M& m) { m = M(((M{} + b) & kLaneBit) != 0); }
+// a = |v| lane by lane (the sign bit cleared, as std::fabs does)
+LPFDM_LANE inline void abs_of(const V& v, V& a) { a = V(M(v) & 0x7fffffffffffffffLL); }
+// v = x in every lane (a broadcast: the same bits, the sign of a zero too)
+LPFDM_LANE inline void splat(double x, V& v) {
+    v = V{x, x, x, x};
+}
+
+// Mohr's circle of (xx, yy) with its radius r given: t.a, t.sig and mohr_inside's lo, hi
+// and shear test.
+LPFDM_LANE inline void circle(const V& xx, const V& yy, const V& zz, const V& r, const V& np, const V& two_c_sq, V& a, V& t0, V& t1, V& hi, M& shear_ok) {
+    const V p = 0.5 * (xx + yy);
+    a = 0.5 * (xx - yy);
+    t0 = p - r; t1 = p + r;
+    const V lo = zz < t0 ? zz : t0;
+    hi = t1 < zz ? zz : t1;
+    shear_ok = lo - hi * np + two_c_sq >= 0;
+}
+// mohr_inside's first exit: bit l set when trial l is inside with no tensile principal
+// value. r: the circle's radius, for shear_return.
+LPFDM_LANE inline int inside(const V& xx, const V& yy, const V& xy, const V& zz, const V& np, const V& two_c_sq, V& r) {
+    constexpr double huge = std::numeric_limits<double>::infinity();
+    V inf;
+    splat(huge, inf);
+    const V half_diff = 0.5 * (xx - yy);
+    sqrt_of(V(half_diff * half_diff + xy * xy), r);
+    V a, t0, t1, hi;
+    M shear_ok;
+    circle(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
+    return bits(M(shear_ok & (hi <= 0) & (two_c_sq >= 0) & (np < inf)));
+}
+// std::min(std::min(a, b), c) and std::max(std::max(a, b), c) in each lane, with their
+// operations (std::min(a, b) is b < a ? b : a, std::max(a, b) a < b ? b : a).
+LPFDM_LANE inline void extremes(const V& a, const V& b, const V& c, V& lo, V& hi) {
+    const V m = b < a ? b : a, big = a < b ? b : a;
+    lo = c < m ? c : m;
+    hi = big < c ? c : big;
+}
+// What shear_return found of each trial, for edge_return (mohr_coulomb_correct's
+// names): the circle's a, the principal values t0 <= t1 and t2 = sig_zz, the tension limit,
+// the tolerance, the tension plane's f at the largest, the order (A: t1 <= t2, C: t2 < t0,
+// else t0 <= t2 < t1) and FLAC's choice of shear.
+struct Found { V a, t0, t1, t2, sig_t, tol, ft; M A, C, shear_first; };
+// The rest of mohr_inside (the tension planes) and the closed-form shear return of
+// mohr_coulomb_correct (where FLAC's h chooses shear). Bit l of the result: lane l is
+// settled; bit N + l (N lanes): it was returned by shear (its stress replaced, d_gamma[l]
+// its plastic shear increment). A lane left unsettled (tension, an edge, or a return the closed form
+// cannot make admissible) goes to edge_return (with `found`), and what that leaves to the
+// one-point code. n_psi, tension, a1, a2: the material's (MaterialConstants).
+LPFDM_LANE inline int shear_return(V& xx, V& yy, V& xy, V& zz, const V& r, const V& np, const V& two_c_sq, double n_psi, double tension, double a1, double a2, V& d_gamma, Found& found) {
+    constexpr double huge = std::numeric_limits<double>::infinity();
+    V inf, zero, one, n_psi_v, tension_v;
+    splat(huge, inf); splat(0.0, zero); splat(1.0, one); splat(n_psi, n_psi_v); splat(tension, tension_v);
+    V a, t0, t1, hi;
+    M shear_ok;
+    circle(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
+    const V t2 = zz;
+    V sig_t = np > 1 ? two_c_sq / (np - 1) : inf;  // tension_limit
+    if (tension >= 0) sig_t = tension < sig_t ? tension_v : sig_t;
+    const M inside = shear_ok & (sig_t - hi >= 0);  // implied by the first exit
+    // The order of t0 <= t1 and t2 (t0 <= t1 holds for every lane without NaN, and a lane
+    // with NaN in its trial or strength fails the check below through tol).
+    const M above = t1 > t2, below = t0 > t2;
+    const M A = ~above, B = above & ~below, C = above & below;  // (i1 i2 i3) = (0 1 2), (0 2 1), (2 0 1)
+    const V ti1 = C ? t2 : t0, ti3 = A ? t2 : t1;
+    const V fs = ti1 - ti3 * np + two_c_sq, ft = sig_t - ti3;
+    V a0, a1v, a2v, at;
+    abs_of(t0, a0); abs_of(t1, a1v); abs_of(t2, a2v); abs_of(sig_t, at);
+    const V tol = 1e-11 * (a0 + a1v + a2v + two_c_sq + (at < inf ? sig_t : zero));
+    const V ns0 = np < n_psi ? np : n_psi_v;  // std::min(n_psi, np)
+    const V d1 = a1 - a2 * ns0, d2 = a2 * (1 - ns0), d3 = a2 - a1 * ns0;
+    const V mu = -fs / (d1 - np * d3);
+    const V s0 = t0 + mu * (C ? d2 : d1), s1 = t1 + mu * (A ? d2 : d3), s2 = t2 + mu * (A ? d3 : B ? d2 : d1);
+    V lo_n, hi_n;
+    extremes(s0, s1, s2, lo_n, hi_n);
+    // FLAC's h chooses shear where the tension plane is violated too (h_fn, the same
+    // operations; a lane with ft >= 0 does not need it, as the one-point code skips it, and
+    // most groups hold no lane that does: their square root is not taken).
+    M shear_first = (fs < 0) & (ft >= 0);
+    if (const M both = (fs < 0) & ~(ft >= 0); bits(both)) {
+        V root;
+        sqrt_of(V(1 + np * np), root);
+        const V alpha_p = root + np, sig_p = sig_t * np - two_c_sq;
+        const V h = ti3 - sig_t + alpha_p * (ti1 - sig_p);
+        shear_first |= both & ~(h > 0);
+    }
+    const M shear = ~inside & shear_first & (lo_n - np * hi_n + two_c_sq >= -tol) & (sig_t - hi_n >= -tol);
+    // to_xy: the same principal direction, the new principal values
+    const V pn = 0.5 * (s1 + s0), rn = 0.5 * (s1 - s0);
+    const V inv_r = one / r, c2 = r > 0 ? a * inv_r : one, s2xy = r > 0 ? xy * inv_r : zero;
+    xx = shear ? pn + rn * c2 : xx;
+    yy = shear ? pn - rn * c2 : yy;
+    xy = shear ? rn * s2xy : xy;
+    zz = shear ? s2 : zz;
+    abs_of(-mu - mu * ns0, d_gamma);  // |e1 - e3|
+    found = Found{a, t0, t1, t2, sig_t, tol, ft, A, C, shear_first};
+    return bits(M(inside | shear)) | bits(shear) << N;
+}
+// The lanes shear_return left (bits of `left`; their trials in xx .. zz, what it found of
+// them in m): the first two
+// sets of mohr_coulomb_correct's search, with the same operations in the same order, in
+// lanes. Its closed-form shear return was not admissible there, or FLAC's h chose
+// tension, whose return is made here and, where admissible, left to the one-point code.
+// The search then pairs its plane p0 with first[0], then first[1], the pairs that end most
+// searches in a flowing collapse (an edge of two shear planes, the apex line of shear and
+// tension, the corner of tension and shear). Bit l of the result: lane l was returned by
+// one of them (xx .. zz its stress, d_gamma[l] its plastic shear, as the one-point code's
+// mode Edge gives them); a lane left unsettled (a third set, an infinite or NaN value, an
+// admissible tension return) takes the one-point code, which tries the same two sets first.
+LPFDM_LANE inline int edge_return(V& xx, V& yy, V& xy, V& zz, const V& r, const V& np, const V& two_c_sq, double n_psi, double a1, double a2, const Found& m, int left, V& d_gamma) {
+    constexpr double huge = std::numeric_limits<double>::infinity();
+    V inf, zero, one, two, n_psi_v;
+    splat(huge, inf); splat(0.0, zero); splat(1.0, one); splat(2.0, two); splat(n_psi, n_psi_v);
+    const V &a = m.a, &t0 = m.t0, &t1 = m.t1, &t2 = m.t2, &sig_t = m.sig_t, &tol = m.tol, &ft = m.ft;
+    const M &C = m.C, &shear_first = m.shear_first;
+    V a0, a1v, a2v, at, ar, anp, ac;
+    abs_of(t0, a0); abs_of(t1, a1v); abs_of(t2, a2v); abs_of(sig_t, at); abs_of(r, ar); abs_of(np, anp); abs_of(two_c_sq, ac);
+    // Finite values only (then nine planes, and t0 <= t1): any other lane takes the one-point code.
+    const M finite = (a0 < inf) & (a1v < inf) & (a2v < inf) & (at < inf) & (ar < inf) & (anp < inf) & (ac < inf);
+    M lanes;
+    lane_mask(left, lanes);
+    M todo = lanes & finite;
+    if (!bits(todo)) return 0;
+    // i1, i2, i3: the order of the trial's principal values, as mohr_coulomb_correct sorts them
+    // ((0 1 2) in A, (2 0 1) in C, else (0 2 1)); the finite lanes' tol is the one-point code's
+    const V i1 = C ? two : zero, i2 = m.A ? one : (C ? zero : two), i3 = m.A ? two : one;
+    const V ns = np < n_psi ? np : n_psi_v;  // st.n_psi
+    {  // the tension return of the closed form, where FLAC's h chose it: admissible lanes are the one-point code's
+        const V mu = -ft / a1;
+        const V d_other = mu * a2, d_i3 = mu * a1;  // sg[i1] -= mu a2, sg[i2] -= mu a2, sg[i3] -= mu a1
+        const V g0 = t0 - (i3 == zero ? d_i3 : d_other), g1 = t1 - (i3 == one ? d_i3 : d_other), g2 = t2 - (i3 == two ? d_i3 : d_other);
+        V lo, hi_t;
+        extremes(g0, g1, g2, lo, hi_t);
+        const M admissible = (lo - np * hi_t + two_c_sq >= -tol) & (sig_t - hi_t >= -tol);
+        todo &= shear_first | ~admissible;
+    }
+    // A plane of the nine, lane by lane: shear (i, j), n = e_i - N_phi e_j and m = e_i - N_psi e_j,
+    // or tension on i, n = m = -e_i; idx its number in mohr_coulomb_correct (2 i + (j > i ? j - 1 : j), 6 + i).
+    struct Plane { V n[3], m[3], kk, idx; };
+    const V n_one = 1.0 - np * 0.0, n_neg = 0.0 - np * 1.0, n_zero = 0.0 - np * 0.0;
+    const V m_one = 1.0 - ns * 0.0, m_neg = 0.0 - ns * 1.0, m_zero = 0.0 - ns * 0.0;
+    V minus_zero;
+    splat(-0.0, minus_zero);
+    const V minus_one = -one;
+    auto shear_plane = [&](const V& i, const V& j, Plane& q) LPFDM_LANE {
+        for (int t = 0; t < 3; ++t) {
+            V tt;
+            splat(double(t), tt);
+            q.n[t] = i == tt ? n_one : (j == tt ? n_neg : n_zero);
+            q.m[t] = i == tt ? m_one : (j == tt ? m_neg : m_zero);
+        }
+        q.kk = two_c_sq;
+        q.idx = 2 * i + (j > i ? j - 1 : j);
+    };
+    auto tension_plane = [&](const V& i, Plane& q) LPFDM_LANE {
+        for (int t = 0; t < 3; ++t) {
+            V tt;
+            splat(double(t), tt);
+            q.n[t] = q.m[t] = i == tt ? minus_one : minus_zero;
+        }
+        q.kk = sig_t;
+        q.idx = 6 + i;
+    };
+    auto pick = [](const M& c, const Plane& x, const Plane& y, Plane& q) LPFDM_LANE {
+        for (int t = 0; t < 3; ++t) { q.n[t] = c ? x.n[t] : y.n[t]; q.m[t] = c ? x.m[t] : y.m[t]; }
+        q.kk = c ? x.kk : y.kk;
+        q.idx = c ? x.idx : y.idx;
+    };
+    // p0 and first[0], first[1] (mohr_coulomb_correct's order)
+    const V o = i3 == two ? i1 : 1 - i3;
+    Plane p0, q1, q2, x, y;
+    shear_plane(i1, i3, x); tension_plane(i3, y); pick(shear_first, x, y, p0);
+    shear_plane(i1, i2, x); shear_plane(o, i3, y); pick(shear_first, x, y, q1);
+    tension_plane(i1, x); shear_plane(i3, o, y); pick(shear_first, x, y, q2);
+    const double d12 = a1 - a2;
+    const V mu_min = -tol / (a1 + 1);
+    const V tr[3] = {t0, t1, t2};
+    // try_set of the pair (p0, q), its planes in index order: true in the lanes where it is admissible
+    auto try_pair = [&](const Plane& q, V sg[3], V& gamma, M& ok) LPFDM_LANE {
+        const M p_first = p0.idx < q.idx;
+        Plane u, v;
+        pick(p_first, p0, q, u); pick(p_first, q, p0, v);
+        V dm[2][3], f[2];
+        const Plane* pl[2] = {&u, &v};
+        for (int w = 0; w < 2; ++w) {
+            const Plane& z = *pl[w];
+            const V a2_tr = a2 * (z.m[0] + z.m[1] + z.m[2]);
+            for (int t = 0; t < 3; ++t) dm[w][t] = a2_tr + d12 * z.m[t];
+            f[w] = z.n[0] * tr[0] + z.n[1] * tr[1] + z.n[2] * tr[2] + z.kk;
+        }
+        V A[2][2];
+        for (int w = 0; w < 2; ++w)
+            for (int x = 0; x < 2; ++x) A[w][x] = pl[w]->n[0] * dm[x][0] + pl[w]->n[1] * dm[x][1] + pl[w]->n[2] * dm[x][2];
+        const V b0 = -f[0], b1 = -f[1];
+        // Gaussian elimination with partial pivoting, 2 x 2, as try_set
+        V abs00, abs10;
+        abs_of(A[0][0], abs00); abs_of(A[1][0], abs10);
+        const M sw = abs10 > abs00;
+        const V p00 = sw ? A[1][0] : A[0][0], p01 = sw ? A[1][1] : A[0][1], q10 = sw ? A[0][0] : A[1][0], q11 = sw ? A[0][1] : A[1][1];
+        const V pb = sw ? b1 : b0, qb = sw ? b0 : b1;
+        const V fr = q10 / p00;
+        const V a11 = q11 - fr * p01, bb1 = qb - fr * pb;
+        const V mu1 = bb1 / a11, mu0 = (pb - p01 * mu1) / p00;
+        V ap00, aa11;
+        abs_of(p00, ap00); abs_of(a11, aa11);
+        V tiny;
+        splat(1e-300, tiny);
+        ok = ~(ap00 < tiny) & ~(aa11 < tiny) & ~(mu0 < mu_min) & ~(mu1 < mu_min);
+        for (int t = 0; t < 3; ++t) { sg[t] = tr[t]; sg[t] += mu0 * dm[0][t]; sg[t] += mu1 * dm[1][t]; }
+        V lo, hi_n;
+        extremes(sg[0], sg[1], sg[2], lo, hi_n);
+        ok &= ~(lo - np * hi_n + two_c_sq < -tol) & ~(sig_t - hi_n < -tol);
+        // plastic strains d_eps^p = -sum mu_a m_a; d_gamma = max - min
+        V ep[3];
+        for (int t = 0; t < 3; ++t) { ep[t] = zero; ep[t] -= mu0 * u.m[t]; ep[t] -= mu1 * v.m[t]; }
+        V e_min, e_max;
+        extremes(ep[0], ep[1], ep[2], e_min, e_max);
+        gamma = e_max - e_min;
+    };
+    V sg[3], best[3], gamma, best_gamma;
+    M done, second;
+    try_pair(q1, sg, gamma, done);
+    done &= todo;
+    for (int t = 0; t < 3; ++t) best[t] = sg[t];
+    best_gamma = gamma;
+    if (bits(M(todo & ~done))) {
+        try_pair(q2, sg, gamma, second);
+        second &= todo & ~done;
+        for (int t = 0; t < 3; ++t) best[t] = second ? sg[t] : best[t];
+        best_gamma = second ? gamma : best_gamma;
+        done |= second;
+    }
+    // to_xy: the same principal direction, the new principal values
+    const V pn = 0.5 * (best[1] + best[0]), rn = 0.5 * (best[1] - best[0]);
+    const V inv_r = one / r, c2 = r > 0 ? a * inv_r : one, s2xy = r > 0 ? xy * inv_r : zero;
+    xx = done ? pn + rn * c2 : xx;
+    yy = done ? pn - rn * c2 : yy;
+    xy = done ? rn * s2xy : xy;
+    zz = done ? best[2] : zz;
+    d_gamma = done ? best_gamma : d_gamma;
+    return bits(done);
+}
+// eq. 6's consult of the Mohr-Coulomb points q .. q + N k - 1 of material mc (the largest
+// whole number of groups of N before qend), which hold their elastic trials (the AVX2
+// point loop's, consult_block in Simulation::run_points): the elastic test, the closed-form shear return
+// and the search's first two sets (an edge, the apex line), then one_point(r, trial) (the
+// one-point test and return, mohr_consult, and the stress stored) for a lane those do not
+// settle. Returns where it stopped (the caller consults the last points). Own: each point's
+// own strength (scatter); vol0_of(g): V0 of group g. A point's consult reads and writes that
+// point only; each lane's operations are those of the one-point code. The lanes the closed
+// form leaves go on at once (edge_return, then the one-point code): a second pass over the
+// groups holding them, which made the elastic test and the return again to find what
+// edge_return needs, was no faster (6.8 % of the groups of four hold one in steps 3600-3640
+// of bench_flow.deck).
+template <bool Own, class Vol0, class OnePoint>
+LPFDM_LANE inline long consult(const MaterialConstants& mc, long q, const long qend, const ConsultArrays& a, const Vol0& vol0_of, const OnePoint& one_point) {
+    // Local pointers (the stores of the yielded flags, through bytes, may change any object)
+    double *psxx = a.sxx, *psyy = a.syy, *psxy = a.sxy, *pszz = a.szz;
+    const double* pvol = a.vol;
+    const std::uint16_t* pgroup = a.group;
+    const double *pc0 = a.c0, *pnphi = a.n_phi, *psqrt = a.sqrt_n_phi;
+    std::uint8_t* pyielded = a.yielded;
+    double *pshear = a.plastic_shear, *pwork = a.plastic_work;
+    // pyielded[r + l] != 0 in lane l (one word: byte l is lane l's, x86 being little-endian)
+    using Word = std::conditional_t<N == 4, std::uint32_t, std::uint64_t>;
+    auto yielded_lanes = [&](long r, M& soft) LPFDM_LANE {
+        Word w;
+        std::memcpy(&w, pyielded + r, sizeof w);
+        soft = M(((M{} + static_cast<long long>(w)) & kLaneByte) != 0);
+    };
+    // strength_of, N points at once: the same operations in each lane
+    auto strength = [&](long r, V& np, V& two_c_sq) LPFDM_LANE {
+        V c0, sq;
+        if constexpr (Own) {
+            load(pc0 + r, c0); load(pnphi + r, np); load(psqrt + r, sq);
+        } else {
+            splat(mc.c, c0); splat(mc.n_phi, np); splat(mc.sqrt_n_phi, sq);
+        }
+        M soft;
+        yielded_lanes(r, soft);
+        const double keep = 1 - mc.soften;
+        const V c = soft ? c0 * keep : c0;
+        two_c_sq = 2 * c * sq;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
+    };
+    // record_yield of lanes `lanes` (bits), returned from the trials t_* to xx .. zz with
+    // plastic shear d_gamma: the same operations
+    auto record = [&](long r, int lanes, const V& xx, const V& yy, const V& xy, const V& zz, const V& t_xx, const V& t_yy, const V& t_xy, const V& t_zz, const V& d_gamma) LPFDM_LANE {
+        V work;  // compliance_product(mc, s, trial - s)
+        compliance_product(mc, xx, yy, xy, zz, V(t_xx - xx), V(t_yy - yy), V(t_xy - xy), V(t_zz - zz), work);
+        V v0{};  // the lanes' groups' V0: one look-up where they are one group (a word holds four)
+        std::uint64_t g[N / 4];
+        std::memcpy(g, pgroup + r, sizeof g);
+        bool one = true;
+        for (int w = 0; w < N / 4; ++w) one &= g[w] == (g[0] & 0xffff) * 0x0001000100010001ULL;
+        if (one) splat(vol0_of(int(g[0] & 0xffff)), v0);
+        else for (int l = 0; l < N; ++l) v0[l] = vol0_of(pgroup[r + l]);
+        M m;
+        lane_mask(lanes, m);
+        V gamma, pw, vol;
+        load(pshear + r, gamma); load(pwork + r, pw); load(pvol + r, vol);
+        const V vk = v0 < vol ? v0 : vol;  // std::min(vol, vol0)
+        gamma = m ? gamma + d_gamma : gamma;
+        pw = m ? pw + vk * work : pw;
+        store(pshear + r, gamma); store(pwork + r, pw);
+        // softening from the next consult: 1 where a lane yielded (words, no branch: lanes yield at random)
+        static constexpr std::uint32_t kLaneBytes[16] = {0x0u, 0xffu, 0xff00u, 0xffffu, 0xff0000u, 0xff00ffu, 0xffff00u, 0xffffffu,
+                                                         0xff000000u, 0xff0000ffu, 0xff00ff00u, 0xff00ffffu, 0xffff0000u, 0xffff00ffu, 0xffffff00u, 0xffffffffu};
+        for (int w = 0; w < N / 4; ++w) {
+            std::uint32_t y;
+            std::memcpy(&y, pyielded + r + 4 * w, 4);  // pyielded[r + 4 w + l] in byte l
+            const std::uint32_t set = kLaneBytes[lanes >> (4 * w) & 15];
+            y = (y & ~set) | (0x01010101u & set);
+            std::memcpy(pyielded + r + 4 * w, &y, 4);
+        }
+    };
+    constexpr int all = (1 << N) - 1;
+    for (; q + N <= qend; q += N) {
+        V xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;
+        load(psxx + q, xx); load(psyy + q, yy); load(psxy + q, xy); load(pszz + q, zz);
+        strength(q, np, two_c_sq);
+        int settled = inside(xx, yy, xy, zz, np, two_c_sq, radius);
+        if (settled == all) continue;  // every lane inside: the trials stand
+        const V t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
+        Found found;
+        settled = shear_return(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
+        if (const int sh = settled >> N) record(q, sh, xx, yy, xy, zz, t_xx, t_yy, t_xy, t_zz, d_gamma);
+        int left = ~settled & all;
+        if (left) {  // an edge or the apex line (the search's first two sets), from the trials
+            V ex = t_xx, ey = t_yy, exy = t_xy, ez = t_zz;
+            if (const int edge = edge_return(ex, ey, exy, ez, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, left, d_gamma)) {
+                M done;
+                lane_mask(edge, done);
+                xx = done ? ex : xx; yy = done ? ey : yy; xy = done ? exy : xy; zz = done ? ez : zz;
+                record(q, edge, ex, ey, exy, ez, t_xx, t_yy, t_xy, t_zz, d_gamma);
+                left &= ~edge;
+            }
+        }
+        store(psxx + q, xx); store(psyy + q, yy); store(psxy + q, xy); store(pszz + q, zz);
+        for (int l = 0; left; ++l, left >>= 1)  // the lanes still left: the one-point code, on the trial
+            if (left & 1) one_point(q + l, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]});
+    }
+    return q;
+}
+#undef LPFDM_LANE
+}  // namespace lanes
+using MohrLanes = lanes::Found;
+// The lanes' functions as functions of their own, for the tests (built for AVX2).
 __attribute__((target("avx2"))) inline int mohr_inside_lanes(const v4d& xx, const v4d& yy, const v4d& xy, const v4d& zz, const v4d& np, const v4d& two_c_sq, v4d& r) {
-    return lanes4::inside(xx, yy, xy, zz, np, two_c_sq, r);
+    return lanes::inside(xx, yy, xy, zz, np, two_c_sq, r);
 }
 __attribute__((target("avx2"))) inline int mohr_return_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double tension, double a1, double a2, v4d& d_gamma, MohrLanes& found) {
-    return lanes4::shear_return(xx, yy, xy, zz, r, np, two_c_sq, n_psi, tension, a1, a2, d_gamma, found);
+    return lanes::shear_return(xx, yy, xy, zz, r, np, two_c_sq, n_psi, tension, a1, a2, d_gamma, found);
 }
 __attribute__((target("avx2"))) inline int mohr_edge_lanes(v4d& xx, v4d& yy, v4d& xy, v4d& zz, const v4d& r, const v4d& np, const v4d& two_c_sq, double n_psi, double a1, double a2, const MohrLanes& m, int left, v4d& d_gamma) {
-    return lanes4::edge_return(xx, yy, xy, zz, r, np, two_c_sq, n_psi, a1, a2, m, left, d_gamma);
-}
-__attribute__((LPFDM_AVX512)) inline int mohr_inside_lanes(const v8d& xx, const v8d& yy, const v8d& xy, const v8d& zz, const v8d& np, const v8d& two_c_sq, v8d& r) {
-    return lanes8::inside(xx, yy, xy, zz, np, two_c_sq, r);
-}
-__attribute__((LPFDM_AVX512)) inline int mohr_return_lanes(v8d& xx, v8d& yy, v8d& xy, v8d& zz, const v8d& r, const v8d& np, const v8d& two_c_sq, double n_psi, double tension, double a1, double a2, v8d& d_gamma, MohrLanes8& found) {
-    return lanes8::shear_return(xx, yy, xy, zz, r, np, two_c_sq, n_psi, tension, a1, a2, d_gamma, found);
-}
-__attribute__((LPFDM_AVX512)) inline int mohr_edge_lanes(v8d& xx, v8d& yy, v8d& xy, v8d& zz, const v8d& r, const v8d& np, const v8d& two_c_sq, double n_psi, double a1, double a2, const MohrLanes8& m, int left, v8d& d_gamma) {
-    return lanes8::edge_return(xx, yy, xy, zz, r, np, two_c_sq, n_psi, a1, a2, m, left, d_gamma);
+    return lanes::edge_return(xx, yy, xy, zz, r, np, two_c_sq, n_psi, a1, a2, m, left, d_gamma);
 }
 #endif
 // f(i, Tag<T>) for i = i0 .. i1 - 1: with Wide (std::true_type, inside a function built for
@@ -2406,22 +2718,53 @@ bool balance(int team, const Was& was, const Seconds& seconds, T* now) {
 //   Reference  the plain cycle (Simulation::step_reference): every cell, point and node,
 //              one value at a time, one thread. The definition of a step.
 //   Fast       the same cycle over the occupied part of the lattice only, by threads
-//              (OpenMP), and four values per AVX2 register where the processor has it
-//              (the Mohr-Coulomb consult eight per AVX-512 register where it has that).
+//              (OpenMP), and four values per AVX2 register where the processor has it.
 //   Scalar     Fast without AVX2.
 // All three give the same numbers, bit for bit (tests/test_reference.cpp).
 enum class Kernel : std::uint8_t { Fast, Scalar, Reference };
 inline const char* kernel_name(Kernel k) { return k == Kernel::Reference ? "reference" : k == Kernel::Scalar ? "scalar" : "fast"; }
 
+// What a scene switches on, read once from it when a Simulation is made (modes_of): every
+// part of the cycle asks this, never whether some array happens to be empty.
+struct Modes {
+    Mapping mapping = Mapping::Paper;  // eq. 8's mapping: the paper's, or MAPPING SMOOTH (GIMP's)
+    Motion motion = Motion::Centre;    // eq. 7a/7b's rule, never Default (SMOOTH: BILINEAR, else CENTRE)
+    Advect advect = Advect::Eq12;      // what the lattice carries: eq. 12, ADVECT POINTS or ADVECT FLIP
+    bool hourglass = false;            // HOURGLASS kappa > 0: the checkerboard's viscous force
+    bool dynamic = false;              // SHAKE or ABSORB: ground motion, dashpots
+    bool plastic = false;              // a Mohr-Coulomb material (or a user model): plastic shear and work
+    bool scatter = false;              // SCATTER: each point its own strength
+    Kernel asked = Kernel::Fast;       // the kernel asked for
+    Kernel kernel = Kernel::Fast;      // the kernel that runs it
+    const char* why = "";              // why the two differ ("" when they do not)
+};
+inline Modes modes_of(const Scene& s, Kernel asked) {
+    Modes m;
+    m.mapping = s.mapping;
+    m.motion = s.motion != Motion::Default ? s.motion : s.mapping == Mapping::Smooth ? Motion::Bilinear : Motion::Centre;
+    m.advect = s.advect;
+    m.hourglass = s.hourglass > 0;
+    m.dynamic = !s.shakes.empty() || s.absorb != 0;
+    for (const auto& mat : s.materials) {
+        m.plastic |= mat.model == Model::MohrCoulomb;
+        m.scatter |= mat.scatter > 0;
+    }
+    m.asked = m.kernel = asked;
+    // ADVECT FLIP is written once, in the reference cycle (the fast kernels have no FLIP
+    // transfer to equal): it runs there whatever kernel was asked for, and says so.
+    if (s.advect == Advect::Flip && asked != Kernel::Reference) {
+        m.kernel = Kernel::Reference;
+        m.why = "ADVECT FLIP runs on the reference cycle only";
+    }
+    return m;
+}
+
 class Simulation {
 public:
-    explicit Simulation(const Scene& scene, Kernel kernel = Kernel::Fast) : kernel_(kernel), sc_(scene) {
-        // ADVECT FLIP is written once, in the reference cycle, which runs it whatever kernel
-        // was asked for (the fast kernels have no FLIP transfer to equal).
-        if (sc_.advect == Advect::Flip) kernel = kernel_ = Kernel::Reference;
-        if (sc_.motion == Motion::Default) sc_.motion = sc_.mapping == Mapping::Smooth ? Motion::Bilinear : Motion::Centre;
+    explicit Simulation(const Scene& scene, Kernel kernel = Kernel::Fast) : modes_(modes_of(scene, kernel)), sc_(scene) {
+        kernel = kernel_ = modes_.kernel;
+        sc_.motion = modes_.motion;
         wide_ = kernel == Kernel::Fast && have_wide();
-        wide512_ = wide_ && have_wide512();
 #if defined(_OPENMP)
         if (kernel != Kernel::Reference) team_ = std::max(1, std::min(omp_get_max_threads(), omp_get_thread_limit()));
 #endif
@@ -2454,6 +2797,7 @@ public:
         if (reorder_due()) reorder_points();  // storage only (REORDER), as step() does
     }
     Kernel kernel() const { return kernel_; }
+    const Modes& modes() const { return modes_; }  // what the scene switches on, the kernel that runs it and why
     // Whether every step runs the reference cycle (the reference kernel).
     bool reference_only() const { return kernel_ == Kernel::Reference; }
 
@@ -2477,22 +2821,8 @@ public:
     }
     void set_wide(bool on) {
         wide_ = on && have_wide() && kernel_ != Kernel::Reference;
-        wide512_ = wide_ && have_wide512();
         choose_point_loop();
     }
-    // The AVX2 point loop's Mohr-Coulomb consult eight points per AVX-512 register instead
-    // of four per AVX2 register: used when the AVX2 version is on and the processor has
-    // AVX-512 F, VL and DQ; set_wide512(false) keeps four (the same numbers, bit for bit).
-    // Never with LPFDM_NO_AVX512 defined (see LPFDM_AVX512). set_wide(true) turns it on again.
-    static bool have_wide512() {
-#if LPFDM_WIDE && !defined(LPFDM_NO_AVX512)
-        return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq");
-#else
-        return false;
-#endif
-    }
-    void set_wide512(bool on) { wide512_ = on && wide_ && have_wide512(); }
-    bool wide512() const { return wide512_; }
     // Threads the fast kernel uses: omp_get_max_threads() when the Simulation was made
     // (1 for the reference kernel, or without OpenMP).
     int threads() const { return team_; }
@@ -2611,6 +2941,7 @@ public:
             user_models_.push_back(std::move(f));
         }
         find_mohr_groups();
+        modes_.plastic = true;
         if (p_.plastic_shear.empty()) {
             p_.plastic_shear.assign(p_.size(), 0.0);
             p_.yielded.assign(p_.size(), 0);
@@ -2696,7 +3027,7 @@ public:
     // (axis 0: x, 1: y; zero where nothing shakes).
     double ground_increment(int axis) const { return ground_[axis].du; }
     double ground_displacement(int axis) const { return ground_[axis].d; }
-    bool dynamic() const { return dynamic_; }                          // the scene shakes or absorbs (SHAKE, ABSORB)
+    bool dynamic() const { return modes_.dynamic; }                          // the scene shakes or absorbs (SHAKE, ABSORB)
 
     // Restart files (write_state, read_state). What a step reads from the steps before it,
     // besides the scene and the points: f(name, member) for the step count and the running
@@ -2729,7 +3060,7 @@ public:
         occupied_ = landed(t);
         // MAPPING SMOOTH: the sums made anew (the centroids the next step reads,
         // cell_centroid), and the box of every cell the points' squares touch.
-        if (sc_.mapping == Mapping::Smooth) map_points();
+        if (modes_.mapping == Mapping::Smooth) map_points();
         strained_ = occupied_.grow(2, mx_, my_);
         live_nodes_ = integrated_ = {0, mx_ + 1, 0, my_ + 1};
         parts_known_ = false;
@@ -2739,7 +3070,7 @@ public:
         for (std::size_t n = 0; n < driven_.size(); ++n)
             if (driven_[n]) driven_nodes_.push_back(std::int32_t(n));
         mark_wall_cells();  // the cells the walls' faces may be crossed from, at the travel read
-        if (dynamic_) replay_ground();  // the ground's motion to this step, and the edges released at START
+        if (modes_.dynamic) replay_ground();  // the ground's motion to this step, and the edges released at START
     }
 
     // The phases of step(), in order; public so that tests and lessons can step
@@ -2762,7 +3093,7 @@ private:
             f("wall_vx", s.sc_.walls[w].vx); f("wall_vy", s.sc_.walls[w].vy);
             f("wall_dx0", s.walls_[w].dx0); f("wall_dy0", s.walls_[w].dy0);  // the faces' last travel (hold_by_walls)
         }
-        if (s.sc_.advect == Advect::Flip && !s.walls_.empty()) f("node_driven", s.driven_);  // the nodes the walls drove last (flip_transfer)
+        if (s.modes_.advect == Advect::Flip && !s.walls_.empty()) f("node_driven", s.driven_);  // the nodes the walls drove last (flip_transfer)
         // The energy account's running sums (energy()).
         auto& e = s.es_;
         f("energy_w_walls", e.w_walls); f("energy_w_fixes", e.w_fixes); f("energy_w_gravity", e.w_gravity); f("energy_d_damping", e.d_damping);
@@ -2770,7 +3101,7 @@ private:
         f("energy_kinetic", e.kinetic); f("energy_peak_kinetic", e.peak_kinetic);
         f("energy_left_strain", e.left_strain); f("energy_left_potential", e.left_potential); f("energy_left_plastic", e.left_plastic);
         f("energy_strain0", e.strain0); f("energy_potential0", e.potential0);
-        if (s.dynamic_) {  // SHAKE, ABSORB (the ground's own motion is replayed: resumed())
+        if (s.modes_.dynamic) {  // SHAKE, ABSORB (the ground's own motion is replayed: resumed())
             f("energy_w_ground", e.w_ground); f("energy_h_ground", e.h_ground); f("energy_h_input", e.h_input);
             f("energy_d_absorb", e.d_absorb); f("energy_h_absorb", e.h_absorb); f("energy_w_held", e.w_held); f("energy_h_held", e.h_held);
             f("absorb_hold_x", s.hold_fx_); f("absorb_hold_y", s.hold_fy_);
@@ -2830,8 +3161,8 @@ private:
     __attribute__((target("avx2"))) void advance_blocks_wide(long k0, long k1, Part& part, Landing& t);
     // The point loop's arrays of the stress, volume and group (run_points' own pointers).
     struct PointArrays { double *sxx, *syy, *sxy, *szz; const double* vol; const std::uint16_t* group; };
-    // The Mohr-Coulomb consult in lanes: four points (AVX2) and eight (AVX-512), one code
-    // (detail::lanes4::consult, detail::lanes8::consult); the arrays it reads and writes, and
+    // The Mohr-Coulomb consult in lanes, four points per AVX2 register (detail::lanes::consult);
+    // the arrays it reads and writes, and
     // its one-point test and return of point r with elastic trial s (the stress stored).
     detail::ConsultArrays consult_arrays(const PointArrays& a) {
         return {a.sxx, a.syy, a.sxy, a.szz, a.vol, a.group, p_.c0.data(), p_.n_phi.data(), p_.sqrt_n_phi.data(), p_.yielded.data(), p_.plastic_shear.data(), p_.plastic_work.data()};
@@ -2841,7 +3172,6 @@ private:
         a.sxx[r] = s.xx; a.syy[r] = s.yy; a.sxy[r] = s.xy; a.szz[r] = s.zz;
     }
     template <bool Own> __attribute__((target("avx2"))) void consult_lanes(const MaterialConstants& mc, long q, long qend, const PointArrays& a);
-    template <bool Own> __attribute__((LPFDM_AVX512)) void consult_lanes8(const MaterialConstants& mc, long q, long qend, const PointArrays& a);
 #endif
     // Row j of a lattice phase: f(j, std::false_type), or f(j, std::true_type) built for
     // AVX2 (f inlined into row_wide) when the AVX2 version is on, so that f may work
@@ -2990,7 +3320,7 @@ private:
     // The fast kernel's point phase: eq. 6, 7a/7b and eq. 7, 8 in one pass, by threads
     // (advance_parted) or by one.
     void point_pass() {
-        if (!shx_.empty()) smooth_point_pass();
+        if (modes_.mapping == Mapping::Smooth) smooth_point_pass();
         else if (serial() || !advance_parted()) advance_points();
     }
     // The reference cycle's phases, in step order.
@@ -3020,7 +3350,7 @@ private:
     // (flip_changes). The fixed directions and the walls read the same masses, and the same
     // force F (with FLIP reference_integrate adds gravity's share of M_n - m_n to it);
     // SHAKE and ABSORB, which FLIP does not take (validate), read eq. 10's.
-    const std::vector<double>& inertia() const { return sc_.advect == Advect::Flip ? flip_mass_ : nmass_; }
+    const std::vector<double>& inertia() const { return modes_.advect == Advect::Flip ? flip_mass_ : nmass_; }
     // eq. 6 for point k in a cell of strain increment e and rotation (rc, rs).
     void consult_model(std::size_t k, const MaterialConstants& mc, const StrainIncrement& e, double rc, double rs, Stress& s);
     // The strength of Mohr-Coulomb point k now: its own c and N_phi (Own: scatter) or its
@@ -3043,6 +3373,7 @@ private:
     LPFDM_INLINE bool strain_at(double fx, double fy, const Range& box, double& exx, double& eyy, double& exy, double& eyx) const;
     Range impose_supports();
     void carried_row(int j, int i0, int i1);
+    Modes modes_;
     Kernel kernel_ = Kernel::Fast;
     int team_ = 1;  // threads, fixed when the Simulation is made
     bool profiling_ = false;
@@ -3050,7 +3381,6 @@ private:
     double return_s_ = 0;  // profiling: return_seconds()
     long returned_ = 0;
     bool wide_ = false;  // the AVX2 version of the point loop and lattice phases (LPFDM_WIDE)
-    bool wide512_ = false;  // its Mohr-Coulomb consult eight points per AVX-512 register
 
     Scene sc_;
     int mx_ = 0, my_ = 0;
@@ -3165,13 +3495,12 @@ private:
     // The same with point k's volume vol given.
     double energy_volume(std::size_t k, double vol) const {
         const double v0 = groups_[p_.group[k]].vol0;
-        return sc_.advect == Advect::Flip ? v0 : std::min(vol, v0);
+        return modes_.advect == Advect::Flip ? v0 : std::min(vol, v0);
     }
     double potential_energy(std::size_t k) const { return -groups_[p_.group[k]].mass * (sc_.gravity_x * p_.x[k] + sc_.gravity_y * p_.y[k]); }
     // Earthquakes: ground motion (SHAKE) and absorbing edges (ABSORB); see dynamics_begin.
     using Ground = detail::GroundMotion;
     Ground ground_[2];                // x, y
-    bool dynamic_ = false;            // the scene shakes or absorbs
     long shake_step_ = 0;             // the first step of the shaking (detail::start_step; 0 without SHAKE)
     // One dashpot per (node, edge cell) of an absorbing edge: its node's slot, the cell (it
     // acts while the cell holds mass), its coefficients rho c L / 2 in x and y [N s/m per m],
@@ -3221,7 +3550,7 @@ inline void Simulation::setup() {
     mx_ = sc_.mx; my_ = sc_.my; L_ = sc_.cell_m; invL_ = 1 / L_;
     const std::size_t nodes = std::size_t(mx_ + 1) * (my_ + 1), cells = std::size_t(mx_) * my_;
     for (auto* v : {&dux_, &duy_, &fx_, &fy_, &nmass_, &nmass_prev_, &dux_old_, &duy_old_}) v->assign(nodes, 0.0);
-    if (sc_.advect == Advect::Flip)
+    if (modes_.advect == Advect::Flip)
         for (auto* v : {&flip_mass_, &flip_ax_, &flip_ay_, &flip_sx_, &flip_sy_}) v->assign(nodes, 0.0);
     fixed_.assign(nodes, 0);
     driven_.assign(nodes, 0);
@@ -3234,8 +3563,8 @@ inline void Simulation::setup() {
     spans(mx_, cols_);
     spans(my_, rows_);
     if (sc_.hourglass > 0) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
-    if (sc_.mapping == Mapping::Smooth) for (auto* v : {&shx_, &shy_, &smu_, &smv_, &centroid_trace_}) v->assign(cells, 0.0);
-    if (sc_.advect == Advect::Points)
+    if (modes_.mapping == Mapping::Smooth) for (auto* v : {&shx_, &shy_, &smu_, &smv_, &centroid_trace_}) v->assign(cells, 0.0);
+    if (modes_.advect == Advect::Points)
         carried_.assign(cells, Carried{});
     for (const auto& m : sc_.materials) consts_.push_back(constants_of(m));
 
@@ -3420,12 +3749,12 @@ inline void Simulation::reference_cell_strains() {
             const int c = cell(i, j);
             CellStrain& s = strain_[std::size_t(c)];
             s = CellStrain{};  // an empty cell: no strain and no rotation (see eq. 12 in the manual)
-            if (!hgx_.empty()) hgx_[std::size_t(c)] = hgy_[std::size_t(c)] = 0;
+            if (modes_.hourglass) hgx_[std::size_t(c)] = hgy_[std::size_t(c)] = 0;
             if (!(cmass_[std::size_t(c)] > 0)) continue;
             const StrainIncrement e = strain_of_cell(i, j);  // eq. 5a-5d
             s.xx = e.xx; s.yy = e.yy; s.xy = e.xy; s.yx = e.yx;
             jaumann_rotation(e.theta(), s.rc, s.rs);  // eq. 5e, 5f
-            if (!hgx_.empty()) checkerboard_mode(dux_.data(), duy_.data(), node(i, j), mx_ + 1, hgx_[std::size_t(c)], hgy_[std::size_t(c)]);
+            if (modes_.hourglass) checkerboard_mode(dux_.data(), duy_.data(), node(i, j), mx_ + 1, hgx_[std::size_t(c)], hgy_[std::size_t(c)]);
         }
 }
 
@@ -3438,7 +3767,7 @@ inline void Simulation::consult_model(std::size_t k, const MaterialConstants& mc
     if (mc.model == Model::User) { user_consult(mc, k, e, s); return; }
     elastic_increment(mc, e, s);  // the elastic trial
     if (mc.model != Model::MohrCoulomb) return;
-    p_.c0.empty() ? mohr_consult<false>(mc, k, p_.vol[k], s) : mohr_consult<true>(mc, k, p_.vol[k], s);
+    modes_.scatter ? mohr_consult<true>(mc, k, p_.vol[k], s) : mohr_consult<false>(mc, k, p_.vol[k], s);
 }
 
 // eq. 7a/7b (or MOTION CENTRE, BILINEAR): where a point of cell (ci, cj) with the cell's
@@ -3447,9 +3776,9 @@ inline void Simulation::move_with_cell(int ci, int cj, const StrainIncrement& e,
     const double xi = ci * L_, yj = cj * L_;
     const int n1 = node(ci, cj), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
     const double ux[4] = {dux_[n1], dux_[n2], dux_[n3], dux_[n4]}, uy[4] = {duy_[n1], duy_[n2], duy_[n3], duy_[n4]};
-    if (sc_.motion == Motion::Paper) {
+    if (modes_.motion == Motion::Paper) {
         move_point_paper(x0, y0, e, xi, yj, ux[0], uy[0], x, y);
-    } else if (sc_.motion == Motion::Centre) {
+    } else if (modes_.motion == Motion::Centre) {
         double umx, umy;
         mean_of_four(ux[0], ux[1], ux[2], ux[3], umx); mean_of_four(uy[0], uy[1], uy[2], uy[3], umy);
         move_point_centre(x0, y0, e, xi, yj, L_, umx, umy, x, y, dx, dy);
@@ -3476,7 +3805,7 @@ inline void Simulation::stop_at_edges(int c, double x0, double y0, double& x, do
 // position, eq. 7 and 8 add its mass and V sigma to the cell it lies in now. A point that
 // left the lattice leaves the cycle (its mass becomes outflow).
 inline void Simulation::reference_points() {
-    if (sc_.mapping == Mapping::Smooth) { reference_points_smooth(); return; }
+    if (modes_.mapping == Mapping::Smooth) { reference_points_smooth(); return; }
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) std::fill(v->begin(), v->end(), 0.0);
     std::fill(carried_.begin(), carried_.end(), Carried{});
     double mass = 0;
@@ -3501,7 +3830,7 @@ inline void Simulation::reference_points() {
         p_.cell[k] = cn;
         if (cn < 0) continue;  // left the lattice
         const int ni = cn % mx_, nj = cn / mx_;
-        if (!carried_.empty()) carry_to(cn, ni, nj, g.mass, x, y, dx, dy, e);  // ADVECT POINTS
+        if (modes_.advect == Advect::Points) carry_to(cn, ni, nj, g.mass, x, y, dx, dy, e);  // ADVECT POINTS
         add_to_cell(std::size_t(cn), g.mass, std::min(p_.vol[k], g.vol0), s.xx, s.yy, s.xy);  // eq. 7, 8
         mass += g.mass;
     }
@@ -3562,7 +3891,7 @@ inline void Simulation::smooth_move(std::size_t k) {
         move_with_cell(ci, cj, {ce.xx, ce.yy, ce.xy, ce.yx}, px, py, x, y, ddx, ddy);
         dx += w * (x - px); dy += w * (y - py);
     });
-    if (sc_.advect == Advect::Flip) { e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5; }  // the first half (flip_second_half)
+    if (modes_.advect == Advect::Flip) { e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5; }  // the first half (flip_second_half)
     smooth_stress(k, e);
     double x = x0 + dx, y = y0 + dy;
     stop_at_edges(p_.cell[k], x0, y0, x, y);  // as in reference_points
@@ -3584,7 +3913,7 @@ inline void Simulation::smooth_stress(std::size_t k, const StrainIncrement& e) {
 // sums cleared before; a point that left the lattice leaves the cycle. t: the cells
 // touched, the mass inside.
 inline void Simulation::smooth_map(Landing& t) {
-    const bool flip = sc_.advect == Advect::Flip;
+    const bool flip = modes_.advect == Advect::Flip;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const double x = p_.x[k], y = p_.y[k];
         p_.cell[k] = cell_holding(x, y);
@@ -3609,7 +3938,7 @@ inline void Simulation::reference_points_smooth() {
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
     Landing t;
     smooth_map(t);
-    if (sc_.advect == Advect::Flip) flip_second_half();
+    if (modes_.advect == Advect::Flip) flip_second_half();
 }
 
 // eq. 7 and 8 for point k at (x, y), MAPPING SMOOTH: its mass m and V sigma shared out
@@ -3639,7 +3968,7 @@ inline void Simulation::reference_nodal_forces() {
         double w;
         smear_weight(cvol_[c], L2, inv2L, w);  // eq. 8
         svxx_[c] *= w; svyy_[c] *= w; svxy_[c] *= w;
-        if (!shx_.empty()) smooth_moment(c);
+        if (modes_.mapping == Mapping::Smooth) smooth_moment(c);
     }
     const double khg = sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s);
     for (int j = 0; j <= my_; ++j)
@@ -3655,14 +3984,14 @@ inline void Simulation::reference_nodal_forces() {
             if (left && above) cell_force(c - 1, std::integral_constant<int, 2>{});
             if (right && below) cell_force(c - mx_, std::integral_constant<int, 3>{});
             if (left && below) cell_force(c - mx_ - 1, std::integral_constant<int, 4>{});
-            if (!shx_.empty()) {  // MAPPING SMOOTH: F[a] -= s_x s_y (shx, shy) / L, s = the corner's signs of b
+            if (modes_.mapping == Mapping::Smooth) {  // MAPPING SMOOTH: F[a] -= s_x s_y (shx, shy) / L, s = the corner's signs of b
                 auto moment = [&](int a, double h) { fx -= h * shx_[std::size_t(a)]; fy -= h * shy_[std::size_t(a)]; };
                 if (right && above) moment(c, 1);
                 if (left && above) moment(c - 1, -1);
                 if (right && below) moment(c - mx_, -1);
                 if (left && below) moment(c - mx_ - 1, 1);
             }
-            if (!hgx_.empty()) {  // HOURGLASS: F[a] = -kappa (M_J / 4) q_J h[a] / dt^2
+            if (modes_.hourglass) {  // HOURGLASS: F[a] = -kappa (M_J / 4) q_J h[a] / dt^2
                 auto hg = [&](int a, double h) {
                     fx -= khg * cmass_[std::size_t(a)] * hgx_[std::size_t(a)] * h;
                     fy -= khg * cmass_[std::size_t(a)] * hgy_[std::size_t(a)] * h;
@@ -3734,8 +4063,8 @@ LPFDM_INLINE inline bool Simulation::strain_at(double fxs, double fys, const Ran
 // neighbours that had mass (see the manual). ADVECT POINTS replaces all of this, and
 // ADVECT FLIP too: its transfer made the increments in the points' phase (flip_second_half).
 inline void Simulation::reference_compensate() {
-    if (sc_.advect == Advect::Flip) return;
-    if (!carried_.empty()) {
+    if (modes_.advect == Advect::Flip) return;
+    if (modes_.advect == Advect::Points) {
         for (int j = 0; j <= my_; ++j) carried_row(j, 0, mx_ + 1);
         return;
     }
@@ -3767,14 +4096,14 @@ inline void Simulation::reference_compensate() {
 // directions and moving walls; the kinetic energy summed by rows, in node order.
 inline void Simulation::reference_integrate() {
     const double dt2 = sc_.dt_s * sc_.dt_s;
-    if (sc_.advect == Advect::Flip)  // eq. 10 put gravity on m_n into F; F is the force on M_n (inertia)
+    if (modes_.advect == Advect::Flip)  // eq. 10 put gravity on m_n into F; F is the force on M_n (inertia)
         for (std::size_t n = 0; n < nmass_.size(); ++n) {
             fx_[n] += sc_.gravity_x * (flip_mass_[n] - nmass_[n]);
             fy_[n] += sc_.gravity_y * (flip_mass_[n] - nmass_[n]);
         }
-    if (dynamic_) dynamics_begin();  // the ground's step, the boundary forces (SHAKE, ABSORB)
+    if (modes_.dynamic) dynamics_begin();  // the ground's step, the boundary forces (SHAKE, ABSORB)
     keep_increments({0, mx_ + 1, 0, my_ + 1});  // for the energy account
-    if (sc_.advect == Advect::Flip) flip_changes();  // eq. 13, 14 on the transfer's masses
+    if (modes_.advect == Advect::Flip) flip_changes();  // eq. 13, 14 on the transfer's masses
     else
         for (std::size_t n = 0; n < nmass_.size(); ++n) {
             if (nmass_[n] == 0) { dux_[n] = duy_[n] = 0; continue; }
@@ -3782,13 +4111,13 @@ inline void Simulation::reference_integrate() {
             damped_increment(duy_[n], fy_[n], nmass_[n], dt2, sc_.damping, duy_[n]);
         }
     integrated_ = {0, mx_ + 1, 0, my_ + 1};
-    if (dynamic_) absorb_increments();  // the dashpots of ABSORB
+    if (modes_.dynamic) absorb_increments();  // the dashpots of ABSORB
     impose_supports();
-    if (sc_.advect == Advect::Flip) flip_return();  // the change to the points, and back
+    if (modes_.advect == Advect::Flip) flip_return();  // the change to the points, and back
     for (int j = 0; j <= my_; ++j) energy_row_terms(j, 0, mx_ + 1, std::false_type{});
     const double peak = es_.peak_kinetic;
     tally_energy(0, my_ + 1);
-    if (sc_.advect == Advect::Flip) {  // the kinetic energy is the points' (flip_return)
+    if (modes_.advect == Advect::Flip) {  // the kinetic energy is the points' (flip_return)
         es_.kinetic = flip_kinetic_;
         es_.peak_kinetic = std::max(peak, es_.kinetic);
     }
@@ -4028,7 +4357,7 @@ inline void Simulation::cell_strains() {
     const double* cm = cmass_.data();
     CellStrain* cs = strain_.data();
     double *hgx = hgx_.data(), *hgy = hgy_.data();
-    const bool hourglass = !hgx_.empty();
+    const bool hourglass = modes_.hourglass;
     // Cell (i, j), or the cells i .. i + 3 in the lanes of a vector T.
     auto cells = [&](int i, int j, auto tag) LPFDM_INLINE {
         using T = typename decltype(tag)::type;
@@ -4210,8 +4539,8 @@ inline void Simulation::advance_range(long k0, long k1, Part& part, Landing& t) 
 // The version of the point loop this scene runs, chosen once (at set-up, and when set_wide
 // changes the choice): the motion rule, ADVECT POINTS, and AVX2.
 inline void Simulation::choose_point_loop() {
-    const bool carry = sc_.advect == Advect::Points;
-    switch (sc_.motion) {
+    const bool carry = modes_.advect == Advect::Points;
+    switch (modes_.motion) {
     case Motion::Paper: run_ = &Simulation::advance_run<Motion::Paper, false>; break;  // ADVECT POINTS refuses PAPER
     case Motion::Centre: run_ = carry ? &Simulation::advance_run<Motion::Centre, true> : &Simulation::advance_run<Motion::Centre, false>; break;
     case Motion::Bilinear: run_ = carry ? &Simulation::advance_run<Motion::Bilinear, true> : &Simulation::advance_run<Motion::Bilinear, false>; break;
@@ -4220,13 +4549,13 @@ inline void Simulation::choose_point_loop() {
 #if LPFDM_WIDE
     // The AVX2 version for the default motion rule only (MOTION CENTRE, without ADVECT
     // POINTS): each version of this loop adds a fifth to the build time of the tests.
-    if (wide_ && sc_.motion == Motion::Centre && !carry) run_ = &Simulation::advance_run_wide;
+    if (wide_ && modes_.motion == Motion::Centre && !carry) run_ = &Simulation::advance_run_wide;
 #endif
 }
 
 // eq. 6 by a model the embedding program gave (set_user_model).
 inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s) {
-    const bool plastic = !p_.plastic_shear.empty();
+    const bool plastic = modes_.plastic;
     PointState ps{plastic ? p_.plastic_shear[q] : 0.0, plastic && p_.yielded[q]};
     user_models_[std::size_t(mc.user)](e, s, ps);
     if (plastic) { p_.plastic_shear[q] = ps.plastic_shear; p_.yielded[q] = ps.yielded; }
@@ -4246,20 +4575,12 @@ __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0
 
 // eq. 6's Mohr-Coulomb consult of points q .. qend-1 of material mc, which hold their
 // elastic trials (the AVX2 point loop's, consult_block): four points per AVX2 register
-// (detail::lanes4::consult) and the last one to three by the one-point code; or eight per
-// AVX-512 register (detail::lanes8::consult) and the last one to seven as consult_lanes
-// does them. Own: each point's own strength (scatter).
+// (detail::lanes::consult) and the last one to three by the one-point code. Own: each point's own strength (scatter).
 template <bool Own>
 __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const MaterialConstants& mc, long q, const long qend, const PointArrays& a) {
     auto one_point = [&](long r, Stress s) { consult_one<Own>(mc, r, s, a); };
-    q = detail::lanes4::consult<Own>(mc, q, qend, consult_arrays(a), [&](int g) { return groups_[std::size_t(g)].vol0; }, one_point);
+    q = detail::lanes::consult<Own>(mc, q, qend, consult_arrays(a), [&](int g) { return groups_[std::size_t(g)].vol0; }, one_point);
     for (; q < qend; ++q) one_point(q, Stress{a.sxx[q], a.syy[q], a.sxy[q], a.szz[q]});
-}
-template <bool Own>
-__attribute__((LPFDM_AVX512)) inline void Simulation::consult_lanes8(const MaterialConstants& mc, long q, const long qend, const PointArrays& a) {
-    auto one_point = [&](long r, Stress s) { consult_one<Own>(mc, r, s, a); };
-    q = detail::lanes8::consult<Own>(mc, q, qend, consult_arrays(a), [&](int g) { return groups_[std::size_t(g)].vol0; }, one_point);
-    if (q < qend) consult_lanes<Own>(mc, q, qend, a);
 }
 #endif
 
@@ -4504,7 +4825,7 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                             consult_point(mc, q, s, own);
                         }
                     };
-                    if (!p_.c0.empty()) consult(std::true_type{});  // scatter: each point's own strength
+                    if (modes_.scatter) consult(std::true_type{});  // scatter: each point's own strength
                     else consult(std::false_type{});
                 } else {
                     for (; q < qend; ++q) {
@@ -4661,13 +4982,8 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
                 long qend = single ? b1 : q + 1;
                 while (qend < b1 && group_consts_[std::size_t(pgroup[qend])] == &mc) ++qend;
                 if (mc.model == Model::MohrCoulomb) {
-                    if (!p_.c0.empty()) {  // scatter: each point's own strength
-                        if (wide512_) consult_lanes8<true>(mc, q, qend, arrays);
-                        else consult_lanes<true>(mc, q, qend, arrays);
-                    } else {
-                        if (wide512_) consult_lanes8<false>(mc, q, qend, arrays);
-                        else consult_lanes<false>(mc, q, qend, arrays);
-                    }
+                    if (modes_.scatter) consult_lanes<true>(mc, q, qend, arrays);  // scatter: each point's own strength
+                    else consult_lanes<false>(mc, q, qend, arrays);
                     consulted += qend - q;
                 }
                 q = qend;
@@ -4938,7 +5254,7 @@ inline void Simulation::remove_departed() {
             mass_out_ += groups_[p_.group[k]].mass;
             es_.left_strain += strain_energy(k);  // the energy account keeps what it took along
             es_.left_potential += potential_energy(k);
-            if (!p_.plastic_work.empty()) es_.left_plastic += p_.plastic_work[k];
+            if (modes_.plastic) es_.left_plastic += p_.plastic_work[k];
         } else {
             cell[k] = 0;
         }
@@ -5026,8 +5342,8 @@ inline void Simulation::clear_row(int j, int lo, int hi) {
     const int c0 = std::max(cell(occupied_.i0, j), lo), c1 = std::min(j * mx_ + occupied_.i1, hi);
     if (c0 >= c1) return;
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) std::fill(v->data() + c0, v->data() + c1, 0.0);
-    if (!carried_.empty()) std::fill(carried_.data() + c0, carried_.data() + c1, Carried{});
-    if (!shx_.empty())
+    if (modes_.advect == Advect::Points) std::fill(carried_.data() + c0, carried_.data() + c1, Carried{});
+    if (modes_.mapping == Mapping::Smooth)
         for (auto* v : {&shx_, &shy_, &smu_, &smv_}) std::fill(v->data() + c0, v->data() + c1, 0.0);
 }
 
@@ -5069,7 +5385,7 @@ inline void Simulation::map_point(std::size_t k) {
 // map_to_lattice: eq. 7 and 8 for every point, in point order, into the cell it lies in
 // (after set-up, after a program moved points, or when advance_parted's chunks clashed).
 inline void Simulation::map_points() {
-    if (sc_.mapping == Mapping::Smooth) {  // every cell each point's square overlaps (the reference's mapping)
+    if (modes_.mapping == Mapping::Smooth) {  // every cell each point's square overlaps (the reference's mapping)
         for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
         Landing t;
         smooth_map(t);
@@ -5109,7 +5425,7 @@ inline void Simulation::nodal_forces() {
     // Only eq. 12 reads the previous masses: the nodes of nr keep theirs as the forces'
     // loop below overwrites them, and it notes the rows where a node gained mass
     // (compensate() visits only those); here the ring of keep around nr.
-    const bool keep_prev = carried_.empty();
+    const bool keep_prev = modes_.advect != Advect::Points;
     if (keep_prev) {
         auto copy = [&](int j, int i0, int i1) { std::copy(nm + (j * (mx + 1) + i0), nm + (j * (mx + 1) + i1), nm_prev + (j * (mx + 1) + i0)); };
         for (int j = keep.j0; j < keep.j1; ++j) {
@@ -5131,11 +5447,11 @@ inline void Simulation::nodal_forces() {
     };
     auto smear_row = [&](int j, auto wide) LPFDM_INLINE { detail::sweep(j * mx + oc.i0, j * mx + oc.i1, wide, smear); };
     by_rows(kSmearRows, oc.j0, oc.j1, oc.size(), [&](int j) { each_row(smear_row, j); });
-    const bool smooth = !shx_.empty();
+    const bool smooth = modes_.mapping == Mapping::Smooth;
     if (smooth)  // MAPPING SMOOTH: the moments as reference_nodal_forces makes them
         for (int j = oc.j0; j < oc.j1; ++j)
             for (int c = j * mx + oc.i0; c < j * mx + oc.i1; ++c) smooth_moment(std::size_t(c));
-    const bool hourglass = !hgx_.empty();
+    const bool hourglass = modes_.hourglass;
     const double khg = hourglass ? sc_.hourglass * 0.25 / (sc_.dt_s * sc_.dt_s) : 0.0;
     // The node is corner [1] of cell (i, j), [2] of (i-1, j), [3] of (i, j-1) and [4] of
     // (i-1, j-1); with b = (+-1, +-1)/2L the transpose of eq. 5 gives the signs below (X,
@@ -5215,7 +5531,7 @@ inline void Simulation::nodal_forces() {
 // correct it with the strain increments of the cell found there.
 inline void Simulation::compensate() {
     const Range nr{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
-    if (!carried_.empty()) { carried_increments(nr); return; }
+    if (modes_.advect == Advect::Points) { carried_increments(nr); return; }
     // Nodes that gained mass this step take the mean increment of their neighbours that
     // had mass (read before those are compensated, so the order does not matter); only
     // rows where nodal_forces() saw such a node.
@@ -5395,7 +5711,7 @@ inline void Simulation::carried_row(int j, int i0, int i1) {
 inline void Simulation::integrate() {
     const Range nodes_now{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     const Range nr = nodes_now.unite(live_nodes_);
-    if (dynamic_) dynamics_begin();  // the ground's step, the boundary forces (SHAKE, ABSORB)
+    if (modes_.dynamic) dynamics_begin();  // the ground's step, the boundary forces (SHAKE, ABSORB)
     const double dt2 = sc_.dt_s * sc_.dt_s, alpha = sc_.damping;
     double ke = 0, maxdu = 0;
     const int mx = mx_;
@@ -5468,7 +5784,7 @@ inline void Simulation::integrate() {
     // later sets the same zeros again and takes the reactions, and the rows where a wall
     // drove a node are made again after it. The same numbers as eq. 13's pass, the supports
     // and then every row's terms (step_reference), one pass over the nodes fewer.
-    const bool fused = !dynamic_;
+    const bool fused = !modes_.dynamic;
     const std::int32_t *fixed_at = fixed_nodes_.data(), *fixed_row = fixed_rows_.data();
     const std::uint8_t* fixed = fixed_.data();
     auto hold_row = [&](int j) LPFDM_INLINE {
@@ -5497,7 +5813,7 @@ inline void Simulation::integrate() {
     };
     by_rows(kAdvanceRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(advance_row, j); });
     integrated_ = nr;
-    if (dynamic_) absorb_increments();  // the dashpots of ABSORB
+    if (modes_.dynamic) absorb_increments();  // the dashpots of ABSORB
     const Range wall_nodes = impose_supports();
     const int e0 = fused ? std::max(nr.j0, wall_nodes.j0) : nr.j0, e1 = fused ? std::min(nr.j1, wall_nodes.j1) : nr.j1;
     if (e0 < e1) by_rows(kEnergyRows, e0, e1, long(e1 - e0) * (nr.i1 - nr.i0), [&](int j) { each_row(energy_row, j); });
@@ -5561,7 +5877,7 @@ inline Range Simulation::impose_supports() {
     }
     es_.h_fixes = hf;
     es_.h_ground = hg;
-    const bool flip = sc_.advect == Advect::Flip;
+    const bool flip = modes_.advect == Advect::Flip;
     const std::vector<double>& mass = inertia();
     for (const std::int32_t n : driven_nodes_) driven_[std::size_t(n)] = 0;
     driven_nodes_.clear();  // capacity reserved at set-up: no allocation
@@ -5652,8 +5968,7 @@ inline void Simulation::replay_ground() {
 // material the points of its edge cell were made of (of the nearest such cell along the
 // edge, for a cell made empty): it acts while that cell holds mass.
 inline void Simulation::setup_dynamics() {
-    dynamic_ = !sc_.shakes.empty() || sc_.absorb != 0;
-    if (!dynamic_) return;
+    if (!modes_.dynamic) return;
     const double dt = sc_.dt_s;
     int edges = sc_.absorb;
     for (const Shake& k : sc_.shakes) {
@@ -6052,7 +6367,7 @@ inline Simulation::Energy Simulation::energy() const {
     for (std::size_t k = 0; k < p_.size(); ++k) {
         strain += strain_energy(k);
         potential += potential_energy(k);
-        if (!p_.plastic_work.empty()) plastic += p_.plastic_work[k];
+        if (modes_.plastic) plastic += p_.plastic_work[k];
     }
     Energy e;
     e.kinetic = es_.kinetic;
@@ -7324,402 +7639,3 @@ inline Diagnostics read_state(const std::string& path, Simulation& sim, std::uin
 #pragma float_control(pop)
 #endif
 #endif  // LPFDM_HPP
-#else  // LPFDM_LANES
-// ------------------------------------------------------------------------------------
-// The Mohr-Coulomb consult in lanes (read twice by the header, above: into namespace
-// detail::lanes4 with LPFDM_LANES 4 and detail::lanes8 with LPFDM_LANES 8).
-//
-// eq. 6's elastic test and plastic return of N elastic trials at once, in the lanes of a
-// vector V of N doubles (M: its mask, all ones or zero in a lane): mohr_inside and
-// mohr_coulomb_correct's closed-form shear return and the first two sets of its search,
-// with the same operations in the same order as those compute them one stress at a time
-// (std::min(a, b) is b < a ? b : a, std::max(a, b) a < b ? b : a), so the lanes they settle
-// get the same numbers bit for bit. Four lanes: AVX2 registers; eight: AVX-512 registers
-// (F, VL, DQ), built without fused multiply-add (LPFDM_AVX512). Every function here and
-// every lambda is built for its width (LPFDM_LANE): a compiler lowers the vector code of a
-// function built for less, lane by lane.
-#if LPFDM_LANES == 4
-using V = v4d;
-using M = v4m;
-#define LPFDM_LANE __attribute__((always_inline, target("avx2")))
-#else
-using V = v8d;
-using M = v8m;
-#define LPFDM_LANE __attribute__((always_inline, LPFDM_AVX512))
-#endif
-constexpr int N = LPFDM_LANES;
-// bit l of lane l, and byte l of a word of N bytes (all ones) in lane l
-#if LPFDM_LANES == 4
-constexpr M kLaneBit = {1, 2, 4, 8}, kLaneByte = {0xff, 0xff00, 0xff0000, 0xff000000};
-#else
-constexpr M kLaneBit = {1, 2, 4, 8, 16, 32, 64, 128};
-constexpr M kLaneByte = {0xff, 0xff00, 0xff0000, 0xff000000, 0xff00000000, 0xff0000000000, 0xff000000000000, static_cast<long long>(0xff00000000000000ULL)};
-#endif
-// bit l: lane l's sign bit (of a mask: lane l set)
-LPFDM_LANE inline int bits(const M& m) {
-#if LPFDM_LANES == 4
-    return __builtin_ia32_movmskpd256(v4d(m));
-#else
-    return __builtin_ia32_cvtq2mask512(m);
-#endif
-}
-// r = sqrt(x) in each lane (correctly rounded, as std::sqrt)
-LPFDM_LANE inline void sqrt_of(const V& x, V& r) {
-#if LPFDM_LANES == 4
-    r = __builtin_ia32_sqrtpd256(x);
-#elif defined(__clang__)
-    r = __builtin_ia32_sqrtpd512(x, 4);
-#else
-    r = __builtin_ia32_sqrtpd512_mask(x, x, -1, 4);
-#endif
-}
-// m: lane l set where bit l of `b` is (bits' inverse)
-LPFDM_LANE inline void lane_mask(int b, M& m) { m = M(((M{} + b) & kLaneBit) != 0); }
-// a = |v| lane by lane (the sign bit cleared, as std::fabs does)
-LPFDM_LANE inline void abs_of(const V& v, V& a) { a = V(M(v) & 0x7fffffffffffffffLL); }
-// v = x in every lane (a broadcast: the same bits, the sign of a zero too)
-LPFDM_LANE inline void splat(double x, V& v) {
-#if LPFDM_LANES == 4
-    v = V{x, x, x, x};
-#else
-    v = V{x, x, x, x, x, x, x, x};
-#endif
-}
-
-// Mohr's circle of (xx, yy) with its radius r given: t.a, t.sig and mohr_inside's lo, hi
-// and shear test.
-LPFDM_LANE inline void circle(const V& xx, const V& yy, const V& zz, const V& r, const V& np, const V& two_c_sq, V& a, V& t0, V& t1, V& hi, M& shear_ok) {
-    const V p = 0.5 * (xx + yy);
-    a = 0.5 * (xx - yy);
-    t0 = p - r; t1 = p + r;
-    const V lo = zz < t0 ? zz : t0;
-    hi = t1 < zz ? zz : t1;
-    shear_ok = lo - hi * np + two_c_sq >= 0;
-}
-// mohr_inside's first exit: bit l set when trial l is inside with no tensile principal
-// value. r: the circle's radius, for shear_return.
-LPFDM_LANE inline int inside(const V& xx, const V& yy, const V& xy, const V& zz, const V& np, const V& two_c_sq, V& r) {
-    constexpr double huge = std::numeric_limits<double>::infinity();
-    V inf;
-    splat(huge, inf);
-    const V half_diff = 0.5 * (xx - yy);
-    sqrt_of(V(half_diff * half_diff + xy * xy), r);
-    V a, t0, t1, hi;
-    M shear_ok;
-    circle(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
-    return bits(M(shear_ok & (hi <= 0) & (two_c_sq >= 0) & (np < inf)));
-}
-// std::min(std::min(a, b), c) and std::max(std::max(a, b), c) in each lane, with their
-// operations (std::min(a, b) is b < a ? b : a, std::max(a, b) a < b ? b : a).
-LPFDM_LANE inline void extremes(const V& a, const V& b, const V& c, V& lo, V& hi) {
-    const V m = b < a ? b : a, big = a < b ? b : a;
-    lo = c < m ? c : m;
-    hi = big < c ? c : big;
-}
-// What shear_return found of each trial, for edge_return (mohr_coulomb_correct's
-// names): the circle's a, the principal values t0 <= t1 and t2 = sig_zz, the tension limit,
-// the tolerance, the tension plane's f at the largest, the order (A: t1 <= t2, C: t2 < t0,
-// else t0 <= t2 < t1) and FLAC's choice of shear.
-struct Found { V a, t0, t1, t2, sig_t, tol, ft; M A, C, shear_first; };
-// The rest of mohr_inside (the tension planes) and the closed-form shear return of
-// mohr_coulomb_correct (where FLAC's h chooses shear). Bit l of the result: lane l is
-// settled; bit N + l (N lanes): it was returned by shear (its stress replaced, d_gamma[l]
-// its plastic shear increment). A lane left unsettled (tension, an edge, or a return the closed form
-// cannot make admissible) goes to edge_return (with `found`), and what that leaves to the
-// one-point code. n_psi, tension, a1, a2: the material's (MaterialConstants).
-LPFDM_LANE inline int shear_return(V& xx, V& yy, V& xy, V& zz, const V& r, const V& np, const V& two_c_sq, double n_psi, double tension, double a1, double a2, V& d_gamma, Found& found) {
-    constexpr double huge = std::numeric_limits<double>::infinity();
-    V inf, zero, one, n_psi_v, tension_v;
-    splat(huge, inf); splat(0.0, zero); splat(1.0, one); splat(n_psi, n_psi_v); splat(tension, tension_v);
-    V a, t0, t1, hi;
-    M shear_ok;
-    circle(xx, yy, zz, r, np, two_c_sq, a, t0, t1, hi, shear_ok);
-    const V t2 = zz;
-    V sig_t = np > 1 ? two_c_sq / (np - 1) : inf;  // tension_limit
-    if (tension >= 0) sig_t = tension < sig_t ? tension_v : sig_t;
-    const M inside = shear_ok & (sig_t - hi >= 0);  // implied by the first exit
-    // The order of t0 <= t1 and t2 (t0 <= t1 holds for every lane without NaN, and a lane
-    // with NaN in its trial or strength fails the check below through tol).
-    const M above = t1 > t2, below = t0 > t2;
-    const M A = ~above, B = above & ~below, C = above & below;  // (i1 i2 i3) = (0 1 2), (0 2 1), (2 0 1)
-    const V ti1 = C ? t2 : t0, ti3 = A ? t2 : t1;
-    const V fs = ti1 - ti3 * np + two_c_sq, ft = sig_t - ti3;
-    V a0, a1v, a2v, at;
-    abs_of(t0, a0); abs_of(t1, a1v); abs_of(t2, a2v); abs_of(sig_t, at);
-    const V tol = 1e-11 * (a0 + a1v + a2v + two_c_sq + (at < inf ? sig_t : zero));
-    const V ns0 = np < n_psi ? np : n_psi_v;  // std::min(n_psi, np)
-    const V d1 = a1 - a2 * ns0, d2 = a2 * (1 - ns0), d3 = a2 - a1 * ns0;
-    const V mu = -fs / (d1 - np * d3);
-    const V s0 = t0 + mu * (C ? d2 : d1), s1 = t1 + mu * (A ? d2 : d3), s2 = t2 + mu * (A ? d3 : B ? d2 : d1);
-    V lo_n, hi_n;
-    extremes(s0, s1, s2, lo_n, hi_n);
-    // FLAC's h chooses shear where the tension plane is violated too (h_fn, the same
-    // operations; a lane with ft >= 0 does not need it, as the one-point code skips it, and
-    // most groups hold no lane that does: their square root is not taken).
-    M shear_first = (fs < 0) & (ft >= 0);
-    if (const M both = (fs < 0) & ~(ft >= 0); bits(both)) {
-        V root;
-        sqrt_of(V(1 + np * np), root);
-        const V alpha_p = root + np, sig_p = sig_t * np - two_c_sq;
-        const V h = ti3 - sig_t + alpha_p * (ti1 - sig_p);
-        shear_first |= both & ~(h > 0);
-    }
-    const M shear = ~inside & shear_first & (lo_n - np * hi_n + two_c_sq >= -tol) & (sig_t - hi_n >= -tol);
-    // to_xy: the same principal direction, the new principal values
-    const V pn = 0.5 * (s1 + s0), rn = 0.5 * (s1 - s0);
-    const V inv_r = one / r, c2 = r > 0 ? a * inv_r : one, s2xy = r > 0 ? xy * inv_r : zero;
-    xx = shear ? pn + rn * c2 : xx;
-    yy = shear ? pn - rn * c2 : yy;
-    xy = shear ? rn * s2xy : xy;
-    zz = shear ? s2 : zz;
-    abs_of(-mu - mu * ns0, d_gamma);  // |e1 - e3|
-    found = Found{a, t0, t1, t2, sig_t, tol, ft, A, C, shear_first};
-    return bits(M(inside | shear)) | bits(shear) << N;
-}
-// The lanes shear_return left (bits of `left`; their trials in xx .. zz, what it found of
-// them in m): the first two
-// sets of mohr_coulomb_correct's search, with the same operations in the same order, in
-// lanes. Its closed-form shear return was not admissible there, or FLAC's h chose
-// tension, whose return is made here and, where admissible, left to the one-point code.
-// The search then pairs its plane p0 with first[0], then first[1], the pairs that end most
-// searches in a flowing collapse (an edge of two shear planes, the apex line of shear and
-// tension, the corner of tension and shear). Bit l of the result: lane l was returned by
-// one of them (xx .. zz its stress, d_gamma[l] its plastic shear, as the one-point code's
-// mode Edge gives them); a lane left unsettled (a third set, an infinite or NaN value, an
-// admissible tension return) takes the one-point code, which tries the same two sets first.
-LPFDM_LANE inline int edge_return(V& xx, V& yy, V& xy, V& zz, const V& r, const V& np, const V& two_c_sq, double n_psi, double a1, double a2, const Found& m, int left, V& d_gamma) {
-    constexpr double huge = std::numeric_limits<double>::infinity();
-    V inf, zero, one, two, n_psi_v;
-    splat(huge, inf); splat(0.0, zero); splat(1.0, one); splat(2.0, two); splat(n_psi, n_psi_v);
-    const V &a = m.a, &t0 = m.t0, &t1 = m.t1, &t2 = m.t2, &sig_t = m.sig_t, &tol = m.tol, &ft = m.ft;
-    const M &C = m.C, &shear_first = m.shear_first;
-    V a0, a1v, a2v, at, ar, anp, ac;
-    abs_of(t0, a0); abs_of(t1, a1v); abs_of(t2, a2v); abs_of(sig_t, at); abs_of(r, ar); abs_of(np, anp); abs_of(two_c_sq, ac);
-    // Finite values only (then nine planes, and t0 <= t1): any other lane takes the one-point code.
-    const M finite = (a0 < inf) & (a1v < inf) & (a2v < inf) & (at < inf) & (ar < inf) & (anp < inf) & (ac < inf);
-    M lanes;
-    lane_mask(left, lanes);
-    M todo = lanes & finite;
-    if (!bits(todo)) return 0;
-    // i1, i2, i3: the order of the trial's principal values, as mohr_coulomb_correct sorts them
-    // ((0 1 2) in A, (2 0 1) in C, else (0 2 1)); the finite lanes' tol is the one-point code's
-    const V i1 = C ? two : zero, i2 = m.A ? one : (C ? zero : two), i3 = m.A ? two : one;
-    const V ns = np < n_psi ? np : n_psi_v;  // st.n_psi
-    {  // the tension return of the closed form, where FLAC's h chose it: admissible lanes are the one-point code's
-        const V mu = -ft / a1;
-        const V d_other = mu * a2, d_i3 = mu * a1;  // sg[i1] -= mu a2, sg[i2] -= mu a2, sg[i3] -= mu a1
-        const V g0 = t0 - (i3 == zero ? d_i3 : d_other), g1 = t1 - (i3 == one ? d_i3 : d_other), g2 = t2 - (i3 == two ? d_i3 : d_other);
-        V lo, hi_t;
-        extremes(g0, g1, g2, lo, hi_t);
-        const M admissible = (lo - np * hi_t + two_c_sq >= -tol) & (sig_t - hi_t >= -tol);
-        todo &= shear_first | ~admissible;
-    }
-    // A plane of the nine, lane by lane: shear (i, j), n = e_i - N_phi e_j and m = e_i - N_psi e_j,
-    // or tension on i, n = m = -e_i; idx its number in mohr_coulomb_correct (2 i + (j > i ? j - 1 : j), 6 + i).
-    struct Plane { V n[3], m[3], kk, idx; };
-    const V n_one = 1.0 - np * 0.0, n_neg = 0.0 - np * 1.0, n_zero = 0.0 - np * 0.0;
-    const V m_one = 1.0 - ns * 0.0, m_neg = 0.0 - ns * 1.0, m_zero = 0.0 - ns * 0.0;
-    V minus_zero;
-    splat(-0.0, minus_zero);
-    const V minus_one = -one;
-    auto shear_plane = [&](const V& i, const V& j, Plane& q) LPFDM_LANE {
-        for (int t = 0; t < 3; ++t) {
-            V tt;
-            splat(double(t), tt);
-            q.n[t] = i == tt ? n_one : (j == tt ? n_neg : n_zero);
-            q.m[t] = i == tt ? m_one : (j == tt ? m_neg : m_zero);
-        }
-        q.kk = two_c_sq;
-        q.idx = 2 * i + (j > i ? j - 1 : j);
-    };
-    auto tension_plane = [&](const V& i, Plane& q) LPFDM_LANE {
-        for (int t = 0; t < 3; ++t) {
-            V tt;
-            splat(double(t), tt);
-            q.n[t] = q.m[t] = i == tt ? minus_one : minus_zero;
-        }
-        q.kk = sig_t;
-        q.idx = 6 + i;
-    };
-    auto pick = [](const M& c, const Plane& x, const Plane& y, Plane& q) LPFDM_LANE {
-        for (int t = 0; t < 3; ++t) { q.n[t] = c ? x.n[t] : y.n[t]; q.m[t] = c ? x.m[t] : y.m[t]; }
-        q.kk = c ? x.kk : y.kk;
-        q.idx = c ? x.idx : y.idx;
-    };
-    // p0 and first[0], first[1] (mohr_coulomb_correct's order)
-    const V o = i3 == two ? i1 : 1 - i3;
-    Plane p0, q1, q2, x, y;
-    shear_plane(i1, i3, x); tension_plane(i3, y); pick(shear_first, x, y, p0);
-    shear_plane(i1, i2, x); shear_plane(o, i3, y); pick(shear_first, x, y, q1);
-    tension_plane(i1, x); shear_plane(i3, o, y); pick(shear_first, x, y, q2);
-    const double d12 = a1 - a2;
-    const V mu_min = -tol / (a1 + 1);
-    const V tr[3] = {t0, t1, t2};
-    // try_set of the pair (p0, q), its planes in index order: true in the lanes where it is admissible
-    auto try_pair = [&](const Plane& q, V sg[3], V& gamma, M& ok) LPFDM_LANE {
-        const M p_first = p0.idx < q.idx;
-        Plane u, v;
-        pick(p_first, p0, q, u); pick(p_first, q, p0, v);
-        V dm[2][3], f[2];
-        const Plane* pl[2] = {&u, &v};
-        for (int w = 0; w < 2; ++w) {
-            const Plane& z = *pl[w];
-            const V a2_tr = a2 * (z.m[0] + z.m[1] + z.m[2]);
-            for (int t = 0; t < 3; ++t) dm[w][t] = a2_tr + d12 * z.m[t];
-            f[w] = z.n[0] * tr[0] + z.n[1] * tr[1] + z.n[2] * tr[2] + z.kk;
-        }
-        V A[2][2];
-        for (int w = 0; w < 2; ++w)
-            for (int x = 0; x < 2; ++x) A[w][x] = pl[w]->n[0] * dm[x][0] + pl[w]->n[1] * dm[x][1] + pl[w]->n[2] * dm[x][2];
-        const V b0 = -f[0], b1 = -f[1];
-        // Gaussian elimination with partial pivoting, 2 x 2, as try_set
-        V abs00, abs10;
-        abs_of(A[0][0], abs00); abs_of(A[1][0], abs10);
-        const M sw = abs10 > abs00;
-        const V p00 = sw ? A[1][0] : A[0][0], p01 = sw ? A[1][1] : A[0][1], q10 = sw ? A[0][0] : A[1][0], q11 = sw ? A[0][1] : A[1][1];
-        const V pb = sw ? b1 : b0, qb = sw ? b0 : b1;
-        const V fr = q10 / p00;
-        const V a11 = q11 - fr * p01, bb1 = qb - fr * pb;
-        const V mu1 = bb1 / a11, mu0 = (pb - p01 * mu1) / p00;
-        V ap00, aa11;
-        abs_of(p00, ap00); abs_of(a11, aa11);
-        V tiny;
-        splat(1e-300, tiny);
-        ok = ~(ap00 < tiny) & ~(aa11 < tiny) & ~(mu0 < mu_min) & ~(mu1 < mu_min);
-        for (int t = 0; t < 3; ++t) { sg[t] = tr[t]; sg[t] += mu0 * dm[0][t]; sg[t] += mu1 * dm[1][t]; }
-        V lo, hi_n;
-        extremes(sg[0], sg[1], sg[2], lo, hi_n);
-        ok &= ~(lo - np * hi_n + two_c_sq < -tol) & ~(sig_t - hi_n < -tol);
-        // plastic strains d_eps^p = -sum mu_a m_a; d_gamma = max - min
-        V ep[3];
-        for (int t = 0; t < 3; ++t) { ep[t] = zero; ep[t] -= mu0 * u.m[t]; ep[t] -= mu1 * v.m[t]; }
-        V e_min, e_max;
-        extremes(ep[0], ep[1], ep[2], e_min, e_max);
-        gamma = e_max - e_min;
-    };
-    V sg[3], best[3], gamma, best_gamma;
-    M done, second;
-    try_pair(q1, sg, gamma, done);
-    done &= todo;
-    for (int t = 0; t < 3; ++t) best[t] = sg[t];
-    best_gamma = gamma;
-    if (bits(M(todo & ~done))) {
-        try_pair(q2, sg, gamma, second);
-        second &= todo & ~done;
-        for (int t = 0; t < 3; ++t) best[t] = second ? sg[t] : best[t];
-        best_gamma = second ? gamma : best_gamma;
-        done |= second;
-    }
-    // to_xy: the same principal direction, the new principal values
-    const V pn = 0.5 * (best[1] + best[0]), rn = 0.5 * (best[1] - best[0]);
-    const V inv_r = one / r, c2 = r > 0 ? a * inv_r : one, s2xy = r > 0 ? xy * inv_r : zero;
-    xx = done ? pn + rn * c2 : xx;
-    yy = done ? pn - rn * c2 : yy;
-    xy = done ? rn * s2xy : xy;
-    zz = done ? best[2] : zz;
-    d_gamma = done ? best_gamma : d_gamma;
-    return bits(done);
-}
-// eq. 6's consult of the Mohr-Coulomb points q .. q + N k - 1 of material mc (the largest
-// whole number of groups of N before qend), which hold their elastic trials (the AVX2
-// point loop's, consult_block in Simulation::run_points): the elastic test, the closed-form shear return
-// and the search's first two sets (an edge, the apex line), then one_point(r, trial) (the
-// one-point test and return, mohr_consult, and the stress stored) for a lane those do not
-// settle. Returns where it stopped (the caller consults the last points). Own: each point's
-// own strength (scatter); vol0_of(g): V0 of group g. A point's consult reads and writes that
-// point only; each lane's operations are those of the one-point code. The lanes the closed
-// form leaves go on at once (edge_return, then the one-point code): a second pass over the
-// groups holding them, which made the elastic test and the return again to find what
-// edge_return needs, was no faster (6.8 % of the groups of four hold one in steps 3600-3640
-// of bench_flow.deck).
-template <bool Own, class Vol0, class OnePoint>
-LPFDM_LANE inline long consult(const MaterialConstants& mc, long q, const long qend, const ConsultArrays& a, const Vol0& vol0_of, const OnePoint& one_point) {
-    // Local pointers (the stores of the yielded flags, through bytes, may change any object)
-    double *psxx = a.sxx, *psyy = a.syy, *psxy = a.sxy, *pszz = a.szz;
-    const double* pvol = a.vol;
-    const std::uint16_t* pgroup = a.group;
-    const double *pc0 = a.c0, *pnphi = a.n_phi, *psqrt = a.sqrt_n_phi;
-    std::uint8_t* pyielded = a.yielded;
-    double *pshear = a.plastic_shear, *pwork = a.plastic_work;
-    // pyielded[r + l] != 0 in lane l (one word: byte l is lane l's, x86 being little-endian)
-    using Word = std::conditional_t<N == 4, std::uint32_t, std::uint64_t>;
-    auto yielded_lanes = [&](long r, M& soft) LPFDM_LANE {
-        Word w;
-        std::memcpy(&w, pyielded + r, sizeof w);
-        soft = M(((M{} + static_cast<long long>(w)) & kLaneByte) != 0);
-    };
-    // strength_of, N points at once: the same operations in each lane
-    auto strength = [&](long r, V& np, V& two_c_sq) LPFDM_LANE {
-        V c0, sq;
-        if constexpr (Own) {
-            load(pc0 + r, c0); load(pnphi + r, np); load(psqrt + r, sq);
-        } else {
-            splat(mc.c, c0); splat(mc.n_phi, np); splat(mc.sqrt_n_phi, sq);
-        }
-        M soft;
-        yielded_lanes(r, soft);
-        const double keep = 1 - mc.soften;
-        const V c = soft ? c0 * keep : c0;
-        two_c_sq = 2 * c * sq;  // two_c_sqrt_n: strength_of sets sqrt_n_phi (its test cost 3 %)
-    };
-    // record_yield of lanes `lanes` (bits), returned from the trials t_* to xx .. zz with
-    // plastic shear d_gamma: the same operations
-    auto record = [&](long r, int lanes, const V& xx, const V& yy, const V& xy, const V& zz, const V& t_xx, const V& t_yy, const V& t_xy, const V& t_zz, const V& d_gamma) LPFDM_LANE {
-        V work;  // compliance_product(mc, s, trial - s)
-        compliance_product(mc, xx, yy, xy, zz, V(t_xx - xx), V(t_yy - yy), V(t_xy - xy), V(t_zz - zz), work);
-        V v0{};  // the lanes' groups' V0: one look-up where they are one group (a word holds four)
-        std::uint64_t g[N / 4];
-        std::memcpy(g, pgroup + r, sizeof g);
-        bool one = true;
-        for (int w = 0; w < N / 4; ++w) one &= g[w] == (g[0] & 0xffff) * 0x0001000100010001ULL;
-        if (one) splat(vol0_of(int(g[0] & 0xffff)), v0);
-        else for (int l = 0; l < N; ++l) v0[l] = vol0_of(pgroup[r + l]);
-        M m;
-        lane_mask(lanes, m);
-        V gamma, pw, vol;
-        load(pshear + r, gamma); load(pwork + r, pw); load(pvol + r, vol);
-        const V vk = v0 < vol ? v0 : vol;  // std::min(vol, vol0)
-        gamma = m ? gamma + d_gamma : gamma;
-        pw = m ? pw + vk * work : pw;
-        store(pshear + r, gamma); store(pwork + r, pw);
-        // softening from the next consult: 1 where a lane yielded (words, no branch: lanes yield at random)
-        static constexpr std::uint32_t kLaneBytes[16] = {0x0u, 0xffu, 0xff00u, 0xffffu, 0xff0000u, 0xff00ffu, 0xffff00u, 0xffffffu,
-                                                         0xff000000u, 0xff0000ffu, 0xff00ff00u, 0xff00ffffu, 0xffff0000u, 0xffff00ffu, 0xffffff00u, 0xffffffffu};
-        for (int w = 0; w < N / 4; ++w) {
-            std::uint32_t y;
-            std::memcpy(&y, pyielded + r + 4 * w, 4);  // pyielded[r + 4 w + l] in byte l
-            const std::uint32_t set = kLaneBytes[lanes >> (4 * w) & 15];
-            y = (y & ~set) | (0x01010101u & set);
-            std::memcpy(pyielded + r + 4 * w, &y, 4);
-        }
-    };
-    constexpr int all = (1 << N) - 1;
-    for (; q + N <= qend; q += N) {
-        V xx, yy, xy, zz, np, two_c_sq, radius, d_gamma;
-        load(psxx + q, xx); load(psyy + q, yy); load(psxy + q, xy); load(pszz + q, zz);
-        strength(q, np, two_c_sq);
-        int settled = inside(xx, yy, xy, zz, np, two_c_sq, radius);
-        if (settled == all) continue;  // every lane inside: the trials stand
-        const V t_xx = xx, t_yy = yy, t_xy = xy, t_zz = zz;
-        Found found;
-        settled = shear_return(xx, yy, xy, zz, radius, np, two_c_sq, mc.n_psi, mc.tension, mc.a1, mc.a2, d_gamma, found);
-        if (const int sh = settled >> N) record(q, sh, xx, yy, xy, zz, t_xx, t_yy, t_xy, t_zz, d_gamma);
-        int left = ~settled & all;
-        if (left) {  // an edge or the apex line (the search's first two sets), from the trials
-            V ex = t_xx, ey = t_yy, exy = t_xy, ez = t_zz;
-            if (const int edge = edge_return(ex, ey, exy, ez, radius, np, two_c_sq, mc.n_psi, mc.a1, mc.a2, found, left, d_gamma)) {
-                M done;
-                lane_mask(edge, done);
-                xx = done ? ex : xx; yy = done ? ey : yy; xy = done ? exy : xy; zz = done ? ez : zz;
-                record(q, edge, ex, ey, exy, ez, t_xx, t_yy, t_xy, t_zz, d_gamma);
-                left &= ~edge;
-            }
-        }
-        store(psxx + q, xx); store(psyy + q, yy); store(psxy + q, xy); store(pszz + q, zz);
-        for (int l = 0; left; ++l, left >>= 1)  // the lanes still left: the one-point code, on the trial
-            if (left & 1) one_point(q + l, Stress{t_xx[l], t_yy[l], t_xy[l], t_zz[l]});
-    }
-    return q;
-}
-#undef LPFDM_LANE
-#endif  // LPFDM_LANES

@@ -103,6 +103,14 @@ expect "misspelt option" 2 -q --stesp 10 tests/decks/bad_unknown_card.deck && {
 expect "misspelt option, good deck" 2 -q --stesp 10 "$deck" && { errors "misspelt option, good deck" 1; nothing_written "misspelt option, good deck"; }
 expect "misspelt option, value apart from the deck" 2 -q "$deck" --stesp=10 && errors "misspelt option, value apart from the deck" 1
 expect "misspelt option, no deck" 2 -q --stesp 10 && says "misspelt option, no deck" "no deck given"
+expect "retired --no-avx512" 2 --no-avx512 "$deck" && says "retired --no-avx512" "--no-avx512 is retired"
+# The summary line names the kernel that ran, and why when it is not the one asked for.
+expect "summary names the kernel" 0 -n 3 --kernel scalar "$deck" &&
+    { grep -q -E '; kernel scalar$' "$tmp/stdout" && ok || fail "summary names the kernel" "$(tail -n 1 "$tmp/stdout")"; }
+{ grep -v '^END' "$deck"; printf 'MAPPING SMOOTH\nADVECT FLIP\nEND\n'; } >"$tmp/flip.deck"
+expect "summary says why FLIP runs on the reference cycle" 0 -n 3 "$tmp/flip.deck" &&
+    { grep -q -F '; kernel reference (ADVECT FLIP runs on the reference cycle only)' "$tmp/stdout" && ok ||
+        fail "summary says why FLIP runs on the reference cycle" "$(tail -n 1 "$tmp/stdout")"; }
 expect "unknown option, value and deck" 2 -q --frobnicate 3 "$deck" && { says "unknown option, value and deck" "unknown option '--frobnicate'"; errors "unknown option, value and deck" 1; }
 
 # --- a long option is written in full: a beginning of one (--thread) is refused, with the option meant ---

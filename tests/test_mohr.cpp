@@ -326,18 +326,12 @@ MohrResult one_point_correction(const MaterialConstants& mc, const detail::MohrT
     st.tension = mc.tension;
     return detail::mohr_coulomb_correct(mc, st, t, s);
 }
-// The consult's lanes of one width: four (AVX2, the vector detail::v4d) and eight (AVX-512,
-// detail::v8d), the same code; each test below runs for both where the processor has them.
+// The consult's lanes: four (AVX2, the vector detail::v4d).
 template <class V> struct Width;
 template <> struct Width<detail::v4d> {
     using Found = detail::MohrLanes;
     static constexpr int N = 4;
     static bool here() { return Simulation::have_wide(); }
-};
-template <> struct Width<detail::v8d> {
-    using Found = detail::MohrLanes8;
-    static constexpr int N = 8;
-    static bool here() { return Simulation::have_wide512(); }
 };
 // Whether this processor runs the lanes of V (says so when it does not).
 template <class V>
@@ -352,8 +346,8 @@ void edges_as_one_point();
 }  // namespace
 #endif
 
-TEST_CASE("Mohr-Coulomb consult in lanes (AVX2, AVX-512): what it settles, it settles as the one-point code does, bit for bit") {
-    // The AVX2 point loop keeps the trials of a group of four or eight that the elastic
+TEST_CASE("Mohr-Coulomb consult in lanes (AVX2): what it settles, it settles as the one-point code does, bit for bit") {
+    // The AVX2 point loop keeps the trials of a group of four that the elastic
     // test in lanes passes (detail::mohr_inside_lanes here), else it makes the closed-form
     // return in lanes (mohr_return_lanes); it keeps a lane that settles and sends any other
     // through mohr_inside and mohr_coulomb_correct. So a lane passed by the first must be exactly
@@ -364,7 +358,6 @@ TEST_CASE("Mohr-Coulomb consult in lanes (AVX2, AVX-512): what it settles, it se
     // infinities and NaN in every component and strength, and three tension limits.
 #if LPFDM_WIDE
     settles_as_one_point<detail::v4d>();
-    settles_as_one_point<detail::v8d>();
 #else
     MESSAGE("built without the AVX2 version (LPFDM_WIDE): nothing to compare");
 #endif
@@ -468,14 +461,13 @@ void settles_as_one_point() {
 TEST_CASE("Mohr-Coulomb edges in lanes (AVX2, AVX-512): the search's first two sets, as the one-point code makes them, bit for bit") {
     // Where FLAC's closed form is not admissible, mohr_coulomb_correct searches sets of
     // planes; detail::mohr_edge_lanes makes its first two (p0 with first[0], then first[1])
-    // four or eight lanes at a time. A lane it settles must get the one-point code's mode Edge, its
+    // four lanes at a time. A lane it settles must get the one-point code's mode Edge, its
     // stress and its plastic shear exactly; a lane it leaves is the one-point code's (the
     // closed form's tension return, a later set, or values that are not finite). Trials
     // from the flowing collapse's range (a weak soil near its apex, sig_zz anywhere between
     // and beyond the in-plane pair), then the odd values of the test above.
 #if LPFDM_WIDE
     edges_as_one_point<detail::v4d>();
-    edges_as_one_point<detail::v8d>();
 #else
     MESSAGE("built without the AVX2 version (LPFDM_WIDE): nothing to compare");
 #endif

@@ -1,8 +1,7 @@
 // The reference cycle is the definition of a step: every fast kernel must give its
 // numbers bit for bit. Every deck of decks/ and tests/decks/ (the good ones), shortened,
 // runs with the reference kernel and with the fast kernel with AVX2 on and off and with
-// 1, 2 and 3 threads (and, where the processor has AVX-512 and the scene a Mohr-Coulomb
-// material, with the consult four points per register instead of eight); at every frame the point table and the history rows (as the program
+// 1, 2 and 3 threads; at every frame the point table and the history rows (as the program
 // writes them) and the bits of every point, cell and node array must be equal.
 #include "../lpfdm.hpp"
 
@@ -55,11 +54,9 @@ void set_threads([[maybe_unused]] int n) {
 }
 
 // steps steps of the scene with kernel k on `threads` threads; a frame every `every` steps.
-// wide512 false: the consult four points per AVX2 register where AVX-512 would take eight.
-Trace run(const Scene& s, Kernel k, int threads, long steps, long every, const UserModel& user = nullptr, int user_mat = 0, bool wide512 = true) {
+Trace run(const Scene& s, Kernel k, int threads, long steps, long every, const UserModel& user = nullptr, int user_mat = 0) {
     set_threads(threads);
     Simulation sim(s, k);
-    if (!wide512) sim.set_wide512(false);
     if (user) sim.set_user_model(user_mat, user);
     Trace t;
     std::FILE* f = std::tmpfile();
@@ -116,13 +113,6 @@ void compare_kernels(const std::string& name, const Scene& s, long steps, const 
             INFO(name << ": kernel " << std::string(kernel_name(k)) << ", " << threads << " thread(s), " << steps << " steps: differs at " << diff);
             CHECK(diff.empty());
         }
-    const bool mohr = std::any_of(s.materials.begin(), s.materials.end(), [](const Material& m) { return m.model == Model::MohrCoulomb; });
-    if (mohr && Simulation::have_wide512()) {
-        const Trace four = run(s, Kernel::Fast, 2, steps, every, user, user_mat, false);
-        const std::string diff = first_difference(ref, four);
-        INFO(name << ": kernel fast, the consult in four lanes (not eight), 2 threads, " << steps << " steps: differs at " << diff);
-        CHECK(diff.empty());
-    }
 }
 
 // The decks a user can run: decks/*.deck and the good decks of tests/decks.
@@ -169,7 +159,7 @@ void compare_decks(bool big) {
     CHECK(ran >= (big ? 3 : 15));
 }
 
-TEST_CASE("every deck: the fast kernels (AVX2 on and off, 1, 2 and 3 threads, AVX-512's consult on and off) give the reference cycle's bits at every frame") {
+TEST_CASE("every deck: the fast kernels (AVX2 on and off, 1, 2 and 3 threads) give the reference cycle's bits at every frame") {
     compare_decks(false);
 }
 
@@ -203,6 +193,37 @@ TEST_CASE("the options no shipped deck uses, on a flowing column and a hopper: t
         r.reorder = 1;
         compare_kernels(std::string(deck) + " REORDER 1", r, steps);
     }
+}
+
+// Modes: read once from the scene, and the kernel that runs it named with the reason when it
+// is not the one asked for (never swapped silently).
+TEST_CASE("modes: what a scene switches on, and which kernel runs it, and why") {
+    Scene s;
+    REQUIRE(read_deck("decks/verify_collapse.deck", s).empty());
+    const Modes d = modes_of(s, Kernel::Fast);
+    CHECK(d.mapping == Mapping::Paper);
+    CHECK(d.motion == Motion::Centre);  // the default rule with the paper's mapping
+    CHECK(d.advect == Advect::Eq12);
+    CHECK(!d.hourglass);
+    CHECK(!d.dynamic);
+    CHECK(d.plastic);  // a Mohr-Coulomb material
+    CHECK(d.kernel == Kernel::Fast);
+    CHECK(std::string(d.why).empty());
+    s.mapping = Mapping::Smooth;
+    s.hourglass = 0.05;
+    CHECK(modes_of(s, Kernel::Scalar).motion == Motion::Bilinear);  // SMOOTH's default rule
+    CHECK(modes_of(s, Kernel::Scalar).hourglass);
+    s.advect = Advect::Flip;
+    for (Kernel k : {Kernel::Fast, Kernel::Scalar}) {
+        const Modes f = modes_of(s, k);
+        CHECK(f.asked == k);
+        CHECK(f.kernel == Kernel::Reference);
+        CHECK(std::string(f.why) == "ADVECT FLIP runs on the reference cycle only");
+        const Simulation sim(s, k);
+        CHECK(sim.kernel() == Kernel::Reference);
+        CHECK(std::string(sim.modes().why) == f.why);
+    }
+    CHECK(std::string(modes_of(s, Kernel::Reference).why).empty());  // asked for: nothing to explain
 }
 
 // The AVX2 loop takes a scene with a Mohr-Coulomb material four points at a time across

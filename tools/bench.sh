@@ -151,14 +151,6 @@ for sc in "${scenes[@]}"; do
       narrow=$(cut -d' ' -f1 <<<"$pair" | stats); wide=$(cut -d' ' -f2 <<<"$pair" | stats)
       log "   one value at a time $narrow, beside the default $wide"
     fi
-    # A Mohr-Coulomb scene on a processor whose default takes the consult eight points per
-    # AVX-512 register: the consult four per AVX2 register (--no-avx512) against the default.
-    if grep -qi '^ *MATERIAL.* MOHR' "$deck" && "$exe" --help 2>/dev/null | grep -q -- --no-avx512 &&
-       OMP_NUM_THREADS=1 "$exe" --profile -q -o "$tmp/o" --steps 1 "$deck" 2>/dev/null | grep -q AVX-512; then
-      pair=$(for r in $(seq "$runs"); do echo "$(rate "$exe" 1 "$deck" "$opts --no-avx512") $(rate "$exe" 1 "$deck" "$opts")"; done)
-      four=$(cut -d' ' -f1 <<<"$pair" | stats); eight=$(cut -d' ' -f2 <<<"$pair" | stats)
-      log "   the consult four points per AVX2 register $four, beside the default (eight per AVX-512 register) $eight: $(ratio "$(med "$eight")" "$(med "$four")")x"
-    fi
     befcell="-"; [ -n "$before" ] && befcell="$(med "$bef") ($(ratio "$(med "$fast")" "$(med "$bef")"))"
     rows+=("| $name | $pts | $steps | $(med "$one") | $(med "$two") ($(ratio "$(med "$two")" "$(med "$one")")x) | - | - | $(med "$ref") | $(ratio "$(med "$fast")" "$(med "$ref")") | $befcell | $(med "$narrow") ($(ratio "$(med "$wide")" "$(med "$narrow")")) | $(med "$mem1") / $(med "$mem2") | $(med "$bpp") | |")
     continue
