@@ -1007,6 +1007,14 @@ LPFDM_INLINE inline void rotate_stress(T& xx, T& yy, T& xy, const C& c2, const C
     xx = pm + ar; yy = pm - ar; xy = br;
 }
 inline void rotate_stress(Stress& s, double c2, double s2) { rotate_stress(s.xx, s.yy, s.xy, c2, s2); }
+// eq. 6's elastic trial: the old stress turned with the material (Jaumann, eq. 5f), then
+// the elastic increment de added (what the reference's consult_model does by rotate_stress
+// and elastic_increment). T: one value, or the lanes of a vector.
+template <class T, class D, class C>
+LPFDM_INLINE inline void elastic_trial(T& xx, T& yy, T& xy, T& zz, const D& de, const C& rc, const C& rs) {
+    rotate_stress(xx, yy, xy, rc, rs);
+    xx += de.xx; yy += de.yy; xy += de.xy; zz += de.zz;  // eq. 6
+}
 
 // The rest of the paper's equations, one function each, written once: the reference
 // cycle (Simulation::step_reference) calls them one value at a time, the fast kernel
@@ -1103,6 +1111,8 @@ namespace detail {
 // function built for AVX2.
 typedef double v4d __attribute__((vector_size(32)));
 typedef long long v4m __attribute__((vector_size(32)));
+typedef int v4i __attribute__((vector_size(16)));  // four cell or node numbers
+typedef float v4f __attribute__((vector_size(16)));
 // The lanes (i, j, k, l) of a and b side by side (0-3 of a, 4-7 of b).
 #if defined(__clang__)
 #define LPFDM_SHUFFLE(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
@@ -3152,10 +3162,50 @@ private:
     void advance_range(long k0, long k1, Part& part, Landing& t);
     void choose_point_loop();
     void (Simulation::*run_)(long, long, Part&, Landing&) = nullptr;  // the point loop (choose_point_loop)
-    template <Motion M, bool Carry> void advance_run(long k0, long k1, Part& part, Landing& t);
-    // Blocks (with Wide, where some group is Mohr-Coulomb): the points in blocks, each
-    // consulted four or eight at a time between its trial and its motion; otherwise run by run.
-    template <Motion M, bool Carry, bool Wide, bool Blocks = false> LPFDM_INLINE void run_points(long k0, long k1, Part& part, Landing& t);
+    template <Motion M> void advance_run(long k0, long k1, Part& part, Landing& t);
+    // The point loop and its parts (the fast kernel's section): Blocks (with Wide, where some
+    // group is Mohr-Coulomb): the points in blocks, each consulted four at a time between its
+    // trial and its motion; otherwise run by run.
+    struct Loop;
+    enum : int { kWhole, kTrial, kMotion };  // the stages of runs
+    template <Motion M, bool Wide, bool Blocks = false> LPFDM_INLINE void run_points(long k0, long k1, Part& part, Landing& t);
+    template <Motion M, bool Wide, int S> LPFDM_INLINE void runs(Loop& lp, long k, long stop);
+    template <bool Wide> LPFDM_INLINE long run_end(const Loop& lp, long k, long stop, int c) const;
+    template <bool Wide> LPFDM_INLINE void run_trial(Loop& lp, long k, long kend, int c, bool& one_group);
+    template <Motion M, bool Wide> LPFDM_INLINE void run_motion(Loop& lp, long k, long kend, int c, int ci, int cj, bool one_group);
+    // eq. 7a/7b's nodes: the increments (ux, uy) of the four nodes of the cell whose node [1]
+    // is n1, from the nodal increments (u, v) of a lattice of `row` nodes a row.
+    LPFDM_INLINE void gather_nodes(int n1, double (&ux)[4], double (&uy)[4]) const {
+        const int n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
+        ux[0] = dux_[n1]; ux[1] = dux_[n2]; ux[2] = dux_[n3]; ux[3] = dux_[n4];
+        uy[0] = duy_[n1]; uy[1] = duy_[n2]; uy[2] = duy_[n3]; uy[3] = duy_[n4];
+    }
+    // MOTION CENTRE's mean increment (umx, umy) of those four nodes.
+    LPFDM_INLINE void gather_mean(int n1, double& umx, double& umy) const {
+        double ux[4], uy[4];
+        gather_nodes(n1, ux, uy);
+        mean_of_four(ux[0], ux[1], ux[2], ux[3], umx); mean_of_four(uy[0], uy[1], uy[2], uy[3], umy);
+    }
+#if LPFDM_WIDE
+    // ... of four cells, node [1] of each in the lanes of n1.
+    LPFDM_INLINE void gather_mean(const detail::v4i& n1, detail::v4d& umx, detail::v4d& umy) const {
+        using detail::v4d;
+        const double *u = dux_.data(), *v = duy_.data();
+        const detail::v4i n3 = n1 + (mx_ + 1);
+        const v4d ux1 = {u[n1[0]], u[n1[1]], u[n1[2]], u[n1[3]]}, ux2 = {u[n1[0] + 1], u[n1[1] + 1], u[n1[2] + 1], u[n1[3] + 1]};
+        const v4d ux3 = {u[n3[0]], u[n3[1]], u[n3[2]], u[n3[3]]}, ux4 = {u[n3[0] + 1], u[n3[1] + 1], u[n3[2] + 1], u[n3[3] + 1]};
+        const v4d uy1 = {v[n1[0]], v[n1[1]], v[n1[2]], v[n1[3]]}, uy2 = {v[n1[0] + 1], v[n1[1] + 1], v[n1[2] + 1], v[n1[3] + 1]};
+        const v4d uy3 = {v[n3[0]], v[n3[1]], v[n3[2]], v[n3[3]]}, uy4 = {v[n3[0] + 1], v[n3[1] + 1], v[n3[2] + 1], v[n3[3] + 1]};
+        mean_of_four(ux1, ux2, ux3, ux4, umx); mean_of_four(uy1, uy2, uy3, uy4, umy);
+    }
+    LPFDM_INLINE long usual_runs(Loop& lp, long k, long stop);
+    LPFDM_INLINE void mohr_blocks(Loop& lp, long k0, long k1);
+    LPFDM_INLINE void consult_timed(Loop& lp, long b0, long b1);
+    LPFDM_INLINE void move_block(Loop& lp, long b0, long b1);
+    LPFDM_INLINE void land_block(Loop& lp, long b0, long b1);
+    LPFDM_INLINE static bool one_group_of_four(const std::uint16_t* pgroup, bool single, long q, int& g);
+    LPFDM_INLINE detail::StrainLanes strain_lanes(const detail::v4i& c, bool one, detail::v4d& rc, detail::v4d& rs) const;
+#endif
 #if LPFDM_WIDE
     __attribute__((target("avx2"))) void advance_run_wide(long k0, long k1, Part& part, Landing& t);
     __attribute__((target("avx2"))) void advance_blocks_wide(long k0, long k1, Part& part, Landing& t);
@@ -3329,6 +3379,7 @@ private:
     void reference_points_smooth();
     void move_with_cell(int ci, int cj, const StrainIncrement& e, double x0, double y0, double& x, double& y, double& dx, double& dy) const;
     void stop_at_edges(int c, double x0, double y0, double& x, double& y) const;
+    LPFDM_INLINE void stop_at_edges(int ci, int cj, std::uint8_t fe, double x0, double y0, double& x, double& y) const;
     void smooth_move(std::size_t k);
     void smooth_point_pass();
     void reference_nodal_forces();
@@ -3790,9 +3841,11 @@ inline void Simulation::move_with_cell(int ci, int cj, const StrainIncrement& e,
 // A cell edge fixed across is impermeable: a point of cell c that moved from (x0, y0) to
 // (x, y) stops on it, inside its cell; nor does any point cross a wall's face.
 inline void Simulation::stop_at_edges(int c, double x0, double y0, double& x, double& y) const {
-    const int ci = c % mx_, cj = c / mx_;
+    stop_at_edges(c % mx_, c / mx_, fixed_edges_[std::size_t(c)], x0, y0, x, y);
+}
+// ... of cell (ci, cj) with fixed edges fe (fixed_edges_).
+LPFDM_INLINE inline void Simulation::stop_at_edges(int ci, int cj, std::uint8_t fe, double x0, double y0, double& x, double& y) const {
     const double xi = ci * L_, yj = cj * L_;
-    const std::uint8_t fe = fixed_edges_[std::size_t(c)];
     if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
     if ((fe & kEdgeTop) && y >= (cj + 1) * L_) y = edge_below(cj + 1);
     if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
@@ -4539,17 +4592,13 @@ inline void Simulation::advance_range(long k0, long k1, Part& part, Landing& t) 
 // The version of the point loop this scene runs, chosen once (at set-up, and when set_wide
 // changes the choice): the motion rule, ADVECT POINTS, and AVX2.
 inline void Simulation::choose_point_loop() {
-    const bool carry = modes_.advect == Advect::Points;
-    switch (modes_.motion) {
-    case Motion::Paper: run_ = &Simulation::advance_run<Motion::Paper, false>; break;  // ADVECT POINTS refuses PAPER
-    case Motion::Centre: run_ = carry ? &Simulation::advance_run<Motion::Centre, true> : &Simulation::advance_run<Motion::Centre, false>; break;
-    case Motion::Bilinear: run_ = carry ? &Simulation::advance_run<Motion::Bilinear, true> : &Simulation::advance_run<Motion::Bilinear, false>; break;
-    case Motion::Default: break;  // resolved when the Simulation was made
-    }
+    // The default motion rule (MOTION CENTRE without ADVECT POINTS) has builds of its own;
+    // the options (MOTION PAPER or BILINEAR, ADVECT POINTS) share one that asks modes_ as it
+    // goes (Motion::Default): each build of the loop adds to the build time of every program.
+    const bool options = modes_.motion != Motion::Centre || modes_.advect == Advect::Points;
+    run_ = options ? &Simulation::advance_run<Motion::Default> : &Simulation::advance_run<Motion::Centre>;
 #if LPFDM_WIDE
-    // The AVX2 version for the default motion rule only (MOTION CENTRE, without ADVECT
-    // POINTS): each version of this loop adds a fifth to the build time of the tests.
-    if (wide_ && modes_.motion == Motion::Centre && !carry) run_ = &Simulation::advance_run_wide;
+    if (wide_ && !options) run_ = &Simulation::advance_run_wide;  // AVX2
 #endif
 }
 
@@ -4561,16 +4610,16 @@ inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q,
     if (plastic) { p_.plastic_shear[q] = ps.plastic_shear; p_.yielded[q] = ps.yielded; }
 }
 
-template <Motion M, bool Carry>
-inline void Simulation::advance_run(long k0, long k1, Part& part, Landing& landing) { run_points<M, Carry, false>(k0, k1, part, landing); }
+template <Motion M>
+inline void Simulation::advance_run(long k0, long k1, Part& part, Landing& landing) { run_points<M, false>(k0, k1, part, landing); }
 #if LPFDM_WIDE
 // Two versions: the one with blocks (a scene with a Mohr-Coulomb material) in the same
 // function made the run-by-run loop of an elastic scene run at half its speed (the
 // compiler's registers), so each has a function of its own.
-__attribute__((target("avx2"), noinline)) inline void Simulation::advance_blocks_wide(long k0, long k1, Part& part, Landing& landing) { run_points<Motion::Centre, false, true, true>(k0, k1, part, landing); }
+__attribute__((target("avx2"), noinline)) inline void Simulation::advance_blocks_wide(long k0, long k1, Part& part, Landing& landing) { run_points<Motion::Centre, true, true>(k0, k1, part, landing); }
 __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Part& part, Landing& landing) {
     if (mohr_groups_) advance_blocks_wide(k0, k1, part, landing);
-    else run_points<Motion::Centre, false, true>(k0, k1, part, landing);
+    else run_points<Motion::Centre, true>(k0, k1, part, landing);
 }
 
 // eq. 6's Mohr-Coulomb consult of points q .. qend-1 of material mc, which hold their
@@ -4584,45 +4633,68 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
 }
 #endif
 
-template <Motion M, bool Carry, bool Wide, bool Blocks>
-LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, Landing& landing) {
-    Landing t = landing;  // locals: kept in registers (stores through the cell arrays could alias a reference)
-    Part pt = part;
+// The point loop of the fast kernel, for points k0 .. k1-1 of a chunk, in parts:
+//   runs          the scalar loop: runs of points sharing a cell (run_trial: eq. 6 and the
+//                 volume; run_motion: eq. 7a/7b, the edge stop, eq. 7 and 8)
+//   usual_runs    the AVX2 loop of an elastic scene: fours of one cell that stay in it
+//   mohr_blocks   the AVX2 loop of a scene with a Mohr-Coulomb material: blocks of points,
+//                 four at a time across cells (move_block), consulted in lanes
+//                 (consult_block), then added to their cells (land_block)
+// Each is the reference's point pass (reference_points) in another order of work: the same
+// functions on the same values (elastic_trial for eq. 6, gather_mean for eq. 7a/7b's
+// nodes, stop_at_edges for the impermeable edges), every cell sum taking its terms in
+// point order, so the output is the same bit for bit.
+//
+// The loop's locals, shared by its parts: the chunk's landing and part (copies, kept in
+// registers: stores through the cell arrays could alias a reference), and local pointers
+// (stores through a double* may alias any double member, which would make the compiler
+// reload every member after every store).
+struct Simulation::Loop {
+    Landing t;
+    Part pt;
     // The cells this chunk adds to directly (all of them in the serial pass); a point
     // landing in any other is listed (advance_parted).
-    const int own_lo = pt.own_lo;
-    const unsigned own_n = unsigned(pt.own_hi) - unsigned(pt.own_lo);
-    auto owned = [&](int c) LPFDM_INLINE { return unsigned(c) - unsigned(own_lo) < own_n; };
-    // Local pointers: stores through a double* may alias any double member, which would
-    // make the compiler reload every member after every store.
-    double* __restrict px = p_.x.data();
-    double* __restrict py = p_.y.data();
-    double* __restrict psxx = p_.sxx.data();
-    double* __restrict psyy = p_.syy.data();
-    double* __restrict psxy = p_.sxy.data();
-    double* __restrict pszz = p_.szz.data();
-    double* __restrict pvol = p_.vol.data();
-    std::int32_t* __restrict pcell = p_.cell.data();
-    const std::uint16_t* __restrict pgroup = p_.group.data();
+    int own_lo;
+    unsigned own_n;
+    double *px, *py, *psxx, *psyy, *psxy, *pszz, *pvol;
+    std::int32_t* pcell;
+    const std::uint16_t* pgroup;
     // ADVECT POINTS with threads: each point's increment and the cell it left.
-    double* carry_dx = p_.carry_dx.empty() ? nullptr : p_.carry_dx.data();
-    double* carry_dy = p_.carry_dy.empty() ? nullptr : p_.carry_dy.data();
-    std::int32_t* carry_from = p_.carry_from.empty() ? nullptr : p_.carry_from.data();
-    const int mx = mx_, my = my_;
-    const double L = L_, invL = invL_, X = mx * L, Y = my * L;
-    const bool single = groups_.size() == 1;
+    double *carry_dx, *carry_dy;
+    std::int32_t* carry_from;
+    int mx, my;
+    double L, invL, X, Y;
+    bool single;  // one group in the scene
+    long k1;
+    const Span *cols, *rows;
+    const MaterialConstants* const* gconsts;
+    const std::uint8_t* fixed;  // fixed_edges_
+    int cprev = -2, iprev = -2, jprev = -2;
+    // The runs of one block of mohr_blocks' run-by-run form, as its trial stage found them,
+    // for its motion stage (a block of kConsultBlock points, extended to the end of a run,
+    // holds at most kConsultBlock runs). On the stack: no allocation.
+    struct Run { long kend; int c, ci, cj; bool one_group; };
+    Run block_runs[kConsultBlock];
+    int nrun = 0, irun = 0;
+    long consulted = 0;  // Mohr-Coulomb points consulted (profiling)
+
+    LPFDM_INLINE bool owned(int c) const { return unsigned(c) - unsigned(own_lo) < own_n; }
+    // Cell c's column ci and row cj; the next cell of the row (the usual case) without an
+    // integer division.
+    LPFDM_INLINE void locate(int c, int& ci, int& cj) {
+        const bool next = c == cprev + 1 && iprev + 1 < mx;
+        ci = next ? iprev + 1 : c % mx; cj = next ? jprev : c / mx;
+        cprev = c; iprev = ci; jprev = cj;
+    }
     // Software prefetch (speed only: no number changes). At a million points the point
     // arrays come from memory at every step, nine streams at once, and the processor's own
     // prefetcher, which follows a stream within a 4 KiB page and starts again at the next,
-    // kept the elastic loop (usual_runs) waiting for them: with the lines of point k + 128
-    // asked for as it reaches point k (every other four: a line of doubles), the elastic
-    // million-point scene's point phase takes a quarter less time. Where the points fit in
-    // the cache the requests find their lines there. The Mohr-Coulomb block loop does not
-    // ask: it waits on its arithmetic, not on memory (mohr-1M as fast with it, mohr-65k 6 %
-    // slower, the requests' own cost).
-    constexpr long kAhead = 128;
-    [[maybe_unused]] auto ahead = [&](long k) LPFDM_INLINE {
+    // kept the elastic loop waiting for them: the lines of point k + 128 are asked for as it
+    // reaches point k (every other four: a line of doubles). The Mohr-Coulomb block loop
+    // does not ask: it waits on its arithmetic, not on memory.
+    LPFDM_INLINE void ahead(long k) const {
 #if defined(__GNUC__)
+        constexpr long kAhead = 128;
         if ((k & 4) || k + kAhead >= k1) return;
         const long q = k + kAhead;
         __builtin_prefetch(px + q, 1); __builtin_prefetch(py + q, 1);
@@ -4632,615 +4704,633 @@ LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, La
 #else
         (void)k;
 #endif
-    };
-    const Span* cols = cols_.data();
-    const Span* rows = rows_.data();
-    // Mohr-Coulomb point r of material mc with its elastic trial s: the consult of eq. 6
-    // (mohr_consult, as the reference's), and the stress written to the point.
-    auto consult_point = [&](const MaterialConstants& mc, long r, Stress s, auto own) LPFDM_INLINE {
-        mohr_consult<decltype(own)::value>(mc, std::size_t(r), pvol[r], s);
-        psxx[r] = s.xx; psyy[r] = s.yy; psxy[r] = s.xy; pszz[r] = s.zz;
-    };
-    // eq. 6 with the Jaumann rotation of eq. 5f (the elastic trial), for one point or four in
-    // the lanes of a vector: de the elastic increment, (rc, rs) the cell's rotation.
-    auto elastic_trial = [](auto& xx, auto& yy, auto& xy, auto& zz, const auto& de, const auto& rc, const auto& rs) LPFDM_INLINE {
-        rotate_stress(xx, yy, xy, rc, rs);  // Jaumann: the old stress turns with the material
-        xx += de.xx; yy += de.yy; xy += de.xy; zz += de.zz;  // eq. 6
-    };
-    int cprev = -2, iprev = -2, jprev = -2;
-    // Cell c's column ci and row cj; the next cell of the row (the usual case) without an
-    // integer division.
-    auto locate = [&](int c, int& ci, int& cj) LPFDM_INLINE {
-        const bool next = c == cprev + 1 && iprev + 1 < mx;
-        ci = next ? iprev + 1 : c % mx; cj = next ? jprev : c / mx;
-        cprev = c; iprev = ci; jprev = cj;
-    };
-    // The runs of one block of the block loop below, as its trial stage found them, for its
-    // motion stage (a block of kConsultBlock points, extended to the end of a run, holds at
-    // most kConsultBlock runs). On the stack: no allocation.
-    struct Run { long kend; int c, ci, cj; bool one_group; };
-    [[maybe_unused]] Run block_runs[kConsultBlock];
-    [[maybe_unused]] int nrun = 0, irun = 0;
+    }
+};
+
+// Three builds: Wide false, M = Centre (the default scene, without AVX2) or Default (any
+// motion rule and ADVECT POINTS, asked of modes_ as it goes: the options); Wide true
+// (MOTION CENTRE without ADVECT POINTS), run by run, or with Blocks in mohr_blocks.
+template <Motion M, bool Wide, bool Blocks>
+LPFDM_INLINE inline void Simulation::run_points(long k0, long k1, Part& part, Landing& landing) {
+    Loop lp;
+    lp.t = landing;
+    lp.pt = part;
+    lp.own_lo = part.own_lo;
+    lp.own_n = unsigned(part.own_hi) - unsigned(part.own_lo);
+    lp.px = p_.x.data(); lp.py = p_.y.data();
+    lp.psxx = p_.sxx.data(); lp.psyy = p_.syy.data(); lp.psxy = p_.sxy.data(); lp.pszz = p_.szz.data();
+    lp.pvol = p_.vol.data();
+    lp.pcell = p_.cell.data();
+    lp.pgroup = p_.group.data();
+    lp.carry_dx = p_.carry_dx.empty() ? nullptr : p_.carry_dx.data();
+    lp.carry_dy = p_.carry_dy.empty() ? nullptr : p_.carry_dy.data();
+    lp.carry_from = p_.carry_from.empty() ? nullptr : p_.carry_from.data();
+    lp.mx = mx_; lp.my = my_;
+    lp.L = L_; lp.invL = invL_; lp.X = mx_ * L_; lp.Y = my_ * L_;
+    lp.single = groups_.size() == 1;
+    lp.k1 = k1;
+    lp.cols = cols_.data(); lp.rows = rows_.data();
+    lp.gconsts = group_consts_.data();
+    lp.fixed = fixed_edges_.data();
 #if LPFDM_WIDE
-    // The usual run of an elastic scene with 2 x 2 points per cell: four points of one cell
-    // (a run of four, or the first four of a longer run) of one elastic group, in a cell with
-    // no fixed edge, that all stay in it. From point k on, such fours one after another, each
-    // in registers and stored (and added to the cell's sums, eq. 7 and 8) only once
-    // all four are known to stay. At the first four that is not one, nothing of it is stored
-    // and its first index is returned, for the general code of runs() below, which makes the
-    // same numbers: the same expressions in the same order, and a run split in two gives the
-    // same sums (they are stored and reloaded). That code's bookkeeping cost about 420
-    // instructions per run of four (callgrind, elastic bench); this path about 220.
-    const MaterialConstants* const* gconsts = group_consts_.data();
-    const std::uint8_t* fixed = fixed_edges_.data();
-    [[maybe_unused]] auto usual_runs = [&](long k, const long stop) LPFDM_INLINE {
-        using detail::v4d;
+    if constexpr (Blocks) mohr_blocks(lp, k0, k1);
+#endif
+    if constexpr (!Blocks) runs<M, Wide, kWhole>(lp, k0, k1);
+    landing = lp.t;
+    part = lp.pt;
+}
+
+// The runs of points k .. stop-1, in one of three stages (S): kWhole, the whole step of each
+// run; kTrial, eq. 6's elastic trial only (a Mohr-Coulomb point is consulted later, by
+// consult_block); kMotion, eq. 7a/7b and the landing only (of the runs kTrial found). The
+// points are stored cell by cell and mostly stay so (they are created that way, sorted so
+// every REORDER steps, and cross a cell edge rarely): a run's cell strain, rotation, nodes
+// and elastic increment are read once. Requires p_.cell[k] to be the cell holding
+// (x[k], y[k]) (as after every step).
+template <Motion M, bool Wide, int S>
+LPFDM_INLINE inline void Simulation::runs(Loop& lp, long k, const long stop) {
+    while (k < stop) {
+#if LPFDM_WIDE
+        if constexpr (Wide && S == kWhole) {
+            k = usual_runs(lp, k, stop);
+            if (k == stop) break;
+        }
+#endif
+        // The run: points k .. kend-1, all in cell c = (ci, cj).
+        int c, ci, cj;
+        long kend;
+        bool one_group = true;
+        if constexpr (S == kMotion) {
+            const Loop::Run& run = lp.block_runs[lp.irun++];
+            c = run.c; ci = run.ci; cj = run.cj; kend = run.kend; one_group = run.one_group;
+        } else {
+            c = lp.pcell[k];
+            lp.locate(c, ci, cj);
+            kend = run_end<Wide>(lp, k, stop, c);
+            run_trial<Wide>(lp, k, kend, c, one_group);
+        }
+        if constexpr (S == kTrial) lp.block_runs[lp.nrun++] = Loop::Run{kend, c, ci, cj, one_group};
+        if constexpr (S != kTrial) run_motion<M, Wide>(lp, k, kend, c, ci, cj, one_group);
+        k = kend;
+    }
+}
+
+// The end of the run of cell c that starts at point k (the first point after it, at most
+// stop).
+template <bool Wide>
+LPFDM_INLINE inline long Simulation::run_end(const Loop& lp, long k, const long stop, int c) const {
+    long kend = k + 1;
+#if LPFDM_WIDE
+    if constexpr (Wide) {  // four cell numbers per compare: one branch per four points, not one per point
         typedef int v4i __attribute__((vector_size(16)));
         typedef float v4f __attribute__((vector_size(16)));
-        double mass = t.mass;
-        int cmin = t.cmin, cmax = t.cmax, imin = t.imin, imax = t.imax;
-        for (; k + 4 <= stop; k += 4) {
-            ahead(k);
-            const int c = pcell[k];
+        for (; kend + 4 <= stop; kend += 4) {
             v4i w;
-            std::memcpy(&w, pcell + k, sizeof w);
-            if (__builtin_ia32_movmskps(v4f(w == c)) != 15) break;
-            const int g = pgroup[k];
-            if (!single) {
-                std::uint64_t gw;
-                std::memcpy(&gw, pgroup + k, sizeof gw);
-                if (gw != std::uint64_t(g) * 0x0001000100010001ULL) break;
-            }
-            const MaterialConstants& mc = *gconsts[g];
-            if (mc.model != Model::Elastic || fixed[c] || !owned(c)) break;
-            int ci, cj;
-            locate(c, ci, cj);
-            const CellStrain& ce = strain_[std::size_t(c)];
-            const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
-            const Stress de = elastic_change(mc, e);  // eq. 6
-            v4d xx, yy, xy, zz, vol, x0, y0, x, y;
-            detail::load(psxx + k, xx); detail::load(psyy + k, yy); detail::load(psxy + k, xy);
-            detail::load(pszz + k, zz); detail::load(pvol + k, vol);
-            elastic_trial(xx, yy, xy, zz, de, ce.rc, ce.rs);
-            vol *= 1 + e.xx + e.yy;
-            detail::load(px + k, x0); detail::load(py + k, y0);
-            const int n1 = node(ci, cj);
-            if constexpr (M == Motion::Paper) {
-                move_point_paper(x0, y0, e, cols[ci].at, rows[cj].at, dux_[n1], duy_[n1], x, y);  // eq. 7a/7b
-            } else {  // MOTION CENTRE: eq. 7a/7b about the centre, with the mean increment
-                const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
-                double umx, umy;
-                mean_of_four(dux_[n1], dux_[n2], dux_[n3], dux_[n4], umx); mean_of_four(duy_[n1], duy_[n2], duy_[n3], duy_[n4], umy);
-                v4d ddx, ddy;
-                move_point_centre(x0, y0, e, cols[ci].at, rows[cj].at, L, umx, umy, x, y, ddx, ddy);
-            }
-            const double uc0 = cols[ci].lo, uc1 = cols[ci].hi, vc0 = rows[cj].lo, vc1 = rows[cj].hi;
-            const v4d u = x * invL, v = y * invL;
-            if (!detail::all_lanes((u >= v4d{uc0, uc0, uc0, uc0}) & (u < v4d{uc1, uc1, uc1, uc1}) & (v >= v4d{vc0, vc0, vc0, vc0}) & (v < v4d{vc1, vc1, vc1, vc1}))) break;
-            detail::store(psxx + k, xx); detail::store(psyy + k, yy); detail::store(psxy + k, xy);
-            detail::store(pszz + k, zz); detail::store(pvol + k, vol);
-            detail::store(px + k, x); detail::store(py + k, y);
-            {
-                CellSums sums = cell_sums(std::size_t(c));
-                sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, xx, yy, xy, mass);  // eq. 7, 8
-                store_sums(std::size_t(c), sums);
-            }
-            cmin = std::min(cmin, c); cmax = std::max(cmax, c);
-            imin = std::min(imin, ci); imax = std::max(imax, ci);
+            std::memcpy(&w, lp.pcell + kend, sizeof w);
+            const int same = __builtin_ia32_movmskps(v4f(w == c));
+            if (same != 15) { kend += __builtin_ctz(~unsigned(same)); break; }
         }
-        t.mass = mass;
-        t.cmin = cmin; t.cmax = cmax; t.imin = imin; t.imax = imax;
-        return k;
+        if (kend + 4 > stop)  // the last points; the scalar loop after every run instead cost 3 % more instructions
+            while (kend < stop && lp.pcell[kend] == c) ++kend;
+    }
+#endif
+    if constexpr (!Wide) while (kend < stop && lp.pcell[kend] == c) ++kend;
+    return kend;
+}
+
+// eq. 6 with the Jaumann rotation of eq. 5f, then the volume change, for the points k ..
+// kend-1 of cell c (a run), by spans of one group: the elastic increment depends on the cell
+// and the material only. A Mohr-Coulomb point is consulted here in the scalar loop; in
+// the AVX2 loop it keeps its elastic trial for consult_block. one_group: whether the run is
+// one span.
+template <bool Wide>
+LPFDM_INLINE inline void Simulation::run_trial(Loop& lp, long k, const long kend, int c, bool& one_group) {
+    double* __restrict psxx = lp.psxx;
+    double* __restrict psyy = lp.psyy;
+    double* __restrict psxy = lp.psxy;
+    double* __restrict pszz = lp.pszz;
+    double* __restrict pvol = lp.pvol;
+    const std::uint16_t* pgroup = lp.pgroup;
+    const CellStrain& ce = strain_[std::size_t(c)];
+    const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
+    const double rc = ce.rc, rs = ce.rs, dv = 1 + e.xx + e.yy;
+    for (long q = k; q < kend;) {
+        const int g = pgroup[q];
+        long qend = lp.single ? kend : q + 1;  // one group in the scene: the whole run
+        while (qend < kend && pgroup[qend] == g) ++qend;
+        one_group = one_group && qend == kend;
+        const MaterialConstants& mc = *group_consts_[std::size_t(g)];
+        const Stress de = elastic_change(mc, e);  // eq. 6
+        if (mc.model == Model::Elastic || (Wide && mc.model == Model::MohrCoulomb)) {
+            long r0 = q;
+            q = qend;
+#if LPFDM_WIDE
+            if constexpr (Wide) {  // four points per register (the simd loop's set-up costs more for runs this short)
+                for (; r0 + 4 <= qend; r0 += 4) {
+                    detail::v4d xx, yy, xy, zz, vol;
+                    detail::load(psxx + r0, xx); detail::load(psyy + r0, yy); detail::load(psxy + r0, xy);
+                    detail::load(pszz + r0, zz); detail::load(pvol + r0, vol);
+                    elastic_trial(xx, yy, xy, zz, de, rc, rs);
+                    vol *= dv;
+                    detail::store(psxx + r0, xx); detail::store(psyy + r0, yy); detail::store(psxy + r0, xy);
+                    detail::store(pszz + r0, zz); detail::store(pvol + r0, vol);
+                }
+            }
+#endif
+            LPFDM_OMP(omp simd)  // independent points: two (or four) per instruction, the same results
+            for (long r = r0; r < qend; ++r) {
+                double xx = psxx[r], yy = psyy[r], xy = psxy[r], zz = pszz[r];
+                elastic_trial(xx, yy, xy, zz, de, rc, rs);
+                psxx[r] = xx; psyy[r] = yy; psxy[r] = xy; pszz[r] = zz; pvol[r] *= dv;
+            }
+        } else if (mc.model == Model::MohrCoulomb) {  // the one-point consult (the AVX2 loop consults in consult_block)
+            auto consult = [&](auto own) LPFDM_INLINE {
+                for (; q < qend; ++q) {
+                    Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                    elastic_trial(s.xx, s.yy, s.xy, s.zz, de, rc, rs);  // eq. 6, the elastic trial
+                    pvol[q] *= dv;  // before the consult, as everywhere (its plastic work reads V)
+                    mohr_consult<decltype(own)::value>(mc, std::size_t(q), pvol[q], s);
+                    psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+                }
+            };
+            if (modes_.scatter) consult(std::true_type{});  // scatter: each point's own strength
+            else consult(std::false_type{});
+        } else {
+            for (; q < qend; ++q) {
+                Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
+                rotate_stress(s, rc, rs);
+                user_consult(mc, std::size_t(q), e, s);  // eq. 6 by the user's model
+                psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
+                pvol[q] *= dv;
+            }
+        }
+    }
+}
+
+// eq. 7a/7b for the points k .. kend-1 of cell c = (ci, cj) (a run), the edge stop, then eq.
+// 7 and 8 into the cell each point lands in. The sums of cell c stay in registers while its
+// points stay in it.
+template <Motion M, bool Wide>
+LPFDM_INLINE inline void Simulation::run_motion(Loop& lp, const long k, const long kend, const int c, const int ci, const int cj, const bool one_group) {
+    double* __restrict px = lp.px;
+    double* __restrict py = lp.py;
+    const double* psxx = lp.psxx;
+    const double* psyy = lp.psyy;
+    const double* psxy = lp.psxy;
+    const double* pvol = lp.pvol;
+    std::int32_t* pcell = lp.pcell;
+    const std::uint16_t* pgroup = lp.pgroup;
+    const int mx = lp.mx, my = lp.my;
+    const double L = lp.L, invL = lp.invL, X = lp.X, Y = lp.Y;
+    Landing& t = lp.t;
+    const CellStrain& ce = strain_[std::size_t(c)];
+    const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
+    const std::uint8_t fe = lp.fixed[c];
+    // A point of a cell in the last column or row takes the full test below: x < X
+    // does not follow from x / L < m there (Span).
+    const double xi = lp.cols[ci].at, yj = lp.rows[cj].at;  // ci L, cj L
+    const double uc0 = lp.cols[ci].lo, uc1 = lp.cols[ci].hi, vc0 = lp.rows[cj].lo, vc1 = lp.rows[cj].hi;
+    const Motion motion = M == Motion::Default ? modes_.motion : M;  // (Default: the options' build)
+    const bool carry = M == Motion::Default && modes_.advect == Advect::Points;
+    const int n1 = node(ci, cj);
+    double ux[4], uy[4], umx = 0, umy = 0;
+    gather_nodes(n1, ux, uy);  // eq. 7a/7b's nodes
+    if (motion == Motion::Centre) { mean_of_four(ux[0], ux[1], ux[2], ux[3], umx); mean_of_four(uy[0], uy[1], uy[2], uy[3], umy); }
+    CellSums sums{0, 0, 0, 0, 0};
+    const bool own = lp.owned(c);  // the sums of cell c are this chunk's to add
+    if (own) sums = cell_sums(std::size_t(c));
+    bool stayed = false;
+    int g = one_group ? pgroup[k] : -1;
+    double gm = one_group ? groups_[std::size_t(g)].mass : 0, gv0 = one_group ? groups_[std::size_t(g)].vol0 : 0;
+    // eq. 7a/7b: where a point of this cell at (x0, y0) moves; one point, or four in the
+    // lanes of a vector (the same operations in the same order in every lane). d: the
+    // point's own increment (MOTION CENTRE and BILINEAR; ADVECT POINTS carries it).
+    auto moved = [&](const auto& x0, const auto& y0, auto& x, auto& y, auto& ddx, auto& ddy) LPFDM_INLINE {
+        if (motion == Motion::Centre) move_point_centre(x0, y0, e, xi, yj, L, umx, umy, x, y, ddx, ddy);  // about the centre, with the mean increment
+        else if (motion == Motion::Paper) move_point_paper(x0, y0, e, xi, yj, ux[0], uy[0], x, y);        // about node [1]
+        else move_point_bilinear(x0, y0, xi, yj, invL, ux, uy, x, y, ddx, ddy);                           // the cell's bilinear field
     };
-#endif
-    // The runs of points k .. stop-1, in one of three stages: kWhole, the whole step of each
-    // run; kTrial, eq. 6's elastic trial only (a Mohr-Coulomb point is consulted later, by
-    // consult_block); kMotion, eq. 7a/7b and the landing only (of the runs kTrial found).
-    enum : int { kWhole, kTrial, kMotion };
-    auto runs = [&](long k, const long stop, auto stage) LPFDM_INLINE {
-        constexpr int S = decltype(stage)::value;
-        while (k < stop) {
-#if LPFDM_WIDE
-            if constexpr (Wide && S == kWhole && M != Motion::Bilinear && !Carry) {
-                k = usual_runs(k, stop);
-                if (k == stop) break;
+    // Point q, now at (x, y): its new cell, min(m - 1, int(x / L)) (the run's own cell in
+    // the usual case), and eq. 7 and 8 into it.
+    auto land = [&](long q, double x, double y, double ddx, double ddy, auto one) LPFDM_INLINE {
+        const double u = x * invL, v = y * invL;
+        int ni = ci, nj = cj, cn = c;
+        if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
+            if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite): cell_holding's test
+                pcell[q] = -1;
+                ++t.departed;
+                return;
             }
-#endif
-            // The run: points k .. kend-1, all in cell c = (ci, cj). The next run is usually
-            // the next cell of the row: no integer division then.
-            int c, ci, cj;
-            long kend;
-            bool one_group = true;
-            if constexpr (S == kMotion) {
-                const Run& run = block_runs[irun++];
-                c = run.c; ci = run.ci; cj = run.cj; kend = run.kend; one_group = run.one_group;
-            } else {
-                c = pcell[k];
-                locate(c, ci, cj);
-                kend = k + 1;
-#if LPFDM_WIDE
-                if constexpr (Wide) {  // four cell numbers per compare: one branch per four points, not one per point
-                    typedef int v4i __attribute__((vector_size(16)));
-                    typedef float v4f __attribute__((vector_size(16)));
-                    for (; kend + 4 <= stop; kend += 4) {
-                        v4i w;
-                        std::memcpy(&w, pcell + kend, sizeof w);
-                        const int same = __builtin_ia32_movmskps(v4f(w == c));
-                        if (same != 15) { kend += __builtin_ctz(~unsigned(same)); break; }
-                    }
-                    if (kend + 4 > stop)  // the last points; the scalar loop after every run instead cost 3 % more instructions
-                        while (kend < stop && pcell[kend] == c) ++kend;
-                }
-#endif
-                if constexpr (!Wide) while (kend < stop && pcell[kend] == c) ++kend;
-            }
-            const int n1 = node(ci, cj);
-            const CellStrain& ce = strain_[std::size_t(c)];
-            const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
-
-            // eq. 6 with the Jaumann rotation of eq. 5f, then the volume change. The elastic
-            // increment depends on the cell and the material only: once per run and group.
-            const double rc = ce.rc, rs = ce.rs, dv = 1 + e.xx + e.yy;
-            for (long q = k; q < kend && S != kMotion;) {
-                const int g = pgroup[q];
-                long qend = single ? kend : q + 1;  // one group in the scene: the whole run
-                while (qend < kend && pgroup[qend] == g) ++qend;
-                one_group = one_group && qend == kend;
-                const MaterialConstants& mc = *group_consts_[std::size_t(g)];
-                const Stress de = elastic_change(mc, e);  // eq. 6
-                // eq. 6 with the Jaumann rotation (the elastic trial); one point, or four in the
-                // lanes of a vector.
-                auto trial = [&](auto& xx, auto& yy, auto& xy, auto& zz) LPFDM_INLINE { elastic_trial(xx, yy, xy, zz, de, rc, rs); };
-                if (mc.model == Model::Elastic || (S == kTrial && mc.model == Model::MohrCoulomb)) {
-                    auto elastic = [&](auto& xx, auto& yy, auto& xy, auto& zz, auto& vol) LPFDM_INLINE {
-                        trial(xx, yy, xy, zz);
-                        vol *= dv;
-                    };
-                    long r0 = q;
-                    q = qend;
-#if LPFDM_WIDE
-                    if constexpr (Wide) {  // four points per register (the simd loop's set-up costs more for runs this short)
-                        for (; r0 + 4 <= qend; r0 += 4) {
-                            detail::v4d xx, yy, xy, zz, vol;
-                            detail::load(psxx + r0, xx); detail::load(psyy + r0, yy); detail::load(psxy + r0, xy);
-                            detail::load(pszz + r0, zz); detail::load(pvol + r0, vol);
-                            elastic(xx, yy, xy, zz, vol);
-                            detail::store(psxx + r0, xx); detail::store(psyy + r0, yy); detail::store(psxy + r0, xy);
-                            detail::store(pszz + r0, zz); detail::store(pvol + r0, vol);
-                        }
-                    }
-#endif
-                    LPFDM_OMP(omp simd)  // independent points: two (or four) per instruction, the same results
-                    for (long r = r0; r < qend; ++r) {
-                        double xx = psxx[r], yy = psyy[r], xy = psxy[r], zz = pszz[r], vol = pvol[r];
-                        elastic(xx, yy, xy, zz, vol);
-                        psxx[r] = xx; psyy[r] = yy; psxy[r] = xy; pszz[r] = zz; pvol[r] = vol;
-                    }
-                } else if (mc.model == Model::MohrCoulomb) {  // the one-point loop (the AVX2 loop consults in consult_block)
-                    auto consult = [&](auto own) LPFDM_INLINE {
-                        for (; q < qend; ++q) {
-                            Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
-                            trial(s.xx, s.yy, s.xy, s.zz);  // eq. 6, the elastic trial
-                            pvol[q] *= dv;  // before the consult, as everywhere (its plastic work reads V)
-                            consult_point(mc, q, s, own);
-                        }
-                    };
-                    if (modes_.scatter) consult(std::true_type{});  // scatter: each point's own strength
-                    else consult(std::false_type{});
-                } else {
-                    for (; q < qend; ++q) {
-                        Stress s{psxx[q], psyy[q], psxy[q], pszz[q]};
-                        rotate_stress(s, rc, rs);
-                        user_consult(mc, std::size_t(q), e, s);  // eq. 6 by the user's model
-                        psxx[q] = s.xx; psyy[q] = s.yy; psxy[q] = s.xy; pszz[q] = s.zz;
-                        pvol[q] *= dv;
-                    }
-                }
-            }
-            if constexpr (S == kTrial) block_runs[nrun++] = Run{kend, c, ci, cj, one_group};
-
-            if constexpr (S != kTrial) {
-                // eq. 7a/7b, about node [1] of the cell; then eq. 7 and 8 into the cell each point
-                // lands in. The sums of cell c stay in registers while its points stay in it.
-                const std::uint8_t fe = fixed_edges_[std::size_t(c)];
-                // A point of a cell in the last column or row takes the full test below: x < X
-                // does not follow from x / L < m there (Span).
-                const double xi = cols[ci].at, yj = rows[cj].at;  // ci L, cj L
-                const double uc0 = cols[ci].lo, uc1 = cols[ci].hi, vc0 = rows[cj].lo, vc1 = rows[cj].hi;
-                const int n2 = n1 + 1, n3 = n1 + mx + 1, n4 = n3 + 1;
-                const double ux1 = dux_[n1], uy1 = duy_[n1];
-                double ux2 = 0, uy2 = 0, ux3 = 0, uy3 = 0, ux4 = 0, uy4 = 0, umx = 0, umy = 0;
-                if constexpr (M != Motion::Paper) { ux2 = dux_[n2]; uy2 = duy_[n2]; ux3 = dux_[n3]; uy3 = duy_[n3]; ux4 = dux_[n4]; uy4 = duy_[n4]; }
-                if constexpr (M == Motion::Centre) { mean_of_four(ux1, ux2, ux3, ux4, umx); mean_of_four(uy1, uy2, uy3, uy4, umy); }
-                CellSums sums{0, 0, 0, 0, 0};
-                const bool own = owned(c);  // the sums of cell c are this chunk's to add
-                if (own) sums = cell_sums(std::size_t(c));
-                bool stayed = false;
-                int g = one_group ? pgroup[k] : -1;
-                double gm = one_group ? groups_[std::size_t(g)].mass : 0, gv0 = one_group ? groups_[std::size_t(g)].vol0 : 0;
-                // eq. 7a/7b: where a point of this cell at (x0, y0) moves; one point, or four in
-                // the lanes of a vector (the same operations in the same order in every lane).
-                // d: the point's own increment (ADVECT POINTS only).
-                auto moved = [&](const auto& x0, const auto& y0, auto& x, auto& y, auto& ddx, auto& ddy) LPFDM_INLINE {
-                    if constexpr (M == Motion::Paper) {  // eq. 7a/7b (refused with ADVECT POINTS)
-                        move_point_paper(x0, y0, e, xi, yj, ux1, uy1, x, y);
-                    } else if constexpr (M == Motion::Centre) {  // eq. 7a/7b about the centre, with the mean increment
-                        move_point_centre(x0, y0, e, xi, yj, L, umx, umy, x, y, ddx, ddy);
-                    } else {  // bilinear shape functions of the cell
-                        const double ux[4] = {ux1, ux2, ux3, ux4}, uy[4] = {uy1, uy2, uy3, uy4};
-                        move_point_bilinear(x0, y0, xi, yj, invL, ux, uy, x, y, ddx, ddy);
-                    }
-                };
-                // Point q, now at (x, y): its new cell, min(m - 1, int(x / L)) (the run's own cell
-                // in the usual case), and eq. 7 and 8 into it. The sums of cell c stay in
-                // registers while its points stay in it.
-                auto land = [&](long q, double x, double y, double ddx, double ddy, auto one) LPFDM_INLINE {
-                    (void)ddx; (void)ddy;
-                    const double u = x * invL, v = y * invL;
-                    int ni = ci, nj = cj, cn = c;
-                    if (!(u >= uc0 && u < uc1 && v >= vc0 && v < vc1)) {
-                        if (!(x >= 0 && x < X && y >= 0 && y < Y)) {  // left the lattice (or not finite): cell_holding's test
-                            pcell[q] = -1;
-                            ++t.departed;
-                            return;
-                        }
-                        ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
-                        pcell[q] = cn;
-                    }
-                    if constexpr (!decltype(one)::value) {
-                        if (pgroup[q] != g) { g = pgroup[q]; gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0; }
-                    }
-                    if constexpr (Carry) {  // ADVECT POINTS: the increment field the point brings to cell cn
-                        if (owned(cn)) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
-                        if (carry_dx) { carry_dx[q] = ddx; carry_dy[q] = ddy; carry_from[q] = c; }  // threads: map_point may add it later
-                    }
-                    const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
-                    if (cn == c && own) {
-                        sums.add(gm, vk, sxx, syy, sxy);  // eq. 7, 8
-                        stayed = true;
-                    } else {
-                        if (owned(cn)) add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
-                        else p_.listed[std::size_t(pt.list_at + pt.listed++)] = std::int32_t(q);  // another chunk's cell
-                        t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
-                        t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
-                    }
-                    t.mass += gm;
-                };
-                // Points q0 .. kend-1 one at a time, in four versions: with or without fixed edges,
-                // one group or several.
-                auto motion = [&](long q0, auto edges, auto one) LPFDM_INLINE {
-                    for (long q = q0; q < kend; ++q) {
-                        const double x0 = px[q], y0 = py[q];
-                        double x, y, ddx = 0, ddy = 0;
-                        moved(x0, y0, x, y, ddx, ddy);
-                        if constexpr (decltype(edges)::value) {
-                            // A fixed edge is impermeable: eq. 7a/7b is an affine map of the whole cell and
-                            // moves a point on a fixed edge by d_eps_yx dx (or d_eps_xy dy) when the far
-                            // nodes move unequally; it stops on the edge, inside its cell.
-                            if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
-                            if ((fe & kEdgeTop) && y >= (cj + 1) * L) y = edge_below(cj + 1);
-                            if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
-                            if ((fe & kEdgeRight) && x >= (ci + 1) * L) x = edge_below(ci + 1);
-                            if (fe & kEdgeWall) hold_by_walls(x0, y0, x, y);  // as the reference
-                        }
-                        px[q] = x; py[q] = y;
-                        land(q, x, y, ddx, ddy, one);
-                    }
-                };
-                long q0 = k;
-#if LPFDM_WIDE
-                if constexpr (Wide && !Carry) {
-                    // Four points at a time in the lanes of an AVX2 register (one group, no fixed
-                    // edge): the motion and the test whether each stays in its cell. When all four
-                    // stay, their sums are added from the lanes in point order; otherwise each
-                    // lands on its own, in order. Either way the result is that of the loop above,
-                    // bit for bit: the same expressions in the same order, and no fused multiply-add
-                    // (see LPFDM_WIDE).
-                    if (!fe && one_group && own) {
-                        using detail::v4d;
-                        const v4d u0 = {uc0, uc0, uc0, uc0}, u1 = {uc1, uc1, uc1, uc1}, v0 = {vc0, vc0, vc0, vc0}, v1 = {vc1, vc1, vc1, vc1};
-                        for (; q0 + 4 <= kend; q0 += 4) {
-                            v4d x0, y0, x, y, ddx{}, ddy{};
-                            detail::load(px + q0, x0); detail::load(py + q0, y0);
-                            moved(x0, y0, x, y, ddx, ddy);
-                            detail::store(px + q0, x); detail::store(py + q0, y);
-                            const v4d u = x * invL, v = y * invL;
-                            if (!detail::all_lanes((u >= u0) & (u < u1) & (v >= v0) & (v < v1))) {
-                                for (int l = 0; l < 4; ++l) land(q0 + l, x[l], y[l], 0.0, 0.0, std::true_type{});
-                                continue;
-                            }
-                            stayed = true;
-                            {
-                                v4d vol, sxx, syy, sxy;
-                                detail::load(pvol + q0, vol); detail::load(psxx + q0, sxx); detail::load(psyy + q0, syy); detail::load(psxy + q0, sxy);
-                                sums.add_four(gm, gv0, vol, sxx, syy, sxy, t.mass);  // eq. 7, 8
-                            }
-                        }
-                    }
-                }
-#endif
-                if (fe) one_group ? motion(q0, std::true_type{}, std::true_type{}) : motion(q0, std::true_type{}, std::false_type{});
-                else one_group ? motion(q0, std::false_type{}, std::true_type{}) : motion(q0, std::false_type{}, std::false_type{});
-                if (stayed) {
-                    store_sums(std::size_t(c), sums);
-                    t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
-                    t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
-                }
-            }
-            k = kend;
+            ni = std::min(mx - 1, int(u)); nj = std::min(my - 1, int(v)); cn = cell(ni, nj);
+            pcell[q] = cn;
+        }
+        if constexpr (!decltype(one)::value) {
+            if (pgroup[q] != g) { g = pgroup[q]; gm = groups_[std::size_t(g)].mass; gv0 = groups_[std::size_t(g)].vol0; }
+        }
+        if (carry) {  // ADVECT POINTS: the increment field the point brings to cell cn
+            if (lp.owned(cn)) carry_to(cn, ni, nj, gm, x, y, ddx, ddy, e);
+            if (lp.carry_dx) { lp.carry_dx[q] = ddx; lp.carry_dy[q] = ddy; lp.carry_from[q] = c; }  // threads: map_point may add it later
+        }
+        const double vk = std::min(pvol[q], gv0), sxx = psxx[q], syy = psyy[q], sxy = psxy[q];
+        if (cn == c && own) {
+            sums.add(gm, vk, sxx, syy, sxy);  // eq. 7, 8
+            stayed = true;
+        } else {
+            if (lp.owned(cn)) add_to_cell(std::size_t(cn), gm, vk, sxx, syy, sxy);  // eq. 7, 8
+            else p_.listed[std::size_t(lp.pt.list_at + lp.pt.listed++)] = std::int32_t(q);  // another chunk's cell
+            t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
+            t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
+        }
+        t.mass += gm;
+    };
+    // Points q0 .. kend-1 one at a time, in four versions: with or without fixed edges, one
+    // group or several.
+    auto one_by_one = [&](long q0, auto edges, auto one) LPFDM_INLINE {
+        for (long q = q0; q < kend; ++q) {
+            const double x0 = px[q], y0 = py[q];
+            double x, y, ddx = 0, ddy = 0;
+            moved(x0, y0, x, y, ddx, ddy);
+            if constexpr (decltype(edges)::value) stop_at_edges(ci, cj, fe, x0, y0, x, y);
+            px[q] = x; py[q] = y;
+            land(q, x, y, ddx, ddy, one);
         }
     };
+    long q0 = k;
 #if LPFDM_WIDE
     if constexpr (Wide) {
-        // The Mohr-Coulomb points of b0 .. b1-1, holding their elastic trials, by spans of
-        // one material (consult_lanes).
-        long consulted = 0;  // Mohr-Coulomb points consulted (profiling)
-        const PointArrays arrays{psxx, psyy, psxy, pszz, pvol, pgroup};
-        auto consult_block = [&](long b0, long b1) LPFDM_INLINE {
-            for (long q = b0; q < b1;) {  // spans of points of one material
-                const MaterialConstants& mc = *group_consts_[std::size_t(pgroup[q])];
-                long qend = single ? b1 : q + 1;
-                while (qend < b1 && group_consts_[std::size_t(pgroup[qend])] == &mc) ++qend;
-                if (mc.model == Model::MohrCoulomb) {
-                    if (modes_.scatter) consult_lanes<true>(mc, q, qend, arrays);  // scatter: each point's own strength
-                    else consult_lanes<false>(mc, q, qend, arrays);
-                    consulted += qend - q;
-                }
-                q = qend;
-            }
-        };
-        if constexpr (Blocks) {  // mohr_groups_ (advance_run_wide)
-            // With a Mohr-Coulomb material, the points go in blocks of about kConsultBlock,
-            // each ending where a run ends: the elastic trial of the block's runs, then the
-            // consult of its Mohr-Coulomb points four or eight at a time whatever cells they lie in
-            // (the consult needs no cell; lanes within runs, rarely more than four points long
-            // with 2 x 2 points per cell, left half the returns to the one-point code),
-            // then the motion and landing of its runs, which read the consulted stresses
-            // while they are still in the cache. The same operations on the same values as
-            // the whole step of each run: the output is the same bit for bit. A scene with
-            // no user's model takes blocks of kConsultBlock points (the chunk's last one
-            // shorter), not ending with a run, four points at a time instead: the trial and
-            // the motion of the block (move_block; the motion of eq. 7a/7b needs no stress),
-            // the consult, then the sums of eq. 7 and 8 (land_block). A run split between two
-            // blocks adds the same sums.
-            static_assert(M == Motion::Centre && !Carry, "the blocks follow MOTION CENTRE without ADVECT POINTS");
-            // A block of points of elastic and Mohr-Coulomb materials, taken four points at a
-            // time whatever cells they lie in: their cells' strain records, and their nodes'
-            // increments, gathered into the lanes (read once when the four share a cell). A
-            // flowing scene leaves runs of one or two points in a cell, and the loop per run
-            // (runs) then mispredicts about one branch per point (where a run ends: 0.99 a
-            // point-update in the last 100 steps of decks/bench_flow.deck, against 0.11 in its
-            // first); this one branches on what is rare (a cell with a fixed edge or near a
-            // wall, whose points stop_at_edges holds one by one; a point leaving the lattice;
-            // four points of two materials) and on whether the four share a cell. Trial and
-            // motion in one pass read each four's strain records once (in two passes, the
-            // trial's and the motion's, the point phase of the flow's last 400 steps took
-            // 11 % longer, of its first 400 steps 7 %: decks/bench_flow.deck, one thread). The same
-            // functions on the same values as the runs, point by point, and each point added to
-            // the sums of the cell it lands in (eq. 7, 8) in point order, as there: the same bits.
-            const double inv_mx = 1.0 / mx;
-            typedef int v4i __attribute__((vector_size(16)));
-            typedef float v4f __attribute__((vector_size(16)));
-            // The column and row of the cells c in the lanes: c / mx as the truncated double
-            // (c + 0.5) / mx, exact for every int c (the quotient lies at least 0.5 / mx from an
-            // integer, its rounding error below (c + 0.5) / mx 2^-52).
-            auto columns_rows = [&](const v4i& c, v4i& ci, v4i& cj) LPFDM_INLINE {
-                cj = __builtin_convertvector((__builtin_convertvector(c, detail::v4d) + 0.5) * inv_mx, v4i);
-                ci = c - cj * mx;
-            };
-            // The strain records of the cells of points q .. q+3 in lanes, and their rotations.
-            auto strain_lanes = [&](long q) LPFDM_INLINE {
-                const CellStrain* sc = strain_.data();
-                const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
-                return detail::StrainLanes{{s0.xx, s1.xx, s2.xx, s3.xx}, {s0.yy, s1.yy, s2.yy, s3.yy}, {s0.xy, s1.xy, s2.xy, s3.xy}, {s0.yx, s1.yx, s2.yx, s3.yx}};
-            };
-            // The strain record of cell c in every lane.
-            auto strain_lane = [&](int c) LPFDM_INLINE {
-                const CellStrain& ce = strain_[std::size_t(c)];
-                return detail::StrainLanes{{ce.xx, ce.xx, ce.xx, ce.xx}, {ce.yy, ce.yy, ce.yy, ce.yy}, {ce.xy, ce.xy, ce.xy, ce.xy}, {ce.yx, ce.yx, ce.yx, ce.yx}};
-            };
-            auto rotation_lanes = [&](long q, detail::v4d& rc, detail::v4d& rs) LPFDM_INLINE {
-                const CellStrain* sc = strain_.data();
-                const CellStrain &s0 = sc[pcell[q]], &s1 = sc[pcell[q + 1]], &s2 = sc[pcell[q + 2]], &s3 = sc[pcell[q + 3]];
-                rc = detail::v4d{s0.rc, s1.rc, s2.rc, s3.rc}; rs = detail::v4d{s0.rs, s1.rs, s2.rs, s3.rs};
-            };
-            // Four cells in the lanes, all the same one.
-            auto one_cell = [](const v4i& c) LPFDM_INLINE { return __builtin_ia32_movmskps(v4f(c == c[0])) == 15; };
-            // Four points q .. q+3 of one group g (read into g): their groups as one 64-bit word.
-            auto one_group_of_four = [&](long q, int& g) LPFDM_INLINE {
-                g = pgroup[q];
-                if (single) return true;
-                std::uint64_t gw;
-                std::memcpy(&gw, pgroup + q, sizeof gw);
-                return gw == std::uint64_t(g) * 0x0001000100010001ULL;
-            };
-            // The block's first pass, four points at a time: eq. 6's elastic trial and the
-            // volume change (Hooke's law for an elastic or a Mohr-Coulomb point; the latter is
-            // consulted afterwards), then eq. 7a/7b (MOTION CENTRE, which needs no stress) and
-            // the cell each point lands in, written to its cell (-1: it left the lattice), with
-            // the box of those cells and the mass landed. Each four's strain records, gathered
-            // once for both. The sums of eq. 7 and 8 wait for the consulted stresses
-            // (land_block).
-            auto move_block = [&](long b0, const long b1) LPFDM_INLINE {
-                const double* ux = dux_.data();
-                const double* uy = duy_.data();
-                auto trial = [&](const MaterialConstants& mc, auto& xx, auto& yy, auto& xy, auto& zz, auto& vol, const auto& e, const auto& rc, const auto& rs) LPFDM_INLINE {
-                    using V = std::remove_reference_t<decltype(xx)>;  // one value or four lanes
-                    struct { V xx, yy, xy, zz; } de;
-                    elastic_change(mc, e.xx, e.yy, e.xy, e.yx, de.xx, de.yy, de.xy, de.zz);  // eq. 6
-                    elastic_trial(xx, yy, xy, zz, de, rc, rs);
-                    vol *= 1.0 + e.xx + e.yy;
-                };
-                auto trial_one = [&](long q) LPFDM_INLINE {
-                    const CellStrain& ce = strain_[std::size_t(pcell[q])];
-                    trial(*gconsts[pgroup[q]], psxx[q], psyy[q], psxy[q], pszz[q], pvol[q], ce, ce.rc, ce.rs);
-                };
-                auto landed_in = [&](int cn, int ni) LPFDM_INLINE {  // the box of the cells landed in
-                    t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
-                    t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
-                };
-                // Point q, moved to (x, y): the cell it lands in (cell_holding), or it left.
-                auto land_one = [&](long q, double x, double y) LPFDM_INLINE {
-                    const int cn = cell_holding(x, y);
-                    pcell[q] = cn;
-                    if (cn < 0) { ++t.departed; return; }  // left the lattice (or not finite)
-                    landed_in(cn, cn % mx);
-                    t.mass += groups_[pgroup[q]].mass;
-                };
-                for (; b0 + 4 <= b1; b0 += 4) {
-                    using detail::v4d;
-                    v4i c, ci, cj;
-                    std::memcpy(&c, pcell + b0, sizeof c);
-                    const bool one = one_cell(c);
-                    detail::StrainLanes e;
-                    v4d rc, rs;
-                    if (one) {  // one cell (while runs are long): its values once
-                        const CellStrain& ce = strain_[std::size_t(c[0])];
-                        e = strain_lane(c[0]);
-                        rc = v4d{ce.rc, ce.rc, ce.rc, ce.rc}; rs = v4d{ce.rs, ce.rs, ce.rs, ce.rs};
-                    } else {
-                        e = strain_lanes(b0);
-                        rotation_lanes(b0, rc, rs);
-                    }
-                    int g;
-                    const bool one_group = one_group_of_four(b0, g);
-                    if (one_group) {
-                        v4d xx, yy, xy, zz, vol;
-                        detail::load(psxx + b0, xx); detail::load(psyy + b0, yy); detail::load(psxy + b0, xy);
-                        detail::load(pszz + b0, zz); detail::load(pvol + b0, vol);
-                        trial(*gconsts[g], xx, yy, xy, zz, vol, e, rc, rs);
-                        detail::store(psxx + b0, xx); detail::store(psyy + b0, yy); detail::store(psxy + b0, xy);
-                        detail::store(pszz + b0, zz); detail::store(pvol + b0, vol);
-                    } else {  // points of two materials
-                        for (int l = 0; l < 4; ++l) trial_one(b0 + l);
-                    }
-                    columns_rows(c, ci, cj);
-                    const v4i n1 = cj * (mx + 1) + ci, n3 = n1 + (mx + 1);  // node(ci, cj); n2 = n1 + 1, n4 = n3 + 1
-                    v4d umx, umy;
-                    if (one) {
-                        const int a = n1[0], b = n3[0];
-                        double mean_x, mean_y;
-                        mean_of_four(ux[a], ux[a + 1], ux[b], ux[b + 1], mean_x); mean_of_four(uy[a], uy[a + 1], uy[b], uy[b + 1], mean_y);
-                        umx = v4d{mean_x, mean_x, mean_x, mean_x}; umy = v4d{mean_y, mean_y, mean_y, mean_y};
-                    } else {
-                        const v4d ux1 = {ux[n1[0]], ux[n1[1]], ux[n1[2]], ux[n1[3]]}, ux2 = {ux[n1[0] + 1], ux[n1[1] + 1], ux[n1[2] + 1], ux[n1[3] + 1]};
-                        const v4d ux3 = {ux[n3[0]], ux[n3[1]], ux[n3[2]], ux[n3[3]]}, ux4 = {ux[n3[0] + 1], ux[n3[1] + 1], ux[n3[2] + 1], ux[n3[3] + 1]};
-                        const v4d uy1 = {uy[n1[0]], uy[n1[1]], uy[n1[2]], uy[n1[3]]}, uy2 = {uy[n1[0] + 1], uy[n1[1] + 1], uy[n1[2] + 1], uy[n1[3] + 1]};
-                        const v4d uy3 = {uy[n3[0]], uy[n3[1]], uy[n3[2]], uy[n3[3]]}, uy4 = {uy[n3[0] + 1], uy[n3[1] + 1], uy[n3[2] + 1], uy[n3[3] + 1]};
-                        mean_of_four(ux1, ux2, ux3, ux4, umx); mean_of_four(uy1, uy2, uy3, uy4, umy);
-                    }
-                    const v4d xi = __builtin_convertvector(ci, v4d) * L, yj = __builtin_convertvector(cj, v4d) * L;  // ci L, cj L
-                    v4d x0, y0, x, y, ddx, ddy;
-                    detail::load(px + b0, x0); detail::load(py + b0, y0);
-                    move_point_centre(x0, y0, e, xi, yj, L, umx, umy, x, y, ddx, ddy);  // eq. 7a/7b
-                    if (fixed[c[0]] | fixed[c[1]] | fixed[c[2]] | fixed[c[3]]) {  // a cell with a fixed edge, or near a wall
-                        for (int l = 0; l < 4; ++l) {
-                            if (!fixed[c[l]]) continue;
-                            double xl = x[l], yl = y[l];
-                            stop_at_edges(c[l], x0[l], y0[l], xl, yl);
-                            x[l] = xl; y[l] = yl;
-                        }
-                    }
-                    detail::store(px + b0, x); detail::store(py + b0, y);
-                    if (!detail::all_lanes((x >= 0) & (x < X) & (y >= 0) & (y < Y))) {  // a point left the lattice
-                        for (int l = 0; l < 4; ++l) land_one(b0 + l, x[l], y[l]);
-                        continue;
-                    }
-                    const v4i mx1 = {mx - 1, mx - 1, mx - 1, mx - 1}, my1 = {my - 1, my - 1, my - 1, my - 1};
-                    v4i ni = __builtin_convertvector(x * invL, v4i), nj = __builtin_convertvector(y * invL, v4i);
-                    ni = ni < mx1 ? ni : mx1; nj = nj < my1 ? nj : my1;  // std::min(m - 1, int(x / L))
-                    const v4i cn = nj * mx + ni;  // cell(ni, nj)
-                    std::memcpy(pcell + b0, &cn, sizeof cn);
-                    if (one_cell(cn)) {
-                        landed_in(cn[0], ni[0]);
-                    } else {
-                        for (int l = 0; l < 4; ++l) landed_in(cn[l], ni[l]);
-                    }
-                    if (one_group) {
-                        const double gm = groups_[std::size_t(g)].mass;
-                        for (int l = 0; l < 4; ++l) t.mass += gm;
-                    } else {
-                        for (int l = 0; l < 4; ++l) t.mass += groups_[pgroup[b0 + l]].mass;
-                    }
-                }
-                for (; b0 < b1; ++b0) {  // the last one to three points of the chunk: the reference's steps
-                    trial_one(b0);
-                    const int c = pcell[b0];
-                    const CellStrain& ce = strain_[std::size_t(c)];
-                    const double x0 = px[b0], y0 = py[b0];
-                    double x, y, ddx, ddy;
-                    move_with_cell(c % mx, c / mx, StrainIncrement{ce.xx, ce.yy, ce.xy, ce.yx}, x0, y0, x, y, ddx, ddy);  // eq. 7a/7b
-                    stop_at_edges(c, x0, y0, x, y);
-                    px[b0] = x; py[b0] = y;
-                    land_one(b0, x, y);
-                }
-            };
-            // The block's last pass: eq. 7 and 8, each point (not departed) added to the sums of
-            // the cell it landed in, in point order, or listed when that cell is another chunk's.
-            auto land_block = [&](long b0, const long b1) LPFDM_INLINE {
-                auto deposit = [&](long q, int cn) LPFDM_INLINE {
-                    if (cn < 0) return;  // left the lattice
-                    const Group& gr = groups_[pgroup[q]];
-                    if (owned(cn)) add_to_cell(std::size_t(cn), gr.mass, std::min(pvol[q], gr.vol0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
-                    else p_.listed[std::size_t(pt.list_at + pt.listed++)] = std::int32_t(q);  // another chunk's cell
-                };
-                for (; b0 + 4 <= b1; b0 += 4) {
-                    using detail::v4d;
-                    v4i cn;
-                    std::memcpy(&cn, pcell + b0, sizeof cn);
-                    int g;
-                    if (one_cell(cn) && owned(cn[0]) && one_group_of_four(b0, g)) {
-                        // all four in one cell (the usual case while runs are long): its sums in
-                        // registers, the four added in point order as deposit() adds them
-                        v4d vol, sxx, syy, sxy;
-                        detail::load(pvol + b0, vol); detail::load(psxx + b0, sxx); detail::load(psyy + b0, syy); detail::load(psxy + b0, sxy);
-                        CellSums sums = cell_sums(std::size_t(cn[0]));
-                        double landed = 0;  // (move_block counted the mass landed)
-                        sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, sxx, syy, sxy, landed);  // eq. 7, 8
-                        store_sums(std::size_t(cn[0]), sums);
-                        continue;
-                    }
-                    for (int l = 0; l < 4; ++l) deposit(b0 + l, cn[l]);
-                }
-                for (; b0 < b1; ++b0) deposit(b0, pcell[b0]);
-            };
-            auto consult_timed = [&](long b0, long b1) LPFDM_INLINE {
-                if (profiling_) {  // two clock reads a block of about 256 points
-                    const auto c0 = std::chrono::steady_clock::now();
-                    consulted = 0;
-                    consult_block(b0, b1);
-                    pt.return_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
-                    pt.returned += consulted;
-                } else {
-                    consult_block(b0, b1);
-                }
-            };
-            for (long b0 = k0; b0 < k1;) {
-                long b1 = std::min(k1, b0 + kConsultBlock);
-                if (no_user_groups_) {  // four points at a time across runs
-                    move_block(b0, b1);
-                    consult_timed(b0, b1);
-                    land_block(b0, b1);
-                    b0 = b1;  // the next block may start inside a run: a run split in two adds the same sums
+        // Four points at a time in the lanes of an AVX2 register (one group, no fixed edge):
+        // the motion and the test whether each stays in its cell. When all four stay, their
+        // sums are added from the lanes in point order; otherwise each lands on its own, in
+        // order. Either way the result is that of one_by_one, bit for bit: the same
+        // expressions in the same order, and no fused multiply-add (see LPFDM_WIDE).
+        static_assert(M == Motion::Centre, "the AVX2 loop follows MOTION CENTRE without ADVECT POINTS");
+        if (!fe && one_group && own) {
+            using detail::v4d;
+            const v4d u0 = {uc0, uc0, uc0, uc0}, u1 = {uc1, uc1, uc1, uc1}, v0 = {vc0, vc0, vc0, vc0}, v1 = {vc1, vc1, vc1, vc1};
+            for (; q0 + 4 <= kend; q0 += 4) {
+                v4d x0, y0, x, y, ddx{}, ddy{};
+                detail::load(px + q0, x0); detail::load(py + q0, y0);
+                move_point_centre(x0, y0, e, xi, yj, L, umx, umy, x, y, ddx, ddy);
+                detail::store(px + q0, x); detail::store(py + q0, y);
+                const v4d u = x * invL, v = y * invL;
+                if (!detail::all_lanes((u >= u0) & (u < u1) & (v >= v0) & (v < v1))) {
+                    for (int l = 0; l < 4; ++l) land(q0 + l, x[l], y[l], 0.0, 0.0, std::true_type{});
                     continue;
                 }
-                while (b1 < k1 && pcell[b1] == pcell[b1 - 1]) ++b1;
-                nrun = irun = 0;
-                runs(b0, b1, std::integral_constant<int, kTrial>{});
-                consult_timed(b0, b1);
-                runs(b0, b1, std::integral_constant<int, kMotion>{});
-                b0 = b1;
+                stayed = true;
+                v4d vol, sxx, syy, sxy;
+                detail::load(pvol + q0, vol); detail::load(psxx + q0, sxx); detail::load(psyy + q0, syy); detail::load(psxy + q0, sxy);
+                sums.add_four(gm, gv0, vol, sxx, syy, sxy, t.mass);  // eq. 7, 8
             }
-            landing = t;
-            part = pt;
-            return;
         }
     }
 #endif
-    if constexpr (!Blocks) runs(k0, k1, std::integral_constant<int, kWhole>{});
-    landing = t;
-    part = pt;
+    if (fe) one_group ? one_by_one(q0, std::true_type{}, std::true_type{}) : one_by_one(q0, std::true_type{}, std::false_type{});
+    else one_group ? one_by_one(q0, std::false_type{}, std::true_type{}) : one_by_one(q0, std::false_type{}, std::false_type{});
+    if (stayed) {
+        store_sums(std::size_t(c), sums);
+        t.cmin = std::min(t.cmin, c); t.cmax = std::max(t.cmax, c);
+        t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
+    }
 }
+
+#if LPFDM_WIDE
+// The usual run of an elastic scene with 2 x 2 points per cell: four points of one cell (a
+// run of four, or the first four of a longer run) of one elastic group, in a cell with no
+// fixed edge, that all stay in it. From point k on, such fours one after another, each in
+// registers and stored (and added to the cell's sums, eq. 7 and 8) only once all four are
+// known to stay. At the first four that is not one, nothing of it is stored and its first
+// index is returned, for runs' general code, which makes the same numbers: the same
+// expressions in the same order, and a run split in two gives the same sums (they are
+// stored and reloaded). That code's bookkeeping cost about 420 instructions per run of four
+// (callgrind, elastic bench); this path about 220. MOTION CENTRE only (the AVX2 loop's).
+LPFDM_INLINE inline long Simulation::usual_runs(Loop& lp, long k, const long stop) {
+    using detail::v4d;
+    typedef int v4i __attribute__((vector_size(16)));
+    typedef float v4f __attribute__((vector_size(16)));
+    double* __restrict px = lp.px;
+    double* __restrict py = lp.py;
+    double* __restrict psxx = lp.psxx;
+    double* __restrict psyy = lp.psyy;
+    double* __restrict psxy = lp.psxy;
+    double* __restrict pszz = lp.pszz;
+    double* __restrict pvol = lp.pvol;
+    const std::int32_t* pcell = lp.pcell;
+    const std::uint16_t* pgroup = lp.pgroup;
+    const double L = lp.L, invL = lp.invL;
+    double mass = lp.t.mass;
+    int cmin = lp.t.cmin, cmax = lp.t.cmax, imin = lp.t.imin, imax = lp.t.imax;
+    for (; k + 4 <= stop; k += 4) {
+        lp.ahead(k);
+        const int c = pcell[k];
+        v4i w;
+        std::memcpy(&w, pcell + k, sizeof w);
+        if (__builtin_ia32_movmskps(v4f(w == c)) != 15) break;
+        const int g = pgroup[k];
+        if (!lp.single) {
+            std::uint64_t gw;
+            std::memcpy(&gw, pgroup + k, sizeof gw);
+            if (gw != std::uint64_t(g) * 0x0001000100010001ULL) break;
+        }
+        const MaterialConstants& mc = *lp.gconsts[g];
+        if (mc.model != Model::Elastic || lp.fixed[c] || !lp.owned(c)) break;
+        int ci, cj;
+        lp.locate(c, ci, cj);
+        const CellStrain& ce = strain_[std::size_t(c)];
+        const StrainIncrement e{ce.xx, ce.yy, ce.xy, ce.yx};
+        const Stress de = elastic_change(mc, e);  // eq. 6
+        v4d xx, yy, xy, zz, vol, x0, y0, x, y;
+        detail::load(psxx + k, xx); detail::load(psyy + k, yy); detail::load(psxy + k, xy);
+        detail::load(pszz + k, zz); detail::load(pvol + k, vol);
+        elastic_trial(xx, yy, xy, zz, de, ce.rc, ce.rs);
+        vol *= 1 + e.xx + e.yy;
+        detail::load(px + k, x0); detail::load(py + k, y0);
+        double umx, umy;
+        gather_mean(node(ci, cj), umx, umy);  // eq. 7a/7b's nodes
+        v4d ddx, ddy;
+        move_point_centre(x0, y0, e, lp.cols[ci].at, lp.rows[cj].at, L, umx, umy, x, y, ddx, ddy);  // eq. 7a/7b about the centre
+        const double uc0 = lp.cols[ci].lo, uc1 = lp.cols[ci].hi, vc0 = lp.rows[cj].lo, vc1 = lp.rows[cj].hi;
+        const v4d u = x * invL, v = y * invL;
+        if (!detail::all_lanes((u >= v4d{uc0, uc0, uc0, uc0}) & (u < v4d{uc1, uc1, uc1, uc1}) & (v >= v4d{vc0, vc0, vc0, vc0}) & (v < v4d{vc1, vc1, vc1, vc1}))) break;
+        detail::store(psxx + k, xx); detail::store(psyy + k, yy); detail::store(psxy + k, xy);
+        detail::store(pszz + k, zz); detail::store(pvol + k, vol);
+        detail::store(px + k, x); detail::store(py + k, y);
+        CellSums sums = cell_sums(std::size_t(c));
+        sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, xx, yy, xy, mass);  // eq. 7, 8
+        store_sums(std::size_t(c), sums);
+        cmin = std::min(cmin, c); cmax = std::max(cmax, c);
+        imin = std::min(imin, ci); imax = std::max(imax, ci);
+    }
+    lp.t.mass = mass;
+    lp.t.cmin = cmin; lp.t.cmax = cmax; lp.t.imin = imin; lp.t.imax = imax;
+    return k;
+}
+
+// The AVX2 loop of a scene with a Mohr-Coulomb material (mohr_groups_): the points go in
+// blocks of about kConsultBlock, each ending where a run ends: the elastic trial of the
+// block's runs, then the consult of its Mohr-Coulomb points four at a time whatever cells
+// they lie in (the consult needs no cell; lanes within runs, rarely more than four points
+// long with 2 x 2 points per cell, left half the returns to the one-point code), then the
+// motion and landing of its runs, which read the consulted stresses while they are still
+// in the cache. A scene with no user's model takes blocks of kConsultBlock points (the
+// chunk's last one shorter), not ending with a run, four points at a time instead: the
+// trial and the motion of the block (move_block; the motion of eq. 7a/7b needs no
+// stress), the consult, then the sums of eq. 7 and 8 (land_block). A run split between
+// two blocks adds the same sums.
+LPFDM_INLINE inline void Simulation::mohr_blocks(Loop& lp, const long k0, const long k1) {
+    for (long b0 = k0; b0 < k1;) {
+        long b1 = std::min(k1, b0 + kConsultBlock);
+        if (no_user_groups_) {  // four points at a time across runs
+            move_block(lp, b0, b1);
+            consult_timed(lp, b0, b1);
+            land_block(lp, b0, b1);
+            b0 = b1;  // the next block may start inside a run: a run split in two adds the same sums
+            continue;
+        }
+        while (b1 < k1 && lp.pcell[b1] == lp.pcell[b1 - 1]) ++b1;
+        lp.nrun = lp.irun = 0;
+        runs<Motion::Centre, true, kTrial>(lp, b0, b1);
+        consult_timed(lp, b0, b1);
+        runs<Motion::Centre, true, kMotion>(lp, b0, b1);
+        b0 = b1;
+    }
+}
+
+// The Mohr-Coulomb points of b0 .. b1-1, holding their elastic trials, by spans of one
+// material (consult_lanes); timed when profiling (two clock reads a block of about 256
+// points).
+LPFDM_INLINE inline void Simulation::consult_timed(Loop& lp, const long b0, const long b1) {
+    auto consult_block = [&] LPFDM_INLINE {
+        const PointArrays arrays{lp.psxx, lp.psyy, lp.psxy, lp.pszz, lp.pvol, lp.pgroup};
+        for (long q = b0; q < b1;) {  // spans of points of one material
+            const MaterialConstants& mc = *group_consts_[std::size_t(lp.pgroup[q])];
+            long qend = lp.single ? b1 : q + 1;
+            while (qend < b1 && group_consts_[std::size_t(lp.pgroup[qend])] == &mc) ++qend;
+            if (mc.model == Model::MohrCoulomb) {
+                if (modes_.scatter) consult_lanes<true>(mc, q, qend, arrays);  // scatter: each point's own strength
+                else consult_lanes<false>(mc, q, qend, arrays);
+                lp.consulted += qend - q;
+            }
+            q = qend;
+        }
+    };
+    if (profiling_) {
+        const auto c0 = std::chrono::steady_clock::now();
+        lp.consulted = 0;
+        consult_block();
+        lp.pt.return_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+        lp.pt.returned += lp.consulted;
+    } else {
+        consult_block();
+    }
+}
+
+// The block's first pass, four points at a time whatever cells they lie in: eq. 6's
+// elastic trial and the volume change (Hooke's law for an elastic or a Mohr-Coulomb point;
+// the latter is consulted afterwards), then eq. 7a/7b (MOTION CENTRE, which needs no
+// stress) and the cell each point lands in, written to its cell (-1: it left the lattice),
+// with the box of those cells and the mass landed. Each four's strain records and nodal
+// increments, gathered into the lanes once for both (read once when the four share a
+// cell). A flowing scene leaves runs of one or two points in a cell, and the run-by-run
+// loop then mispredicts about one branch per point (where a run ends: 0.99 a point-update
+// in the last 100 steps of decks/bench_flow.deck, against 0.11 in its first); this one
+// branches on what is rare (a cell with a fixed edge or near a wall, whose points
+// stop_at_edges holds one by one; a point leaving the lattice; four points of two
+// materials) and on whether the four share a cell. The sums of eq. 7 and 8 wait for the
+// consulted stresses (land_block).
+LPFDM_INLINE inline void Simulation::move_block(Loop& lp, long b0, const long b1) {
+    using detail::v4d;
+    typedef int v4i __attribute__((vector_size(16)));
+    typedef float v4f __attribute__((vector_size(16)));
+    double* __restrict px = lp.px;
+    double* __restrict py = lp.py;
+    double* __restrict psxx = lp.psxx;
+    double* __restrict psyy = lp.psyy;
+    double* __restrict psxy = lp.psxy;
+    double* __restrict pszz = lp.pszz;
+    double* __restrict pvol = lp.pvol;
+    std::int32_t* pcell = lp.pcell;
+    const std::uint16_t* pgroup = lp.pgroup;
+    const int mx = lp.mx, my = lp.my;
+    const double L = lp.L, invL = lp.invL, X = lp.X, Y = lp.Y;
+    const double inv_mx = 1.0 / mx;
+    const MaterialConstants* const* gconsts = lp.gconsts;
+    const std::uint8_t* fixed = lp.fixed;
+    const bool single = lp.single;
+    Landing t = lp.t;  // a local: kept in registers
+    // The column and row of the cells c in the lanes: c / mx as the truncated double
+    // (c + 0.5) / mx, exact for every int c (the quotient lies at least 0.5 / mx from an
+    // integer, its rounding error below (c + 0.5) / mx 2^-52).
+    auto columns_rows = [&](const v4i& c, v4i& ci, v4i& cj) LPFDM_INLINE {
+        cj = __builtin_convertvector((__builtin_convertvector(c, v4d) + 0.5) * inv_mx, v4i);
+        ci = c - cj * mx;
+    };
+    // Four cells in the lanes, all the same one.
+    auto one_cell = [](const v4i& c) LPFDM_INLINE { return __builtin_ia32_movmskps(v4f(c == c[0])) == 15; };
+    // eq. 6's trial and the volume change of one point, or of four in lanes, of material mc.
+    auto trial = [&](const MaterialConstants& mc, auto& xx, auto& yy, auto& xy, auto& zz, auto& vol, const auto& e, const auto& rc, const auto& rs) LPFDM_INLINE {
+        using V = std::remove_reference_t<decltype(xx)>;  // one value or four lanes
+        struct { V xx, yy, xy, zz; } de;
+        elastic_change(mc, e.xx, e.yy, e.xy, e.yx, de.xx, de.yy, de.xy, de.zz);  // eq. 6
+        elastic_trial(xx, yy, xy, zz, de, rc, rs);
+        vol *= 1.0 + e.xx + e.yy;
+    };
+    auto trial_one = [&](long q) LPFDM_INLINE {
+        const CellStrain& ce = strain_[std::size_t(pcell[q])];
+        trial(*gconsts[pgroup[q]], psxx[q], psyy[q], psxy[q], pszz[q], pvol[q], ce, ce.rc, ce.rs);
+    };
+    auto landed_in = [&](int cn, int ni) LPFDM_INLINE {  // the box of the cells landed in
+        t.cmin = std::min(t.cmin, cn); t.cmax = std::max(t.cmax, cn);
+        t.imin = std::min(t.imin, ni); t.imax = std::max(t.imax, ni);
+    };
+    // Point q, moved to (x, y): the cell it lands in (cell_holding), or it left.
+    auto land_one = [&](long q, double x, double y) LPFDM_INLINE {
+        const int cn = cell_holding(x, y);
+        pcell[q] = cn;
+        if (cn < 0) { ++t.departed; return; }  // left the lattice (or not finite)
+        landed_in(cn, cn % mx);
+        t.mass += groups_[pgroup[q]].mass;
+    };
+    for (; b0 + 4 <= b1; b0 += 4) {
+        v4i c, ci, cj;
+        std::memcpy(&c, pcell + b0, sizeof c);
+        const bool one = one_cell(c);
+        v4d rc, rs;
+        const detail::StrainLanes e = strain_lanes(c, one, rc, rs);
+        int g;
+        const bool one_group = one_group_of_four(pgroup, single, b0, g);
+        if (one_group) {
+            v4d xx, yy, xy, zz, vol;
+            detail::load(psxx + b0, xx); detail::load(psyy + b0, yy); detail::load(psxy + b0, xy);
+            detail::load(pszz + b0, zz); detail::load(pvol + b0, vol);
+            trial(*gconsts[g], xx, yy, xy, zz, vol, e, rc, rs);
+            detail::store(psxx + b0, xx); detail::store(psyy + b0, yy); detail::store(psxy + b0, xy);
+            detail::store(pszz + b0, zz); detail::store(pvol + b0, vol);
+        } else {  // points of two materials
+            for (int l = 0; l < 4; ++l) trial_one(b0 + l);
+        }
+        columns_rows(c, ci, cj);
+        const v4i n1 = cj * (mx + 1) + ci;  // node(ci, cj)
+        v4d umx, umy;
+        if (one) {
+            double mean_x, mean_y;
+            gather_mean(n1[0], mean_x, mean_y);  // eq. 7a/7b's nodes
+            umx = v4d{mean_x, mean_x, mean_x, mean_x}; umy = v4d{mean_y, mean_y, mean_y, mean_y};
+        } else {
+            gather_mean(n1, umx, umy);  // eq. 7a/7b's nodes, of four cells
+        }
+        const v4d xi = __builtin_convertvector(ci, v4d) * L, yj = __builtin_convertvector(cj, v4d) * L;  // ci L, cj L
+        v4d x0, y0, x, y, ddx, ddy;
+        detail::load(px + b0, x0); detail::load(py + b0, y0);
+        move_point_centre(x0, y0, e, xi, yj, L, umx, umy, x, y, ddx, ddy);  // eq. 7a/7b
+        if (fixed[c[0]] | fixed[c[1]] | fixed[c[2]] | fixed[c[3]]) {  // a cell with a fixed edge, or near a wall
+            for (int l = 0; l < 4; ++l) {
+                if (!fixed[c[l]]) continue;
+                double xl = x[l], yl = y[l];
+                stop_at_edges(c[l], x0[l], y0[l], xl, yl);
+                x[l] = xl; y[l] = yl;
+            }
+        }
+        detail::store(px + b0, x); detail::store(py + b0, y);
+        if (!detail::all_lanes((x >= 0) & (x < X) & (y >= 0) & (y < Y))) {  // a point left the lattice
+            for (int l = 0; l < 4; ++l) land_one(b0 + l, x[l], y[l]);
+            continue;
+        }
+        const v4i mx1 = {mx - 1, mx - 1, mx - 1, mx - 1}, my1 = {my - 1, my - 1, my - 1, my - 1};
+        v4i ni = __builtin_convertvector(x * invL, v4i), nj = __builtin_convertvector(y * invL, v4i);
+        ni = ni < mx1 ? ni : mx1; nj = nj < my1 ? nj : my1;  // std::min(m - 1, int(x / L))
+        const v4i cn = nj * mx + ni;  // cell(ni, nj)
+        std::memcpy(pcell + b0, &cn, sizeof cn);
+        if (one_cell(cn)) {
+            landed_in(cn[0], ni[0]);
+        } else {
+            for (int l = 0; l < 4; ++l) landed_in(cn[l], ni[l]);
+        }
+        if (one_group) {
+            const double gm = groups_[std::size_t(g)].mass;
+            for (int l = 0; l < 4; ++l) t.mass += gm;
+        } else {
+            for (int l = 0; l < 4; ++l) t.mass += groups_[pgroup[b0 + l]].mass;
+        }
+    }
+    for (; b0 < b1; ++b0) {  // the last one to three points of the chunk: the reference's steps
+        trial_one(b0);
+        const int c = pcell[b0];
+        const CellStrain& ce = strain_[std::size_t(c)];
+        const double x0 = px[b0], y0 = py[b0];
+        double x, y, ddx, ddy;
+        move_with_cell(c % mx, c / mx, StrainIncrement{ce.xx, ce.yy, ce.xy, ce.yx}, x0, y0, x, y, ddx, ddy);  // eq. 7a/7b
+        stop_at_edges(c, x0, y0, x, y);
+        px[b0] = x; py[b0] = y;
+        land_one(b0, x, y);
+    }
+    lp.t = t;
+}
+
+// The block's last pass: eq. 7 and 8, each point (not departed) added to the sums of the
+// cell it landed in, in point order, or listed when that cell is another chunk's.
+LPFDM_INLINE inline void Simulation::land_block(Loop& lp, long b0, const long b1) {
+    using detail::v4d;
+    typedef int v4i __attribute__((vector_size(16)));
+    typedef float v4f __attribute__((vector_size(16)));
+    const double* pvol = lp.pvol;
+    const double* psxx = lp.psxx;
+    const double* psyy = lp.psyy;
+    const double* psxy = lp.psxy;
+    const std::int32_t* pcell = lp.pcell;
+    const std::uint16_t* pgroup = lp.pgroup;
+    const int own_lo = lp.own_lo;
+    const unsigned own_n = lp.own_n;
+    auto owned = [&](int c) LPFDM_INLINE { return unsigned(c) - unsigned(own_lo) < own_n; };  // Loop::owned
+    auto deposit = [&](long q, int cn) LPFDM_INLINE {
+        if (cn < 0) return;  // left the lattice
+        const Group& gr = groups_[pgroup[q]];
+        if (owned(cn)) add_to_cell(std::size_t(cn), gr.mass, std::min(pvol[q], gr.vol0), psxx[q], psyy[q], psxy[q]);  // eq. 7, 8
+        else p_.listed[std::size_t(lp.pt.list_at + lp.pt.listed++)] = std::int32_t(q);  // another chunk's cell
+    };
+    for (; b0 + 4 <= b1; b0 += 4) {
+        v4i cn;
+        std::memcpy(&cn, pcell + b0, sizeof cn);
+        int g;
+        if (__builtin_ia32_movmskps(v4f(cn == cn[0])) == 15 && owned(cn[0]) && one_group_of_four(pgroup, lp.single, b0, g)) {
+            // all four in one cell (the usual case while runs are long): its sums in
+            // registers, the four added in point order as deposit() adds them
+            v4d vol, sxx, syy, sxy;
+            detail::load(pvol + b0, vol); detail::load(psxx + b0, sxx); detail::load(psyy + b0, syy); detail::load(psxy + b0, sxy);
+            CellSums sums = cell_sums(std::size_t(cn[0]));
+            double landed = 0;  // (move_block counted the mass landed)
+            sums.add_four(groups_[std::size_t(g)].mass, groups_[std::size_t(g)].vol0, vol, sxx, syy, sxy, landed);  // eq. 7, 8
+            store_sums(std::size_t(cn[0]), sums);
+            continue;
+        }
+        for (int l = 0; l < 4; ++l) deposit(b0 + l, cn[l]);
+    }
+    for (; b0 < b1; ++b0) deposit(b0, pcell[b0]);
+}
+
+// Four points q .. q+3 of one group g (read into g): their groups as one 64-bit word.
+LPFDM_INLINE inline bool Simulation::one_group_of_four(const std::uint16_t* pgroup, bool single, long q, int& g) {
+    g = pgroup[q];
+    if (single) return true;
+    std::uint64_t gw;
+    std::memcpy(&gw, pgroup + q, sizeof gw);
+    return gw == std::uint64_t(g) * 0x0001000100010001ULL;
+}
+
+// The strain records (e) and rotations (rc, rs) of the cells c of four points in the lanes;
+// one: the four share a cell, read once.
+LPFDM_INLINE inline detail::StrainLanes Simulation::strain_lanes(const detail::v4i& c, bool one, detail::v4d& rc, detail::v4d& rs) const {
+    const CellStrain* sc = strain_.data();
+    if (one) {
+        const CellStrain& ce = sc[c[0]];
+        rc = detail::v4d{ce.rc, ce.rc, ce.rc, ce.rc}; rs = detail::v4d{ce.rs, ce.rs, ce.rs, ce.rs};
+        return detail::StrainLanes{{ce.xx, ce.xx, ce.xx, ce.xx}, {ce.yy, ce.yy, ce.yy, ce.yy}, {ce.xy, ce.xy, ce.xy, ce.xy}, {ce.yx, ce.yx, ce.yx, ce.yx}};
+    }
+    const CellStrain &s0 = sc[c[0]], &s1 = sc[c[1]], &s2 = sc[c[2]], &s3 = sc[c[3]];
+    rc = detail::v4d{s0.rc, s1.rc, s2.rc, s3.rc}; rs = detail::v4d{s0.rs, s1.rs, s2.rs, s3.rs};
+    return detail::StrainLanes{{s0.xx, s1.xx, s2.xx, s3.xx}, {s0.yy, s1.yy, s2.yy, s3.yy}, {s0.xy, s1.xy, s2.xy, s3.xy}, {s0.yx, s1.yx, s2.yx, s3.yx}};
+}
+#endif
 
 // Points that left the lattice leave the cycle; their mass becomes outflow. The order
 // of the remaining points is kept.
