@@ -4,6 +4,9 @@ CXXFLAGS ?= -O2
 OMP      ?= -fopenmp
 WARN      = -std=c++17 -Wall -Wextra -Wpedantic
 EIGEN     = -I/usr/include/eigen3
+# The tests' units all need the kernel's internals: each holds its definitions, inline
+# (lpfdm.hpp's LPFDM_HEADER_ONLY; a program of its own defines LPFDM_IMPLEMENTATION in one unit).
+TEST_DEFS = -DLPFDM_HEADER_ONLY
 LIBS      = -lfmt
 OUT      ?= out
 SAN_OPT  ?= -O1
@@ -77,17 +80,17 @@ build/san/unit.cpp: FORCE
 	$(call unity,$@,$(SAN_GROUP))
 
 build/o2/unit.o: build/o2/unit.cpp $(TESTS) tests/common.hpp lpfdm.hpp | test-deps
-	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) -c -o $@ $<
+	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) $(TEST_DEFS) -c -o $@ $<
 build/o2/%.o: tests/%.cpp | test-deps
 	@mkdir -p build/o2
-	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) -c -o $@ $<
+	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) $(TEST_DEFS) -c -o $@ $<
 
 build/san/test_deck.o: SAN_OPT = -O0
 build/san/unit.o: build/san/unit.cpp $(SAN_GROUP) tests/common.hpp lpfdm.hpp | test-deps
-	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) -c -o $@ $<
+	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) $(TEST_DEFS) -c -o $@ $<
 build/san/%.o: tests/%.cpp lpfdm.hpp | test-deps
 	@mkdir -p build/san
-	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) -c -o $@ $<
+	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) $(TEST_DEFS) -c -o $@ $<
 
 build/tests: $(TEST_OBJ)
 	$(CXX) $(CXXFLAGS) $(OMP) -o $@ $^ $(LIBS)

@@ -1,5 +1,6 @@
 // lpfdm — command-line program: reads a deck, runs the LPFDM cycle, writes point
 // tables and histories for gnuplot. Usage: lpfdm [options] DECK (see --help).
+#define LPFDM_IMPLEMENTATION  // this unit holds the kernel's definitions (lpfdm.hpp, USE)
 #include "lpfdm.hpp"
 
 #include <algorithm>

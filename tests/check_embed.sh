@@ -19,7 +19,10 @@
 #   6. the example runs, exits 0, and each of its own checks prints "ok";
 #   7. the first rung of the teaching ladder, decks/freefall.deck, runs with EXE: the block
 #      falls at g (kinetic energy (1/2) m (g t)^2 just before the impact) and the floor
-#      first pushes at step 2433, when the lowest points enter the cells touching it.
+#      first pushes at step 2433, when the lowest points enter the cells touching it;
+#   8. (plain build) the example split in two units as stb's pattern asks: the unit
+#      without LPFDM_IMPLEMENTATION compiles at -O2 in at most 1/8 of the time of the one
+#      with it, links alone only to fail naming LPFDM_IMPLEMENTATION, and runs with it.
 # One line per failure, and last "embed: N passed, M failed".
 set -u
 cd "$(dirname "$0")/.." || exit 2
@@ -110,6 +113,50 @@ if [ -x "$tmp/src/embed" ]; then
 else
     fail "no embed example to run (the compile failed)"
 fi
+
+# 8: stb's pattern. The example as one file of a program of two: its copy without the
+# define (declarations only, as every unit but one of an embedding program) and a unit
+# that defines LPFDM_IMPLEMENTATION. Built at -O2 (plain build only), the declarations
+# unit compiles in at most 1/8 of the implementation unit's time; linked alone it fails,
+# and the linker names LPFDM_IMPLEMENTATION; linked with the other it runs as the example.
+case $(basename "$exe") in
+*san*) echo "embed: the two-unit build is the plain build's to check" ;;
+*)
+    split=$tmp/split
+    mkdir -p "$split"
+    grep -v '^#define LPFDM_IMPLEMENTATION' tools/embed_example.cpp >"$split/mine.cpp"
+    printf '#define LPFDM_IMPLEMENTATION\n#include "lpfdm.hpp"\n' >"$split/impl.cpp"
+    cp lpfdm.hpp "$split/"
+    o2=(-std=c++17 -O2 -Wall -Wextra -Wpedantic -DLPFDM_NO_IO)
+    compile() {  # compile FILE: its object; prints the processor seconds it took (user + system:
+                 # make test runs other jobs beside this one, which stretch the wall time)
+        local t
+        t=$( { TIMEFORMAT='%3U %3S'; time (cd "$split" && "$cxx" "${o2[@]}" -c "$1.cpp" -o "$1.o" >>"$split/log" 2>&1); } 2>&1 ) || { echo fail; return; }
+        awk -v t="$t" 'BEGIN { split(t, a, " "); printf "%.2f", a[1] + a[2] }'
+    }
+    t_mine=$(compile mine) t_impl=$(compile impl)
+    if [ "$t_mine" = fail ] || [ "$t_impl" = fail ]; then
+        fail "the two-unit build (-O2) does not compile: $(grep -m 3 -E 'error|warning' "$split/log" | tr '\n' ' ')"
+    else
+        echo "embed: -O2 compile (processor time): the declarations unit $t_mine s, the implementation unit $t_impl s"
+        if awk -v m="$t_mine" -v i="$t_impl" 'BEGIN { exit !(8 * m <= i) }'; then pass; else
+            fail "the unit without LPFDM_IMPLEMENTATION took $t_mine s, more than 1/8 of the implementation unit's $t_impl s"; fi
+        if (cd "$split" && "$cxx" mine.o -o alone) >"$split/link" 2>&1; then
+            fail "the declarations unit linked without an implementation unit"
+        elif grep -q 'LPFDM_IMPLEMENTATION' "$split/link"; then
+            pass
+        else
+            fail "linked alone, the declarations unit fails without naming LPFDM_IMPLEMENTATION: $(head -n 3 "$split/link" | tr '\n' ' ')"
+        fi
+        if (cd "$split" && "$cxx" mine.o impl.o -o two) >>"$split/log" 2>&1 && "$split/two" >"$split/run" 2>&1 &&
+           grep -q 'all checks passed' "$split/run"; then
+            pass
+        else
+            fail "the two-unit example does not link or run: $(tail -n 2 "$split/run" 2>/dev/null | tr '\n' ' ')"
+        fi
+    fi
+    ;;
+esac
 
 # 7: the free-fall deck through the program (2600 of its steps: fall and impact).
 if [ -x "$exe" ] && timeout 120 "$exe" -q -o "$tmp/ff" --steps 2600 decks/freefall.deck >"$tmp/ff.log" 2>&1; then

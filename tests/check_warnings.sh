@@ -53,7 +53,7 @@ compile() {
 }
 compile "lpfdm.cpp at -O3" -O3 "${omp[@]}" -c lpfdm.cpp -o "$tmp/lpfdm.o"
 printf '#include "%s"\n' "$PWD"/tests/test_*.cpp >"$tmp/unit.cpp"
-compile "the unit tests (-fsyntax-only)" -O3 "${omp[@]}" -I. -I/usr/include/eigen3 -fsyntax-only "$tmp/unit.cpp"
+compile "the unit tests (-fsyntax-only)" -O3 "${omp[@]}" -DLPFDM_HEADER_ONLY -I. -I/usr/include/eigen3 -fsyntax-only "$tmp/unit.cpp"
 compile "tools/embed_example.cpp with LPFDM_NO_IO (-fsyntax-only)" -O3 -DLPFDM_NO_IO -I. -fsyntax-only tools/embed_example.cpp
 echo "warnings: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <string>
 
+#define LPFDM_IMPLEMENTATION  // the fuzzing program's one unit
 #include "../lpfdm.hpp"
 
 namespace {

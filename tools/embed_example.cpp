@@ -5,6 +5,7 @@
 // Build and run (the header needs only the C++17 standard library with LPFDM_NO_IO):
 //   g++ -std=c++17 -O2 -DLPFDM_NO_IO -I. tools/embed_example.cpp -o embed_example && ./embed_example
 // Exit status 0 when every check passes, 1 otherwise.
+#define LPFDM_IMPLEMENTATION  // the kernel's definitions: in one file of a program, the others include it alone
 #include "lpfdm.hpp"
 
 #include <algorithm>
