@@ -1111,6 +1111,10 @@ private:
     void flip_second_half();
     void flip_changes();
     void flip_return();
+    void flip_integrate();
+    void nodal_kinetic();
+    void smooth_node_force(int c, bool right, bool left, bool above, bool below, double& fx, double& fy) const;
+    void hourglass_node_force(int c, bool right, bool left, bool above, bool below, double khg, double& fx, double& fy) const;
     template <class F> void flip_weights(std::size_t k, const F& f) const;
     void smooth_stress(std::size_t k, const StrainIncrement& e);
     // ADVECT FLIP's scratch: the nodes' masses by the points' weights, eq. 13's change of
@@ -1317,9 +1321,6 @@ namespace lpfdm {
 //   cell's volume into a cell, its smeared stress is their volume average instead of
 //   an overcount (that overcount made cells stiffer in proportion to their number of
 //   points, and errors grew under refinement: see tests/test_cycle.cpp).
-// * Eq. 5's one strain per cell does not see the checkerboard pattern (+1,-1,-1,+1) of
-//   nodal increments: nothing resists it. HOURGLASS kappa (off by default) adds the
-//   smallest remedy, a viscous force on that pattern alone (see nodal_forces).
 // * In eq. 8 a point smears at most its initial volume m / rho_0. A point failing in
 //   tension keeps dilating (53 times its volume was seen behind a wall pushed through
 //   soil); its smeared stiffness grew with its volume while its mass did not, and the
@@ -1532,7 +1533,7 @@ inline void square_overlap(double x, double l, double L, int m, int& a, double w
 
 // eq. 8: the factor that turns a cell's sum V sigma into the stress the nodal forces
 // use, already divided by 2L (b = +-1/2L): 1/L^2 (the paper) times L^2, or 1 / sum V
-// where the points pack more than the cell's area (see "Choices" in the manual).
+// where the points pack more than the cell's area (see the choices at the head of this section).
 // (Vectors go out through references: a function returning one would have another ABI
 // without AVX, GCC warns.)
 template <class T>
@@ -3217,6 +3218,15 @@ LPFDM_DEF double Simulation::unbalanced_ratio() const {
 // ======================================================================================
 // THE REFERENCE CYCLE
 //
+// One LPFDM step (paper section 2) as plainly as it can be written: one loop per phase
+// over every cell, point and node, one value at a time, one thread. It is the definition
+// of a step: the fast kernel below visits only the occupied part of the lattice, runs
+// threads and AVX2 lanes, and gives the same numbers bit for bit (tests/test_reference.cpp
+// runs every deck both ways). The equations themselves are the free functions above
+// (cell_strain, jaumann_rotation, elastic_increment, mohr_coulomb_return, move_point_*,
+// CellSums::add, smear_weight, add_cell_force, compensate_increment, damped_increment),
+// which both kernels call.
+//
 // Where the paper is open, the choices made here (each tested in tests/):
 // * Points move by eq. 7a/7b's affine map taken about the cell centre with the mean of the
 //   four nodal increments (MOTION CENTRE, the default), not about node [1]: the paper's
@@ -3257,24 +3267,13 @@ inline void Simulation::user_consult(const MaterialConstants& mc, std::size_t q,
     if (plastic) { p_.plastic_shear[q] = ps.plastic_shear; p_.yielded[q] = ps.yielded; }
 }
 
-// ---------------------------------------------------- the reference cycle ---
-//
-// One LPFDM step (paper section 2) as plainly as it can be written: one loop per phase
-// over every cell, point and node, one value at a time, one thread. It is the definition
-// of a step: the fast kernel below visits only the occupied part of the lattice, runs
-// threads and AVX2 lanes, and gives the same numbers bit for bit (tests/test_reference.cpp
-// runs every deck both ways). The equations themselves are the free functions above
-// (cell_strain, jaumann_rotation, elastic_increment, mohr_coulomb_return, move_point_*,
-// CellSums::add, smear_weight, add_cell_force, compensate_increment, damped_increment),
-// which both kernels call.
-
 // 1. eq. 5a-5f: each cell's strain increments and rotation from its four nodes' increments.
 inline void Simulation::reference_cell_strains() {
     for (int j = 0; j < my_; ++j)
         for (int i = 0; i < mx_; ++i) {
             const int c = cell(i, j);
             CellStrain& s = strain_[std::size_t(c)];
-            s = CellStrain{};  // an empty cell: no strain and no rotation (see eq. 12 in the manual)
+            s = CellStrain{};  // an empty cell: no strain and no rotation (see eq. 12 at the head of this section)
             if (modes_.hourglass) hgx_[std::size_t(c)] = hgy_[std::size_t(c)] = 0;
             if (!(cmass_[std::size_t(c)] > 0)) continue;
             const StrainIncrement e = strain_of_cell(i, j);  // eq. 5a-5d
@@ -3376,23 +3375,8 @@ inline void Simulation::reference_nodal_forces() {
             if (left && above) cell_force(c - 1, std::integral_constant<int, 2>{});
             if (right && below) cell_force(c - mx_, std::integral_constant<int, 3>{});
             if (left && below) cell_force(c - mx_ - 1, std::integral_constant<int, 4>{});
-            if (modes_.mapping == Mapping::Smooth) {  // MAPPING SMOOTH: F[a] -= s_x s_y (shx, shy) / L, s = the corner's signs of b
-                auto moment = [&](int a, double h) { fx -= h * shx_[std::size_t(a)]; fy -= h * shy_[std::size_t(a)]; };
-                if (right && above) moment(c, 1);
-                if (left && above) moment(c - 1, -1);
-                if (right && below) moment(c - mx_, -1);
-                if (left && below) moment(c - mx_ - 1, 1);
-            }
-            if (modes_.hourglass) {  // HOURGLASS: F[a] = -kappa (M_J / 4) q_J h[a] / dt^2
-                auto hg = [&](int a, double h) {
-                    fx -= khg * cmass_[std::size_t(a)] * hgx_[std::size_t(a)] * h;
-                    fy -= khg * cmass_[std::size_t(a)] * hgy_[std::size_t(a)] * h;
-                };
-                if (right && above) hg(c, 1);
-                if (left && above) hg(c - 1, -1);
-                if (right && below) hg(c - mx_, -1);
-                if (left && below) hg(c - mx_ - 1, 1);
-            }
+            if (modes_.mapping == Mapping::Smooth) smooth_node_force(c, right, left, above, below, fx, fy);  // MAPPING SMOOTH
+            if (modes_.hourglass) hourglass_node_force(c, right, left, above, below, khg, fx, fy);  // HOURGLASS
             const std::size_t n = std::size_t(node(i, j));
             const double mn = 0.25 * m;  // eq. 10
             nmass_prev_[n] = nmass_[n];
@@ -3452,7 +3436,7 @@ LPFDM_INLINE inline bool Simulation::strain_at(double fxs, double fys, const Ran
 // 4. eq. 12: the increment each node carries belonged to the material now at
 // x_node - du_node; it is compensated by the strain increments of the cell found there.
 // A node that gained mass this step takes the mass-weighted mean increment of its
-// neighbours that had mass (see the manual). ADVECT POINTS replaces all of this, and
+// neighbours that had mass (see the head of this section). ADVECT POINTS replaces all of this, and
 // ADVECT FLIP too: its transfer made the increments in the points' phase (flip_second_half).
 inline void Simulation::reference_compensate() {
     if (modes_.advect == Advect::Flip) return;
@@ -3487,32 +3471,27 @@ inline void Simulation::reference_compensate() {
 // 5. eq. 13-14 at every node with mass (a node without mass does not move), then fixed
 // directions and moving walls; the kinetic energy summed by rows, in node order.
 inline void Simulation::reference_integrate() {
+    if (modes_.advect == Advect::Flip) { flip_integrate(); return; }  // ADVECT FLIP's own step 5 (its section)
     const double dt2 = sc_.dt_s * sc_.dt_s;
-    if (modes_.advect == Advect::Flip)  // eq. 10 put gravity on m_n into F; F is the force on M_n (inertia)
-        for (std::size_t n = 0; n < nmass_.size(); ++n) {
-            fx_[n] += sc_.gravity_x * (flip_mass_[n] - nmass_[n]);
-            fy_[n] += sc_.gravity_y * (flip_mass_[n] - nmass_[n]);
-        }
     if (modes_.dynamic) dynamics_begin();  // the ground's step, the boundary forces (SHAKE, ABSORB)
     keep_increments({0, mx_ + 1, 0, my_ + 1});  // for the energy account
-    if (modes_.advect == Advect::Flip) flip_changes();  // eq. 13, 14 on the transfer's masses
-    else
-        for (std::size_t n = 0; n < nmass_.size(); ++n) {
-            if (nmass_[n] == 0) { dux_[n] = duy_[n] = 0; continue; }
-            damped_increment(dux_[n], fx_[n], nmass_[n], dt2, sc_.damping, dux_[n]);  // eq. 13, 14
-            damped_increment(duy_[n], fy_[n], nmass_[n], dt2, sc_.damping, duy_[n]);
-        }
+    for (std::size_t n = 0; n < nmass_.size(); ++n) {
+        if (nmass_[n] == 0) { dux_[n] = duy_[n] = 0; continue; }
+        damped_increment(dux_[n], fx_[n], nmass_[n], dt2, sc_.damping, dux_[n]);  // eq. 13, 14
+        damped_increment(duy_[n], fy_[n], nmass_[n], dt2, sc_.damping, duy_[n]);
+    }
     integrated_ = {0, mx_ + 1, 0, my_ + 1};
     if (modes_.dynamic) absorb_increments();  // the dashpots of ABSORB
     impose_supports();
-    if (modes_.advect == Advect::Flip) flip_return();  // the change to the points, and back
     for (int j = 0; j <= my_; ++j) energy_row_terms(j, 0, mx_ + 1, std::false_type{});
-    const double peak = es_.peak_kinetic;
     tally_energy(0, my_ + 1);
-    if (modes_.advect == Advect::Flip) {  // the kinetic energy is the points' (flip_return)
-        es_.kinetic = flip_kinetic_;
-        es_.peak_kinetic = std::max(peak, es_.kinetic);
-    }
+    nodal_kinetic();
+}
+
+// The nodes' kinetic energy (ke, at the last half step) summed by rows in node order, and
+// the largest increment (the run's health check).
+inline void Simulation::nodal_kinetic() {
+    const double dt2 = sc_.dt_s * sc_.dt_s;
     double ke = 0, maxdu = 0;
     for (int j = 0; j <= my_; ++j) {
         double row_ke = 0;
@@ -3588,7 +3567,7 @@ LPFDM_DEF void Simulation::smooth_moment(std::size_t c) {
 // Its strain increments are the weighted sum over those cells of the gradient of the
 // cell's bilinear increment field at the centre of the point's part in it (eq. 5 is that
 // gradient at the cell centre), with the trace of each part's taken at the centroid of
-// the cell's material (B-bar, see the manual); its rotation follows from them (eq. 5f),
+// the cell's material (B-bar, see the head of this section); its rotation follows from them (eq. 5f),
 // its motion is the weighted sum of each cell's eq. 7a/7b (or MOTION rule) at the centre
 // of its part, and eq. 7, 8 share its mass and V sigma out by the weights at its new place.
 inline StrainIncrement Simulation::strain_of_part(int i, int j, double x, double y) const {
@@ -3724,6 +3703,17 @@ inline void Simulation::smooth_point_pass() {
     departed_ = std::size_t(t.departed);
     occupied_ = landed(t);
     parts_known_ = false;
+}
+
+// reference_nodal_forces' share of MAPPING SMOOTH at the node that is corner [1] of cell c
+// (which of its four cells exist: right, left, above, below): F[a] -= s_x s_y (shx, shy) / L,
+// s = the corner's signs of b.
+inline void Simulation::smooth_node_force(int c, bool right, bool left, bool above, bool below, double& fx, double& fy) const {
+    auto moment = [&](int a, double h) { fx -= h * shx_[std::size_t(a)]; fy -= h * shy_[std::size_t(a)]; };
+    if (right && above) moment(c, 1);
+    if (left && above) moment(c - 1, -1);
+    if (right && below) moment(c - mx_, -1);
+    if (left && below) moment(c - mx_ - 1, 1);
 }
 
 // ======================================================================================
@@ -3899,6 +3889,28 @@ inline void Simulation::flip_return() {
     }
 }
 
+// ADVECT FLIP's step 5 (reference_integrate's, for it): eq. 10 put gravity on m_n into F,
+// and F is the force on the transfer's M_n (inertia); eq. 13, 14 on those masses
+// (flip_changes), the supports, then the change back to the points (flip_return), whose
+// kinetic energy is the account's. FLIP takes neither SHAKE nor ABSORB (validate).
+inline void Simulation::flip_integrate() {
+    for (std::size_t n = 0; n < nmass_.size(); ++n) {
+        fx_[n] += sc_.gravity_x * (flip_mass_[n] - nmass_[n]);
+        fy_[n] += sc_.gravity_y * (flip_mass_[n] - nmass_[n]);
+    }
+    keep_increments({0, mx_ + 1, 0, my_ + 1});  // for the energy account
+    flip_changes();  // eq. 13, 14 on the transfer's masses
+    integrated_ = {0, mx_ + 1, 0, my_ + 1};
+    impose_supports();
+    flip_return();  // the change to the points, and back
+    for (int j = 0; j <= my_; ++j) energy_row_terms(j, 0, mx_ + 1, std::false_type{});
+    const double peak = es_.peak_kinetic;
+    tally_energy(0, my_ + 1);
+    es_.kinetic = flip_kinetic_;  // the points' (flip_return)
+    es_.peak_kinetic = std::max(peak, es_.kinetic);
+    nodal_kinetic();
+}
+
 // ======================================================================================
 // ADVECT POINTS
 //
@@ -3952,6 +3964,28 @@ inline void Simulation::carried_row(int j, int i0, int i1) {
             if (m > 0) { dux_[n] = px / m; duy_[n] = py / m; }
         }
     }
+}
+
+// ======================================================================================
+// HOURGLASS
+//
+// Eq. 5's one strain per cell does not see the checkerboard pattern (+1, -1, -1, +1) of
+// nodal increments: nothing resists it. HOURGLASS kappa (off by default) adds the smallest
+// remedy, a viscous force on that pattern alone: each cell's part of the pattern
+// (checkerboard_mode, made with the strains) against its mass.
+// ======================================================================================
+
+// reference_nodal_forces' share of HOURGLASS at the node that is corner [1] of cell c:
+// F[a] = -kappa (M_J / 4) q_J h[a] / dt^2 (khg = kappa / 4 dt^2).
+inline void Simulation::hourglass_node_force(int c, bool right, bool left, bool above, bool below, double khg, double& fx, double& fy) const {
+    auto hg = [&](int a, double h) {
+        fx -= khg * cmass_[std::size_t(a)] * hgx_[std::size_t(a)] * h;
+        fy -= khg * cmass_[std::size_t(a)] * hgy_[std::size_t(a)] * h;
+    };
+    if (right && above) hg(c, 1);
+    if (left && above) hg(c - 1, -1);
+    if (right && below) hg(c - mx_, -1);
+    if (left && below) hg(c - mx_ - 1, 1);
 }
 
 // ======================================================================================
@@ -7045,40 +7079,7 @@ public:
             if (ok_ && !key_ok(k, p.value, sc, index)) fail(p.pos, range_message(k, p.value));
         }
     }
-    std::vector<Param> params(const std::vector<const char*>& allowed, const std::vector<const char*>& required) {
-        std::vector<Param> out;
-        while (ok_ && next_ < t_.size()) {
-            const Token& name = t_[next_];
-            if (name.text == "=") { fail(name.pos, "'=' without a parameter name"); break; }
-            if (next_ + 1 >= t_.size() || t_[next_ + 1].text != "=") { fail(name.pos, "extra field '" + name.text + "'"); break; }
-            const std::string u = upper(name.text);
-            bool known = false;
-            for (const char* a : allowed) known |= u == a;
-            if (!known) {
-                std::string list;
-                for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
-                fail(name.pos, "unknown parameter '" + name.text + "' (this card takes " + list + ")" +
-                                   did_you_mean(name.text, std::vector<std::string>(allowed.begin(), allowed.end())));
-                break;
-            }
-            for (const auto& p : out)
-                if (p.name == u) { fail(name.pos, "parameter " + u + " given twice"); break; }
-            if (!ok_) break;
-            if (next_ + 2 >= t_.size() || t_[next_ + 2].text == "=") { fail(t_[next_ + 1].pos, "missing value after " + u + "="); break; }
-            const Token& val = t_[next_ + 2];
-            double v = 0;
-            if (!number(val, u.c_str(), v)) break;
-            out.push_back({u, v, val.pos});
-            next_ += 3;
-        }
-        for (const char* r : required) {
-            if (!ok_) break;
-            bool have = false;
-            for (const auto& p : out) have |= p.name == r;
-            if (!have) fail(end_pos(), std::string("missing parameter ") + r + "=");
-        }
-        return out;
-    }
+    std::vector<Param> params(const std::vector<const char*>& allowed, const std::vector<const char*>& required);
     void finish() {
         if (ok_ && next_ < t_.size()) fail(t_[next_].pos, "extra field '" + t_[next_].text + "'");
     }
@@ -7100,6 +7101,41 @@ private:
     std::size_t next_ = 1;
     bool ok_ = true;
 };
+
+inline std::vector<CardReader::Param> CardReader::params(const std::vector<const char*>& allowed, const std::vector<const char*>& required) {
+    std::vector<Param> out;
+    while (ok_ && next_ < t_.size()) {
+        const Token& name = t_[next_];
+        if (name.text == "=") { fail(name.pos, "'=' without a parameter name"); break; }
+        if (next_ + 1 >= t_.size() || t_[next_ + 1].text != "=") { fail(name.pos, "extra field '" + name.text + "'"); break; }
+        const std::string u = upper(name.text);
+        bool known = false;
+        for (const char* a : allowed) known |= u == a;
+        if (!known) {
+            std::string list;
+            for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+            fail(name.pos, "unknown parameter '" + name.text + "' (this card takes " + list + ")" +
+                               did_you_mean(name.text, std::vector<std::string>(allowed.begin(), allowed.end())));
+            break;
+        }
+        for (const auto& p : out)
+            if (p.name == u) { fail(name.pos, "parameter " + u + " given twice"); break; }
+        if (!ok_) break;
+        if (next_ + 2 >= t_.size() || t_[next_ + 2].text == "=") { fail(t_[next_ + 1].pos, "missing value after " + u + "="); break; }
+        const Token& val = t_[next_ + 2];
+        double v = 0;
+        if (!number(val, u.c_str(), v)) break;
+        out.push_back({u, v, val.pos});
+        next_ += 3;
+    }
+    for (const char* r : required) {
+        if (!ok_) break;
+        bool have = false;
+        for (const auto& p : out) have |= p.name == r;
+        if (!have) fail(end_pos(), std::string("missing parameter ") + r + "=");
+    }
+    return out;
+}
 
 
 }  // namespace detail
@@ -7181,6 +7217,192 @@ inline void read_polygon(CardReader& r, Cluster& c) {
 }
 }  // namespace detail
 
+namespace detail {
+// The cards that take more than their fields (parse_deck_text): each reads its card with r
+// into sc (kp: where the card starts), and takes back what it added when the card fails.
+// MATERIAL id ELASTIC|MOHR NAME=value ...
+inline void read_material(CardReader& r, Scene& sc, const Pos& kp) {
+    sc.materials.emplace_back();
+    const std::size_t at = sc.materials.size() - 1;
+    sc.materials[at].pos = kp;
+    r.fields("MATERIAL", sc, at);
+    const Token* model = r.field("model (ELASTIC or MOHR)");
+    if (model) {
+        const std::string mm = upper(model->text);
+        if (mm == "ELASTIC") {
+            r.parameters("MATERIAL", kElastic, sc, at);
+        } else if (mm == "MOHR") {
+            sc.materials[at].model = Model::MohrCoulomb;
+            r.parameters("MATERIAL", kMohr, sc, at);
+        } else {
+            r.fail(model->pos, "unknown material model '" + model->text + "' (ELASTIC or MOHR)");
+        }
+    }
+    if (!r.ok()) sc.materials.pop_back();
+}
+// CLUSTER mat x0 y0 x1 y1 [PPC=n], or CLUSTER mat POLYGON x1 y1 ... [PPC=n]
+inline void read_cluster(CardReader& r, Scene& sc, const Pos& kp, const std::vector<Token>& toks) {
+    sc.clusters.emplace_back();
+    const std::size_t at = sc.clusters.size() - 1;
+    sc.clusters[at].pos = kp;
+    if (toks.size() > 2 && upper(toks[2].text) == "POLYGON") {
+        r.fields("CLUSTER", sc, at, "MAT");
+        detail::read_polygon(r, sc.clusters[at]);
+    } else {
+        r.fields("CLUSTER", sc, at);
+    }
+    r.parameters("CLUSTER", 0, sc, at);
+    if (!r.ok()) sc.clusters.pop_back();
+}
+// FIX X|Y|XY x0 y0 x1 y1
+inline void read_fix(CardReader& r, Scene& sc, const Pos& kp) {
+    Fix f;
+    f.pos = kp;
+    const Token* dir = r.field("direction (X, Y or XY)");
+    if (dir) {
+        const std::string u = upper(dir->text);
+        if (u == "X") f.dirs = kFixX;
+        else if (u == "Y") f.dirs = kFixY;
+        else if (u == "XY" || u == "YX") f.dirs = kFixX | kFixY;
+        else r.fail(dir->pos, "unknown direction '" + dir->text + "' (X, Y or XY)");
+    }
+    sc.fixes.push_back(f);
+    r.fields("FIX", sc, sc.fixes.size() - 1);
+    if (!r.ok()) sc.fixes.pop_back();
+}
+// WALL id x0 y0 x1 y1 vx vy [SMOOTH|ROUGH]
+inline void read_wall(CardReader& r, Scene& sc, const Pos& kp) {
+    sc.walls.emplace_back();
+    sc.walls.back().pos = kp;
+    r.fields("WALL", sc, sc.walls.size() - 1);
+    if (r.ok() && !r.at_end()) {
+        const Token* w = r.field("SMOOTH or ROUGH");
+        const std::string u = w ? upper(w->text) : std::string();
+        if (u == "SMOOTH") sc.walls.back().smooth = true;
+        else if (u != "ROUGH" && w) r.fail(w->pos, "unknown word '" + w->text + "' (SMOOTH or ROUGH)" + did_you_mean(w->text, {"SMOOTH", "ROUGH"}));
+    }
+    if (!r.ok()) sc.walls.pop_back();
+}
+// SHAKE X|Y FILE=name [SCALE=s] [START=t] [DAMPING=alpha] [COMPLIANT] [BASELINE]
+inline void read_shake(CardReader& r, Scene& sc, const Pos& kp, const std::string& file) {
+    // SHAKE X|Y FILE=name [SCALE=s] [START=t] [DAMPING=alpha] [COMPLIANT] [BASELINE], the
+    // parameters and words in any order after the direction.
+    Shake k;
+    k.pos = kp;
+    const int dir = r.word_of("direction", {"X", "Y"});
+    k.dir = dir == 1 ? kFixY : kFixX;
+    sc.shakes.push_back(k);
+    const std::size_t at = sc.shakes.size() - 1;
+    const Token* file_tok = nullptr;
+    std::vector<std::string> seen;
+    const std::vector<std::string> names = {"FILE", "SCALE", "START", "DAMPING"}, words = {"COMPLIANT", "BASELINE"};
+    while (r.ok() && !r.at_end()) {
+        if (r.more_positional() && r.peek()->text != "=") {  // a word (a lone '=' goes to one_param, which names it)
+            const Token* w = r.field("COMPLIANT or BASELINE");
+            if (!w) break;
+            const std::string u = upper(w->text);
+            if (u != "COMPLIANT" && u != "BASELINE") { r.fail(w->pos, "unknown word '" + w->text + "' (COMPLIANT or BASELINE)" + did_you_mean(w->text, words)); break; }
+            if (std::find(seen.begin(), seen.end(), u) != seen.end()) { r.fail(w->pos, u + " given twice"); break; }
+            seen.push_back(u);
+            (u == "COMPLIANT" ? sc.shakes[at].compliant : sc.shakes[at].baseline) = true;
+            continue;
+        }
+        const Token *n = nullptr, *v = nullptr;
+        if (!r.one_param(n, v)) break;
+        const std::string u = upper(n->text);
+        if (std::find(names.begin(), names.end(), u) == names.end()) {
+            r.fail(n->pos, "unknown parameter '" + n->text + "' (this card takes FILE, SCALE, START, DAMPING)" + did_you_mean(n->text, names));
+            break;
+        }
+        if (std::find(seen.begin(), seen.end(), u) != seen.end()) { r.fail(n->pos, "parameter " + u + " given twice"); break; }
+        seen.push_back(u);
+        if (u == "FILE") { file_tok = v; continue; }
+        const DeckKey& key = *deck_key("SHAKE", u.c_str());
+        double x = 0;
+        if (!r.number(*v, u.c_str(), x)) break;
+        if (!in_range(key, x)) { r.fail(v->pos, range_message(key, x)); break; }
+        key.set(sc, at, x);
+    }
+    if (r.ok() && !file_tok) r.fail(r.end_pos(), "missing parameter FILE= (the motion file: time [s] and acceleration [m/s^2] a line)");
+    if (r.ok()) {  // the motion file, beside the deck unless its path is absolute
+        namespace fs = std::filesystem;
+        const fs::path name(file_tok->text);
+        const std::string path = name.is_absolute() ? name.string() : (fs::path(file).parent_path() / name).string();
+        sc.shakes[at].file = file_tok->text;
+        Diagnostics md = read_motion(path, sc.shakes[at]);
+        if (!md.empty()) {
+            if (md[0].pos.line == 0) {  // the file itself: at the card, naming the path tried
+                md[0].pos = file_tok->pos;
+                const std::string the = "the motion file";
+                const std::size_t named = md[0].message.find(the);
+                if (named != std::string::npos) md[0].message.insert(named + the.size(), " '" + path + "'");
+                if (!name.is_absolute()) md[0].message += " (a relative FILE= is read from the deck's directory)";
+            }
+            r.fail(md[0].pos, md[0].message);
+        }
+    }
+    if (!r.ok()) sc.shakes.pop_back();
+}
+// ABSORB BOTTOM|TOP|LEFT|RIGHT ...
+inline void read_absorb(CardReader& r, Scene& sc, const Pos& kp) {
+    const int before = sc.absorb;
+    if (!sc.absorb) sc.absorb_pos = kp;
+    do {
+        const int e = r.word_of("edge", {"BOTTOM", "TOP", "LEFT", "RIGHT"});
+        if (e < 0) break;
+        const int bit = 1 << e;
+        static const char* const edge_names[] = {"BOTTOM", "TOP", "LEFT", "RIGHT"};
+        if (sc.absorb & bit) { r.fail(kp, std::string("ABSORB ") + edge_names[e] + " is given twice"); break; }
+        sc.absorb |= bit;
+    } while (r.ok() && !r.at_end());
+    if (!r.ok()) sc.absorb = before;
+}
+// OUTPUT POINTS|HISTORY|VTU|STATE file [BINARY] [NODES] [EVERY n]
+inline void read_output(CardReader& r, Scene& sc, const Pos& kp) {
+    Output o;
+    o.pos = kp;
+    const Token* kind = r.field("kind (POINTS, HISTORY, VTU or STATE)");
+    if (kind) {
+        const std::string u = upper(kind->text);
+        if (u == "POINTS") o.kind = Output::Points;
+        else if (u == "HISTORY") o.kind = Output::History;
+        else if (u == "VTU") o.kind = Output::Vtu;
+        else if (u == "STATE") o.kind = Output::State;
+        else r.fail(kind->pos, "unknown output '" + kind->text + "' (POINTS, HISTORY, VTU or STATE)" +
+                                   did_you_mean(kind->text, {"POINTS", "HISTORY", "VTU", "STATE"}));
+    }
+    const Token* f = r.field("file name");
+    if (f) o.file = f->text;
+    if (f && (o.file.find('/') != std::string::npos || o.file == "." || o.file == ".."))
+        r.fail(f->pos, "the file name must not contain a directory (use -o DIR)");
+    // OUTPUT VTU name [BINARY] [NODES], in either order
+    while (r.ok() && r.more_positional() && (upper(r.peek()->text) == "BINARY" || upper(r.peek()->text) == "NODES")) {
+        const Token* b = r.field("BINARY or NODES");
+        const bool binary = upper(b->text) == "BINARY";
+        if (o.kind != Output::Vtu) r.fail(b->pos, upper(b->text) + " is a word of OUTPUT VTU only" + (binary ? " (point tables and histories are text)" : ""));
+        else if (binary ? o.binary : o.nodes) r.fail(b->pos, upper(b->text) + " given twice");
+        else (binary ? o.binary : o.nodes) = true;
+    }
+    for (const auto& prev : sc.outputs)
+        if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
+    sc.outputs.push_back(o);
+    const std::size_t at = sc.outputs.size() - 1;
+    if (r.ok() && !r.at_end()) {
+        const Token* e = r.peek();
+        if (upper(e->text) == "EVERY" && !r.more_positional()) {  // EVERY=n, like other parameters
+            r.parameters("OUTPUT", 0, sc, at);
+        } else {  // EVERY n
+            e = r.field("EVERY");
+            if (e && upper(e->text) != "EVERY") r.fail(e->pos, "extra field '" + e->text + "'");
+            const DeckKey& k = *deck_key("OUTPUT", "EVERY");
+            const long n = r.integer(k.what, long(k.lo), long(k.hi));
+            if (r.ok()) k.set(sc, at, double(n));
+        }
+    }
+    if (!r.ok()) sc.outputs.pop_back();
+}
+}  // namespace detail
+
 // Parses a deck (decks/README.md) into scene: every card, field and parameter checked, each
 // problem reported with file:line:column (the first problem of each card). The scene as a
 // whole is checked by validate(), told by *unread what the cards with errors left out.
@@ -7237,131 +7459,18 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
             sc.grid_pos = kp;
             r.fields("GRID", sc, 0);
         } else if (kw == "MATERIAL") {
-            sc.materials.emplace_back();
-            const std::size_t at = sc.materials.size() - 1;
-            sc.materials[at].pos = kp;
-            r.fields("MATERIAL", sc, at);
-            const Token* model = r.field("model (ELASTIC or MOHR)");
-            if (model) {
-                const std::string mm = upper(model->text);
-                if (mm == "ELASTIC") {
-                    r.parameters("MATERIAL", kElastic, sc, at);
-                } else if (mm == "MOHR") {
-                    sc.materials[at].model = Model::MohrCoulomb;
-                    r.parameters("MATERIAL", kMohr, sc, at);
-                } else {
-                    r.fail(model->pos, "unknown material model '" + model->text + "' (ELASTIC or MOHR)");
-                }
-            }
-            if (!r.ok()) sc.materials.pop_back();
+            read_material(r, sc, kp);
         } else if (kw == "CLUSTER") {
             ++cluster_cards;
-            sc.clusters.emplace_back();
-            const std::size_t at = sc.clusters.size() - 1;
-            sc.clusters[at].pos = kp;
-            if (toks.size() > 2 && upper(toks[2].text) == "POLYGON") {
-                r.fields("CLUSTER", sc, at, "MAT");
-                detail::read_polygon(r, sc.clusters[at]);
-            } else {
-                r.fields("CLUSTER", sc, at);
-            }
-            r.parameters("CLUSTER", 0, sc, at);
-            if (!r.ok()) sc.clusters.pop_back();
+            read_cluster(r, sc, kp, toks);
         } else if (kw == "FIX") {
-            Fix f;
-            f.pos = kp;
-            const Token* dir = r.field("direction (X, Y or XY)");
-            if (dir) {
-                const std::string u = upper(dir->text);
-                if (u == "X") f.dirs = kFixX;
-                else if (u == "Y") f.dirs = kFixY;
-                else if (u == "XY" || u == "YX") f.dirs = kFixX | kFixY;
-                else r.fail(dir->pos, "unknown direction '" + dir->text + "' (X, Y or XY)");
-            }
-            sc.fixes.push_back(f);
-            r.fields("FIX", sc, sc.fixes.size() - 1);
-            if (!r.ok()) sc.fixes.pop_back();
+            read_fix(r, sc, kp);
         } else if (kw == "WALL") {
-            sc.walls.emplace_back();
-            sc.walls.back().pos = kp;
-            r.fields("WALL", sc, sc.walls.size() - 1);
-            if (r.ok() && !r.at_end()) {
-                const Token* w = r.field("SMOOTH or ROUGH");
-                const std::string u = w ? upper(w->text) : std::string();
-                if (u == "SMOOTH") sc.walls.back().smooth = true;
-                else if (u != "ROUGH" && w) r.fail(w->pos, "unknown word '" + w->text + "' (SMOOTH or ROUGH)" + did_you_mean(w->text, {"SMOOTH", "ROUGH"}));
-            }
-            if (!r.ok()) sc.walls.pop_back();
+            read_wall(r, sc, kp);
         } else if (kw == "SHAKE") {
-            // SHAKE X|Y FILE=name [SCALE=s] [START=t] [DAMPING=alpha] [COMPLIANT] [BASELINE], the
-            // parameters and words in any order after the direction.
-            Shake k;
-            k.pos = kp;
-            const int dir = r.word_of("direction", {"X", "Y"});
-            k.dir = dir == 1 ? kFixY : kFixX;
-            sc.shakes.push_back(k);
-            const std::size_t at = sc.shakes.size() - 1;
-            const Token* file_tok = nullptr;
-            std::vector<std::string> seen;
-            const std::vector<std::string> names = {"FILE", "SCALE", "START", "DAMPING"}, words = {"COMPLIANT", "BASELINE"};
-            while (r.ok() && !r.at_end()) {
-                if (r.more_positional() && r.peek()->text != "=") {  // a word (a lone '=' goes to one_param, which names it)
-                    const Token* w = r.field("COMPLIANT or BASELINE");
-                    if (!w) break;
-                    const std::string u = upper(w->text);
-                    if (u != "COMPLIANT" && u != "BASELINE") { r.fail(w->pos, "unknown word '" + w->text + "' (COMPLIANT or BASELINE)" + did_you_mean(w->text, words)); break; }
-                    if (std::find(seen.begin(), seen.end(), u) != seen.end()) { r.fail(w->pos, u + " given twice"); break; }
-                    seen.push_back(u);
-                    (u == "COMPLIANT" ? sc.shakes[at].compliant : sc.shakes[at].baseline) = true;
-                    continue;
-                }
-                const Token *n = nullptr, *v = nullptr;
-                if (!r.one_param(n, v)) break;
-                const std::string u = upper(n->text);
-                if (std::find(names.begin(), names.end(), u) == names.end()) {
-                    r.fail(n->pos, "unknown parameter '" + n->text + "' (this card takes FILE, SCALE, START, DAMPING)" + did_you_mean(n->text, names));
-                    break;
-                }
-                if (std::find(seen.begin(), seen.end(), u) != seen.end()) { r.fail(n->pos, "parameter " + u + " given twice"); break; }
-                seen.push_back(u);
-                if (u == "FILE") { file_tok = v; continue; }
-                const DeckKey& key = *deck_key("SHAKE", u.c_str());
-                double x = 0;
-                if (!r.number(*v, u.c_str(), x)) break;
-                if (!in_range(key, x)) { r.fail(v->pos, range_message(key, x)); break; }
-                key.set(sc, at, x);
-            }
-            if (r.ok() && !file_tok) r.fail(r.end_pos(), "missing parameter FILE= (the motion file: time [s] and acceleration [m/s^2] a line)");
-            if (r.ok()) {  // the motion file, beside the deck unless its path is absolute
-                namespace fs = std::filesystem;
-                const fs::path name(file_tok->text);
-                const std::string path = name.is_absolute() ? name.string() : (fs::path(file).parent_path() / name).string();
-                sc.shakes[at].file = file_tok->text;
-                Diagnostics md = read_motion(path, sc.shakes[at]);
-                if (!md.empty()) {
-                    if (md[0].pos.line == 0) {  // the file itself: at the card, naming the path tried
-                        md[0].pos = file_tok->pos;
-                        const std::string the = "the motion file";
-                        const std::size_t named = md[0].message.find(the);
-                        if (named != std::string::npos) md[0].message.insert(named + the.size(), " '" + path + "'");
-                        if (!name.is_absolute()) md[0].message += " (a relative FILE= is read from the deck's directory)";
-                    }
-                    r.fail(md[0].pos, md[0].message);
-                }
-            }
-            if (!r.ok()) sc.shakes.pop_back();
+            read_shake(r, sc, kp, file);
         } else if (kw == "ABSORB") {
-            const int before = sc.absorb;
-            if (!sc.absorb) sc.absorb_pos = kp;
-            do {
-                const int e = r.word_of("edge", {"BOTTOM", "TOP", "LEFT", "RIGHT"});
-                if (e < 0) break;
-                const int bit = 1 << e;
-                static const char* const edge_names[] = {"BOTTOM", "TOP", "LEFT", "RIGHT"};
-                if (sc.absorb & bit) { r.fail(kp, std::string("ABSORB ") + edge_names[e] + " is given twice"); break; }
-                sc.absorb |= bit;
-            } while (r.ok() && !r.at_end());
-            if (!r.ok()) sc.absorb = before;
+            read_absorb(r, sc, kp);
         } else if (kw == "GRAVITY") {
             once(have_gravity);
             r.fields("GRAVITY", sc, 0);
@@ -7377,47 +7486,7 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
             sc.step_pos = kp;
             r.fields("STEP", sc, 0);
         } else if (kw == "OUTPUT") {
-            Output o;
-            o.pos = kp;
-            const Token* kind = r.field("kind (POINTS, HISTORY, VTU or STATE)");
-            if (kind) {
-                const std::string u = upper(kind->text);
-                if (u == "POINTS") o.kind = Output::Points;
-                else if (u == "HISTORY") o.kind = Output::History;
-                else if (u == "VTU") o.kind = Output::Vtu;
-                else if (u == "STATE") o.kind = Output::State;
-                else r.fail(kind->pos, "unknown output '" + kind->text + "' (POINTS, HISTORY, VTU or STATE)" +
-                                           did_you_mean(kind->text, {"POINTS", "HISTORY", "VTU", "STATE"}));
-            }
-            const Token* f = r.field("file name");
-            if (f) o.file = f->text;
-            if (f && (o.file.find('/') != std::string::npos || o.file == "." || o.file == ".."))
-                r.fail(f->pos, "the file name must not contain a directory (use -o DIR)");
-            // OUTPUT VTU name [BINARY] [NODES], in either order
-            while (r.ok() && r.more_positional() && (upper(r.peek()->text) == "BINARY" || upper(r.peek()->text) == "NODES")) {
-                const Token* b = r.field("BINARY or NODES");
-                const bool binary = upper(b->text) == "BINARY";
-                if (o.kind != Output::Vtu) r.fail(b->pos, upper(b->text) + " is a word of OUTPUT VTU only" + (binary ? " (point tables and histories are text)" : ""));
-                else if (binary ? o.binary : o.nodes) r.fail(b->pos, upper(b->text) + " given twice");
-                else (binary ? o.binary : o.nodes) = true;
-            }
-            for (const auto& prev : sc.outputs)
-                if (r.ok() && prev.file == o.file) r.fail(f->pos, "file '" + o.file + "' is written by another OUTPUT card");
-            sc.outputs.push_back(o);
-            const std::size_t at = sc.outputs.size() - 1;
-            if (r.ok() && !r.at_end()) {
-                const Token* e = r.peek();
-                if (upper(e->text) == "EVERY" && !r.more_positional()) {  // EVERY=n, like other parameters
-                    r.parameters("OUTPUT", 0, sc, at);
-                } else {  // EVERY n
-                    e = r.field("EVERY");
-                    if (e && upper(e->text) != "EVERY") r.fail(e->pos, "extra field '" + e->text + "'");
-                    const DeckKey& k = *deck_key("OUTPUT", "EVERY");
-                    const long n = r.integer(k.what, long(k.lo), long(k.hi));
-                    if (r.ok()) k.set(sc, at, double(n));
-                }
-            }
-            if (!r.ok()) sc.outputs.pop_back();
+            read_output(r, sc, kp);
         } else if (kw == "HOURGLASS") {
             once(have_hourglass);
             r.fields("HOURGLASS", sc, 0);
