@@ -1189,9 +1189,8 @@ private:
     std::vector<double> centroid_trace_;  // MAPPING SMOOTH: per cell, the trace of the increments' gradient at the material's centroid
     // ADVECT POINTS only: per cell, sum m (d - E r) and sum m E of the points that landed in
     // it (r from the cell centre).
-    // One record per cell, not six arrays: bench_elastic with ADVECT POINTS ran 400 steps
-    // in 3.2 s with six arrays (all starting at the same offset in their pages), 2.15 s
-    // with one record; 1.8 s with eq. 12.
+    // One record per cell, not six arrays (six arrays starting at the same offset in their
+    // pages were six memory streams that evicted one another).
     struct Carried { double px = 0, py = 0, qxx = 0, qxy = 0, qyx = 0, qyy = 0; };
     std::vector<Carried> carried_;
     // The threaded point pass only: per thread its chunk's cells, mass and list length
@@ -1391,7 +1390,7 @@ namespace detail {
 // The store is an assignment to doubles, or to a vector of doubles aligned as a double
 // (which may alias doubles, GCC and Clang), not a memcpy: GCC takes a memcpy's store for
 // one that may change any object, and after each reloaded the pointers that the lattice
-// phases' lambdas reach by reference (nodal_forces took 25 % longer, elastic bench scene).
+// phases' lambdas reach by reference.
 template <class T>
 LPFDM_INLINE inline void load(const double* p, T& v) { std::memcpy(&v, p, sizeof v); }
 template <class T>
@@ -4545,8 +4544,7 @@ LPFDM_LANE inline int edge_return(V& xx, V& yy, V& xy, V& zz, const V& r, const 
 // point only; each lane's operations are those of the one-point code. The lanes the closed
 // form leaves go on at once (edge_return, then the one-point code): a second pass over the
 // groups holding them, which made the elastic test and the return again to find what
-// edge_return needs, was no faster (6.8 % of the groups of four hold one in steps 3600-3640
-// of bench_flow.deck).
+// edge_return needs, was no faster (few groups of four hold one).
 template <bool Own, class Vol0, class OnePoint>
 LPFDM_LANE inline long consult(const MaterialConstants& mc, long q, const long qend, const ConsultArrays& a, const Vol0& vol0_of, const OnePoint& one_point) {
     // Local pointers (the stores of the yielded flags, through bytes, may change any object)
@@ -4816,15 +4814,11 @@ template <bool Own> inline void Simulation::consult_one(const MaterialConstants&
 
 // Rows j0 .. j1-1 of a lattice phase, f(j) for each, by threads when they visit more than
 // 4 096 cells or nodes in all (work; the same number as the point pass's threshold in
-// points). A loop left to one thread in a threaded run is slow: with the threshold at
-// 8 192, bench_peer.deck's 8 192 cells took eq. 5 twice as long on one thread of a
-// two-thread run as in a one-thread run (70 us a step against 36; most likely reading
-// from the other core's cache what the other thread wrote in the phase before), and
-// they take 24-33 us by two threads. Each row writes
-// only its own nodes or cells, so which thread takes a row changes no number: thread u
-// takes a block of rows, and the blocks follow the threads' times (detail::balance), as
-// rows cost unequal amounts (eq. 12 costs more where nodes cross cells: the elastic bench
-// block's upper half of the rows 41 us a step, its lower half 32 us).
+// points): a loop left to one thread in a threaded run is slow (it reads from the other
+// core's cache what the other thread wrote in the phase before). Each row writes only
+// its own nodes or cells, so which thread takes a row changes no number: thread u takes a
+// block of rows, and the blocks follow the threads' times (detail::balance), as rows cost
+// unequal amounts (eq. 12 costs more where nodes cross cells).
 template <class F>
 inline void Simulation::by_rows([[maybe_unused]] RowLoop loop, int j0, int j1, [[maybe_unused]] long work, const F& f) {
 #if defined(_OPENMP)
@@ -5243,7 +5237,7 @@ LPFDM_INLINE inline long Simulation::run_end(const Loop& lp, long k, const long 
             const int same = __builtin_ia32_movmskps(v4f(w == c));
             if (same != 15) { kend += __builtin_ctz(~unsigned(same)); break; }
         }
-        if (kend + 4 > stop)  // the last points; the scalar loop after every run instead cost 3 % more instructions
+        if (kend + 4 > stop)  // the last points only (a scalar loop after every run cost more)
             while (kend < stop && lp.pcell[kend] == c) ++kend;
     }
 #endif
@@ -5455,8 +5449,8 @@ LPFDM_INLINE inline void Simulation::run_motion(Loop& lp, const long k, const lo
 // known to stay. At the first four that is not one, nothing of it is stored and its first
 // index is returned, for runs' general code, which makes the same numbers: the same
 // expressions in the same order, and a run split in two gives the same sums (they are
-// stored and reloaded). That code's bookkeeping cost about 420 instructions per run of four
-// (callgrind, elastic bench); this path about 220. MOTION CENTRE only (the AVX2 loop's).
+// stored and reloaded). This path takes about half the instructions of that code's
+// bookkeeping. MOTION CENTRE only (the AVX2 loop's).
 LPFDM_INLINE inline long Simulation::usual_runs(Loop& lp, long k, const long stop) {
     using detail::v4d;
     typedef int v4i __attribute__((vector_size(16)));
@@ -5585,8 +5579,7 @@ LPFDM_INLINE inline void Simulation::consult_timed(Loop& lp, const long b0, cons
 // with the box of those cells and the mass landed. Each four's strain records and nodal
 // increments, gathered into the lanes once for both (read once when the four share a
 // cell). A flowing scene leaves runs of one or two points in a cell, and the run-by-run
-// loop then mispredicts about one branch per point (where a run ends: 0.99 a point-update
-// in the last 100 steps of decks/bench_flow.deck, against 0.11 in its first); this one
+// loop then mispredicts about one branch per point (where a run ends); this one
 // branches on what is rare (a cell with a fixed edge or near a wall, whose points
 // stop_at_edges holds one by one; a point leaving the lattice; four points of two
 // materials) and on whether the four share a cell. The sums of eq. 7 and 8 wait for the
@@ -6104,7 +6097,7 @@ LPFDM_DEF void Simulation::integrate() {
     // Node n of the nodes this step's cells touch, or the nodes n .. n + 3 in the lanes of
     // a vector T. Each node of nr keeps the increment eq. 13 begins from, in this same pass
     // and by the same threads (what keep_increments does in the reference cycle). Its
-    // pointers by value: by reference, the pass below ran bench_peer's integrate 10 % slower.
+    // pointers by value (by reference, the compiler reloaded them after every store).
     auto advance = [ux_n, uy_n, ux_old, uy_old, nm, fxn, fyn, dt2, alpha](int n, auto tag) LPFDM_INLINE {
         using T = typename decltype(tag)::type;
         constexpr bool one = std::is_same_v<T, double>;
