@@ -137,12 +137,69 @@ double physical_memory_bytes() {
     return pages > 0 && size > 0 ? double(pages) * double(size) : 0.0;
 }
 
-}  // namespace
 
-int main(int argc, char** argv) {
-    Options opt;
-    // --- the command line: every mistake collected, then reported with the deck's ---
-    std::vector<std::string> cli_errors, decks;
+// Option c (getopt_long's value) with its value arg, when it is one that sets opt (or
+// records its mistake in errors): true; false for the others (help, version, mistakes).
+bool take_option(int c, const char* arg, Options& opt, std::vector<std::string>& cli_errors) {
+    long long v = 0;
+    switch (c) {
+    case 'q': opt.quiet = true; break;
+    case 'p': opt.profile = true; break;
+    case kStrict: opt.strict = true; break;
+    case kNoAvx2: opt.kernel = lpfdm::Kernel::Scalar; break;
+    case 'o':
+        if (!*arg) cli_errors.push_back("-o needs a directory");
+        else opt.outdir = arg;
+        break;
+    case 'r':
+        if (!parse_long(arg, 1, 64, v)) cli_errors.push_back(std::string("--refine needs a whole number from 1 to 64, not '") + arg + "'");
+        else opt.refine = long(v);
+        break;
+    case 'n':
+        if (!parse_long(arg, 1, 1'000'000'000LL, v)) cli_errors.push_back(std::string("--steps needs a whole number from 1 to 1e9, not '") + arg + "'");
+        else opt.steps = long(v);
+        break;
+    case kSeed:
+        if (!parse_long(arg, 0, 9'007'199'254'740'992LL, v)) cli_errors.push_back(std::string("--seed needs a whole number >= 0, not '") + arg + "'");
+        else opt.seed = v;
+        break;
+    case 't':
+        if (!parse_long(arg, 1, 1024, v)) cli_errors.push_back(std::string("--threads needs a whole number from 1 to 1024, not '") + arg + "'");
+        else opt.threads = long(v);
+        break;
+    case 'k': {
+        const std::string d = arg;
+        if (d == "fast") opt.kernel = lpfdm::Kernel::Fast;
+        else if (d == "scalar") opt.kernel = lpfdm::Kernel::Scalar;
+        else if (d == "reference") opt.kernel = lpfdm::Kernel::Reference;
+        else cli_errors.push_back("--kernel needs fast, scalar or reference, not '" + d + "'" + lpfdm::did_you_mean(d, {"fast", "scalar", "reference"}));
+        break;
+    }
+    case kRestart:
+        if (!*arg) cli_errors.push_back("--restart needs a state file");
+        else opt.restart = arg;
+        break;
+    case 'D': {
+        const std::string kv = arg;
+        const std::size_t eq = kv.find('=');
+        double x = 0;
+        if (eq == std::string::npos || !lpfdm::detail::parse_real(kv.substr(eq + 1), x)) {
+            cli_errors.push_back("--set needs CARD.PARAM=VALUE with a finite number, e.g. --set MATERIAL1.C=12000, not '" + kv + "'");
+        } else {
+            opt.settings.push_back({kv.substr(0, eq), x});
+            opt.setting_text.push_back(kv);
+        }
+        break;
+    }
+    default: return false;
+    }
+    return true;
+}
+
+// The command line into opt, every mistake collected in cli_errors (reported with the
+// deck's): -1 to go on, or the exit status of a run that ends here (--help, --version).
+int read_command_line(int argc, char** argv, Options& opt, std::vector<std::string>& cli_errors) {
+    std::vector<std::string> decks;
     std::vector<option> longs;
     std::string shorts = ":";  // ':' first: a missing value is told from an unknown option
     std::vector<std::string> names;
@@ -200,59 +257,10 @@ int main(int argc, char** argv) {
                 continue;
             }
         }
-        long long v = 0;
-        const char* arg = optarg;
+        if (take_option(c, optarg, opt, cli_errors)) continue;
         switch (c) {
         case 'h': std::fputs(usage_text().c_str(), stdout); std::fputs(("\n" + lpfdm::deck_help()).c_str(), stdout); return 0;
         case 'V': std::printf("lpfdm %s\n", lpfdm::kVersion); return 0;
-        case 'q': opt.quiet = true; break;
-        case 'p': opt.profile = true; break;
-        case kStrict: opt.strict = true; break;
-        case kNoAvx2: opt.kernel = lpfdm::Kernel::Scalar; break;
-        case 'o':
-            if (!*arg) cli_errors.push_back("-o needs a directory");
-            else opt.outdir = arg;
-            break;
-        case 'r':
-            if (!parse_long(arg, 1, 64, v)) cli_errors.push_back(std::string("--refine needs a whole number from 1 to 64, not '") + arg + "'");
-            else opt.refine = long(v);
-            break;
-        case 'n':
-            if (!parse_long(arg, 1, 1'000'000'000LL, v)) cli_errors.push_back(std::string("--steps needs a whole number from 1 to 1e9, not '") + arg + "'");
-            else opt.steps = long(v);
-            break;
-        case kSeed:
-            if (!parse_long(arg, 0, 9'007'199'254'740'992LL, v)) cli_errors.push_back(std::string("--seed needs a whole number >= 0, not '") + arg + "'");
-            else opt.seed = v;
-            break;
-        case 't':
-            if (!parse_long(arg, 1, 1024, v)) cli_errors.push_back(std::string("--threads needs a whole number from 1 to 1024, not '") + arg + "'");
-            else opt.threads = long(v);
-            break;
-        case 'k': {
-            const std::string d = arg;
-            if (d == "fast") opt.kernel = lpfdm::Kernel::Fast;
-            else if (d == "scalar") opt.kernel = lpfdm::Kernel::Scalar;
-            else if (d == "reference") opt.kernel = lpfdm::Kernel::Reference;
-            else cli_errors.push_back("--kernel needs fast, scalar or reference, not '" + d + "'" + lpfdm::did_you_mean(d, {"fast", "scalar", "reference"}));
-            break;
-        }
-        case kRestart:
-            if (!*arg) cli_errors.push_back("--restart needs a state file");
-            else opt.restart = arg;
-            break;
-        case 'D': {
-            const std::string kv = arg;
-            const std::size_t eq = kv.find('=');
-            double x = 0;
-            if (eq == std::string::npos || !lpfdm::detail::parse_real(kv.substr(eq + 1), x)) {
-                cli_errors.push_back("--set needs CARD.PARAM=VALUE with a finite number, e.g. --set MATERIAL1.C=12000, not '" + kv + "'");
-            } else {
-                opt.settings.push_back({kv.substr(0, eq), x});
-                opt.setting_text.push_back(kv);
-            }
-            break;
-        }
         case ':': {  // (argv[optind - 1]: the option, the last word)
             const std::string word = optind > 0 && optind <= argc ? argv[optind - 1] : "";
             if (word.rfind("--", 0) == 0 && option_name(word.c_str()) != spelled(optopt)) cli_errors.push_back(unknown_option(option_name(word.c_str())));
@@ -289,10 +297,13 @@ int main(int argc, char** argv) {
     if (decks.size() > 1) cli_errors.push_back("one deck, please: " + std::to_string(decks.size()) + " are named");
     if (decks.empty()) cli_errors.push_back("no deck given");
     if (decks.size() == 1) opt.deck = decks[0];
+    return -1;
+}
 
-    // --- read and check the deck and the options in one pass: every error and warning ---
-    lpfdm::Scene scene;
-    std::string text;
+// The deck (its text into text, the scene into scene) and the options read and checked in
+// one pass: every error and warning, in the deck's order (a mistake of an option that
+// needs the deck, such as --set, into cli_errors).
+lpfdm::Diagnostics read_and_check(const Options& opt, std::vector<std::string>& cli_errors, lpfdm::Scene& scene, std::string& text) {
     lpfdm::Diagnostics diags;
     lpfdm::Unread unread;
     if (!opt.deck.empty()) {
@@ -333,6 +344,12 @@ int main(int argc, char** argv) {
         diags.insert(diags.end(), w.begin(), w.end());
         lpfdm::sort_diagnostics(diags);
     }
+    return diags;
+}
+
+// What a state file must have been written by: the deck and the options that change the
+// scene (not --steps: a restart may run further).
+std::uint64_t scene_digest(const Options& opt, const lpfdm::Scene& scene, const std::string& text) {
     // What a state file must have been written by: the deck and the options that change
     // the scene (not --steps: a restart may run further).
     std::string scene_options = fmt::format("refine {} seed {}", opt.refine, opt.seed);
@@ -341,7 +358,256 @@ int main(int argc, char** argv) {
         const std::uint64_t h = lpfdm::detail::fnv1a(k.a.data(), k.a.size() * sizeof(double), lpfdm::detail::fnv1a(k.t.data(), k.t.size() * sizeof(double)));
         scene_options += fmt::format(" motion {:016x}", h);
     }
-    const std::uint64_t digest = lpfdm::state_digest(text, scene_options);
+    return lpfdm::state_digest(text, scene_options);
+}
+
+// The run's output files (its OUTPUT cards): tables and histories written as NAME.part and
+// renamed when complete, so a stopped run never leaves a table that looks complete; VTU
+// frames, collections and states written whole the same way.
+struct Outputs {
+    const Options& opt;
+    lpfdm::Simulation& sim;
+    const lpfdm::RunInfo& run;
+    std::uint64_t digest;
+    std::vector<double> x0, y0;  // the points' positions at step 0, by id (the VTU series' displacement)
+    std::vector<OutFile> outs;
+    bool write_failed = false;
+
+    // Each file opened (NAME.part) with its header and first frame; false when one cannot be.
+    bool open() {
+        for (const auto& o : sim.scene().outputs) {
+            OutFile of;
+            of.final_path = opt.outdir + "/" + o.file;
+            of.part_path = of.final_path + ".part";
+            of.spec = &o;
+            if (o.kind == lpfdm::Output::Vtu || o.kind == lpfdm::Output::State) {  // files written whole
+                outs.push_back(of);
+                continue;
+            }
+            of.f = std::fopen(of.part_path.c_str(), "wb");
+            if (!of.f) {
+                std::fprintf(stderr, "%s:%d:%d: error: cannot write '%s': %s\n", o.pos.file.c_str(), o.pos.line, o.pos.col, of.part_path.c_str(), std::strerror(errno));
+                for (auto& p : outs) if (p.f) { std::fclose(p.f); std::remove(p.part_path.c_str()); }
+                return false;
+            }
+            if (o.kind == lpfdm::Output::Points) {
+                lpfdm::write_points_header(of.f, sim, opt.deck, &run);
+                lpfdm::write_points_frame(of.f, sim, true);
+                of.first_frame = false;
+            } else {
+                lpfdm::write_history_header(of.f, sim, opt.deck, &run);
+            }
+            outs.push_back(of);
+        }
+        for (auto& o : outs)
+            if (o.spec->kind == lpfdm::Output::Vtu) vtu_frame(o);
+        return true;
+    }
+
+    // A file written whole as NAME.part, then renamed (VTU frames and collections, states).
+    template <class W> bool write_whole(const std::string& path, const W& write) {
+        const std::string part = path + ".part";
+        std::FILE* f = std::fopen(part.c_str(), "wb");
+        bool ok = f && write(f);
+        if (f) ok &= std::fclose(f) == 0;
+        ok = ok && std::rename(part.c_str(), path.c_str()) == 0;
+        if (!ok) std::fprintf(stderr, "lpfdm: error: cannot write '%s': %s\n", path.c_str(), std::strerror(errno));
+        return ok;
+    }
+    // A frame of a VTU series, and its collection written anew.
+    void vtu_frame(OutFile& o) {
+        const std::string file = lpfdm::vtu_frame_file(o.spec->file, sim.step_count());
+        write_failed |= !write_whole(opt.outdir + "/" + file, [&](std::FILE* f) {
+            lpfdm::write_vtu(f, sim, x0, y0, o.spec->binary);
+            return !std::ferror(f);
+        });
+        o.frames.push_back({file, sim.time()});
+        write_failed |= !write_whole(opt.outdir + "/" + o.spec->file + ".pvd", [&](std::FILE* f) {
+            lpfdm::write_pvd(f, o.frames);
+            return !std::ferror(f);
+        });
+        if (!o.spec->nodes) return;
+        const std::string nodes = lpfdm::vtu_frame_file(o.spec->file, sim.step_count(), true);
+        write_failed |= !write_whole(opt.outdir + "/" + nodes, [&](std::FILE* f) {
+            lpfdm::write_vti(f, sim, o.spec->binary);
+            return !std::ferror(f);
+        });
+        o.node_frames.push_back({nodes, sim.time()});
+        write_failed |= !write_whole(opt.outdir + "/" + o.spec->file + "_nodes.pvd", [&](std::FILE* f) {
+            lpfdm::write_pvd(f, o.node_frames);
+            return !std::ferror(f);
+        });
+    }
+    void save_state(OutFile& o) {
+        write_failed |= !write_whole(o.final_path, [&](std::FILE* f) { return lpfdm::write_state(f, sim, digest); });
+    }
+    bool finish(const std::string& note) {
+        bool ok = !write_failed;
+        for (auto& o : outs) {
+            if (!o.f) continue;
+            if (!note.empty()) std::fprintf(o.f, "# %s\n", note.c_str());
+            ok &= std::fclose(o.f) == 0;
+            ok &= std::rename(o.part_path.c_str(), o.final_path.c_str()) == 0;
+        }
+        if (!ok) std::fprintf(stderr, "lpfdm: error: writing the output files failed\n");
+        return ok;
+    }
+};
+
+// A run gone wrong at step n (Simulation::healthy): where, on stderr; the last good frame
+// and history row written where the points are still finite. Returns the note for the files.
+std::string report_trouble(const lpfdm::Simulation& sim, long n, Outputs& out) {
+    const long k = sim.first_nonfinite_point();
+    const auto& p = sim.points();
+    std::string where;
+    if (k >= 0) {
+        where = fmt::format("; first bad point: id {} in cell ({}, {})", p.id[std::size_t(k)], p.cell[std::size_t(k)] % sim.mx(), p.cell[std::size_t(k)] / sim.mx());
+    } else {
+        int ni = 0, nj = 0;
+        long q = -1;
+        sim.worst_node(ni, nj, q);
+        where = fmt::format("; worst node ({}, {}) at x = {:.6g} m, y = {:.6g} m", ni, nj, ni * sim.cell_size(), nj * sim.cell_size());
+        if (q >= 0) where += fmt::format(", next to point id {} in cell ({}, {})", p.id[std::size_t(q)], p.cell[std::size_t(q)] % sim.mx(), p.cell[std::size_t(q)] / sim.mx());
+    }
+    const std::string why = std::isfinite(sim.kinetic_energy())
+        ? fmt::format("a node moved {:.3g} m in one step, more than half a cell: the run is unstable", sim.max_du())
+        : "a non-finite value appeared";
+    std::fprintf(stderr, "lpfdm: error: numerical trouble at step %ld (t = %.6g s): %s%s\n", n, sim.time(), why.c_str(), where.c_str());
+    // The points are still finite when the trouble is in the nodal increments: their
+    // state at this step is the last good one, so it is written as the last frame
+    // (not to a VTU series, whose velocities come from the nodes, nor a state).
+    if (k < 0)
+        for (auto& o : out.outs) {
+            if (o.spec->kind == lpfdm::Output::Points) lpfdm::write_points_frame(o.f, sim, false);
+            else if (o.spec->kind == lpfdm::Output::History && std::isfinite(sim.kinetic_energy())) lpfdm::write_history_row(o.f, sim);
+        }
+    return fmt::format("run stopped at step {}: numerical trouble; the frames above are the last good ones", n);
+}
+
+// The steps of the run, each output written when due, until the last step, numerical
+// trouble or SIGINT: the exit status; the particle-steps and wall time, for the summary.
+int run_steps(lpfdm::Simulation& sim, const Options& opt, Outputs& out, double& particle_steps, double& wall) {
+    std::signal(SIGINT, on_sigint);
+    const long steps = sim.scene().steps, first = sim.step_count() + 1;
+    const bool progress = !opt.quiet && isatty(2);
+    const auto t0 = std::chrono::steady_clock::now();
+    auto last_print = t0;
+    int status = 0;
+    std::string note;
+    // Whether output o is due at step n: a history row every n steps (every step without
+    // EVERY; the last only when EVERY is above the steps, a warning); a frame or a state every n steps and at the last step (without EVERY only
+    // there; frames also at the first).
+    auto due = [&](const OutFile& o, long n) {
+        const long every = o.spec->every;
+        if (o.spec->kind == lpfdm::Output::History) return n % (every > 0 ? every : 1) == 0 || (every > steps && n == steps);  // (warned)
+        return (every > 0 && n % every == 0) || n == steps;
+    };
+    // Energy the cycle creates (energy_error < 0) is trouble the checks above do not stop.
+    // The account is read every steps / 200 steps of the run, at least 100 apart (a reading
+    // is a pass over the points, about half a step: read every other step, it slowed the
+    // 400-step benchmark by 35 %), counted from step 0 so that a run continued with the
+    // same --steps reads it at the same steps; also at the last step and at an interrupted
+    // one. Reading it changes no result. A creation of more than kEnergyCreated of the
+    // energy in play is reported at the end, on stderr only: a run continued with
+    // --restart must write the whole run's tables, and it has not seen the steps before.
+    // The shipped decks create at most 6.3 % (freefall.deck's impact on a block 4 cells
+    // across, for one step; 5.6 % over the impact; 2.7 % and 1.0 % at 8 and 16 cells
+    // across: a first-order error in L), so the warning marks a creation 1.6 times the
+    // coarsest shipped impact's: a body too coarsely resolved for what it does, or a cycle
+    // gone wrong.
+    const long energy_every = std::max(100L, steps / 200);
+    double created = 0;  // the lowest energy_error read, and its step
+    long created_step = 0;
+    for (long n = first; n <= steps; ++n) {
+        particle_steps += double(sim.points().size());
+        sim.step();
+        if (sim.healthy() && (n % energy_every == 0 || n == steps || g_interrupted)) {
+            const double e = sim.energy().error;
+            if (e < created) { created = e; created_step = n; }
+        }
+        if (!sim.healthy()) {
+            note = report_trouble(sim, n, out);
+            status = kExitNumerical;
+            break;
+        }
+        // Each output due at this step, and on SIGINT every output not due (the
+        // interrupted step once).
+        const bool stop = g_interrupted;
+        for (auto& o : out.outs) {
+            if (!due(o, n) && !stop) continue;
+            switch (o.spec->kind) {
+            case lpfdm::Output::History: lpfdm::write_history_row(o.f, sim); break;
+            case lpfdm::Output::Points: lpfdm::write_points_frame(o.f, sim, o.first_frame); o.first_frame = false; break;
+            case lpfdm::Output::Vtu: out.vtu_frame(o); break;
+            case lpfdm::Output::State: out.save_state(o); break;
+            }
+        }
+        if (stop) {
+            note = fmt::format("run interrupted at step {} of {}", n, steps);
+            bool saved = false;
+            for (const auto& o : out.outs) saved |= o.spec->kind == lpfdm::Output::State;
+            std::fprintf(stderr, "\nlpfdm: interrupted at step %ld of %ld; the last frame and a history row were written%s\n", n, steps,
+                         saved ? ", and the state (--restart continues it)" : "");
+            status = kExitInterrupted;
+            break;
+        }
+        if (progress) {
+            const auto now = std::chrono::steady_clock::now();
+            if (std::chrono::duration<double>(now - last_print).count() > 0.5 || n == steps) {
+                last_print = now;
+                const double el = std::chrono::duration<double>(now - t0).count();
+                std::fprintf(stderr, "\rstep %ld/%ld (%3.0f%%)  ke %.4g J/m  %.0f s left   ", n, steps, 100.0 * n / steps, sim.kinetic_energy(),
+                             el / double(n - first + 1) * double(steps - n));
+            }
+        }
+    }
+    if (progress) std::fputc('\n', stderr);
+    if (status != kExitNumerical && created < -kEnergyCreated) {
+        const std::string w = fmt::format(
+            "warning: the cycle created energy: energy_error reached {:.3g} at step {} (t = {:.6g} s; read every {} steps), "
+            "{:.1f} % of the energy in play; such creation falls with the cell size (decks/freefall.deck's impact: 5.6, 2.7 "
+            "and 1.0 % with 4, 8 and 16 cells across the block): refine the lattice (--refine 2) and compare",
+            created, created_step, double(created_step) * sim.scene().dt_s, energy_every, -100 * created);
+        std::fprintf(stderr, "lpfdm: %s\n", w.c_str());
+    }
+    wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!out.finish(note) && status == 0) status = kExitBadInput;
+    return status;
+}
+
+// --profile: the time of each phase, peak memory, bytes per point, and which loops ran.
+void print_profile(const lpfdm::Simulation& sim, int nthreads) {
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    double total = 0;
+    for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
+    const bool ref = sim.kernel() == lpfdm::Kernel::Reference;  // asked for, or the scene's modes ask it (Modes::why)
+    const std::string reference = *sim.modes().why ? std::string("the reference cycle (") + sim.modes().why + ")" : "the reference cycle";
+    const char* lanes = ref ? reference.c_str()
+                        : !sim.wide() ? "points, cells and nodes one at a time"
+                        : sim.scene().motion == lpfdm::Motion::Centre && sim.scene().advect == lpfdm::Advect::Eq12 && sim.scene().mapping == lpfdm::Mapping::Paper
+                            ? "points, cells and nodes four per AVX2 register"
+                            : "cells and nodes four per AVX2 register, points one at a time";
+    std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, %s\n", ref ? 1 : nthreads,
+                double(ru.ru_maxrss) / 1024.0, sim.bytes_per_point(), lanes);
+    for (int k = 0; k < lpfdm::Simulation::kPhases; ++k)
+        std::printf("profile: %-15s %8.3f s  %5.1f %%\n", lpfdm::Simulation::phase_name(k), sim.phase_seconds()[k],
+                    total > 0 ? 100 * sim.phase_seconds()[k] / total : 0.0);
+    if (sim.return_updates() > 0)  // inside the points phase (thread seconds)
+        std::printf("profile:   of which the Mohr-Coulomb consult (elastic test and return) %.3f s, %.1f ns per point-update (%ld)\n", sim.return_seconds(),
+                    1e9 * sim.return_seconds() / double(sim.return_updates()), sim.return_updates());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Options opt;
+    std::vector<std::string> cli_errors;  // every mistake, reported with the deck's
+    if (const int done = read_command_line(argc, argv, opt, cli_errors); done >= 0) return done;
+    lpfdm::Scene scene;
+    std::string text;
+    lpfdm::Diagnostics diags = read_and_check(opt, cli_errors, scene, text);
+    const std::uint64_t digest = scene_digest(opt, scene, text);
     bool stop = !cli_errors.empty();
     for (const auto& e : cli_errors) std::fprintf(stderr, "lpfdm: error: %s\n", e.c_str());
     for (const auto& d : diags) {
@@ -391,214 +657,11 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "lpfdm: error: cannot create the output directory '%s': %s\n", opt.outdir.c_str(), std::strerror(errno));
         return kExitBadInput;
     }
-    // A file written whole as NAME.part, then renamed (VTU frames and collections, states).
-    auto write_whole = [&](const std::string& path, const auto& write) {
-        const std::string part = path + ".part";
-        std::FILE* f = std::fopen(part.c_str(), "wb");
-        bool ok = f && write(f);
-        if (f) ok &= std::fclose(f) == 0;
-        ok = ok && std::rename(part.c_str(), path.c_str()) == 0;
-        if (!ok) std::fprintf(stderr, "lpfdm: error: cannot write '%s': %s\n", path.c_str(), std::strerror(errno));
-        return ok;
-    };
-    bool write_failed = false;
-    std::vector<OutFile> outs;
-    for (const auto& o : sim.scene().outputs) {
-        OutFile of;
-        of.final_path = opt.outdir + "/" + o.file;
-        of.part_path = of.final_path + ".part";
-        of.spec = &o;
-        if (o.kind == lpfdm::Output::Vtu || o.kind == lpfdm::Output::State) {  // files written whole
-            outs.push_back(of);
-            continue;
-        }
-        of.f = std::fopen(of.part_path.c_str(), "wb");
-        if (!of.f) {
-            std::fprintf(stderr, "%s:%d:%d: error: cannot write '%s': %s\n", o.pos.file.c_str(), o.pos.line, o.pos.col, of.part_path.c_str(), std::strerror(errno));
-            for (auto& p : outs) if (p.f) { std::fclose(p.f); std::remove(p.part_path.c_str()); }
-            return kExitBadInput;
-        }
-        if (o.kind == lpfdm::Output::Points) {
-            lpfdm::write_points_header(of.f, sim, opt.deck, &run);
-            lpfdm::write_points_frame(of.f, sim, true);
-            of.first_frame = false;
-        } else {
-            lpfdm::write_history_header(of.f, sim, opt.deck, &run);
-        }
-        outs.push_back(of);
-    }
-    // A frame of a VTU series, and its collection written anew.
-    auto vtu_frame = [&](OutFile& o) {
-        const std::string file = lpfdm::vtu_frame_file(o.spec->file, sim.step_count());
-        write_failed |= !write_whole(opt.outdir + "/" + file, [&](std::FILE* f) {
-            lpfdm::write_vtu(f, sim, x0, y0, o.spec->binary);
-            return !std::ferror(f);
-        });
-        o.frames.push_back({file, sim.time()});
-        write_failed |= !write_whole(opt.outdir + "/" + o.spec->file + ".pvd", [&](std::FILE* f) {
-            lpfdm::write_pvd(f, o.frames);
-            return !std::ferror(f);
-        });
-        if (!o.spec->nodes) return;
-        const std::string nodes = lpfdm::vtu_frame_file(o.spec->file, sim.step_count(), true);
-        write_failed |= !write_whole(opt.outdir + "/" + nodes, [&](std::FILE* f) {
-            lpfdm::write_vti(f, sim, o.spec->binary);
-            return !std::ferror(f);
-        });
-        o.node_frames.push_back({nodes, sim.time()});
-        write_failed |= !write_whole(opt.outdir + "/" + o.spec->file + "_nodes.pvd", [&](std::FILE* f) {
-            lpfdm::write_pvd(f, o.node_frames);
-            return !std::ferror(f);
-        });
-    };
-    auto save_state = [&](OutFile& o) {
-        write_failed |= !write_whole(o.final_path, [&](std::FILE* f) { return lpfdm::write_state(f, sim, digest); });
-    };
-    for (auto& o : outs)
-        if (o.spec->kind == lpfdm::Output::Vtu) vtu_frame(o);
-    auto finish_outputs = [&](const std::string& note) {
-        bool ok = !write_failed;
-        for (auto& o : outs) {
-            if (!o.f) continue;
-            if (!note.empty()) std::fprintf(o.f, "# %s\n", note.c_str());
-            ok &= std::fclose(o.f) == 0;
-            ok &= std::rename(o.part_path.c_str(), o.final_path.c_str()) == 0;
-        }
-        if (!ok) std::fprintf(stderr, "lpfdm: error: writing the output files failed\n");
-        return ok;
-    };
-
-    std::signal(SIGINT, on_sigint);
-    const long steps = scene.steps, first = sim.step_count() + 1;
-    const bool progress = !opt.quiet && isatty(2);
-    const auto t0 = std::chrono::steady_clock::now();
-    auto last_print = t0;
-    double particle_steps = 0;
-    int status = 0;
-    std::string note;
-    // Whether output o is due at step n: a history row every n steps (every step without
-    // EVERY; the last only when EVERY is above the steps, a warning); a frame or a state every n steps and at the last step (without EVERY only
-    // there; frames also at the first).
-    auto due = [&](const OutFile& o, long n) {
-        const long every = o.spec->every;
-        if (o.spec->kind == lpfdm::Output::History) return n % (every > 0 ? every : 1) == 0 || (every > steps && n == steps);  // (warned)
-        return (every > 0 && n % every == 0) || n == steps;
-    };
-    // Energy the cycle creates (energy_error < 0) is trouble the checks above do not stop.
-    // The account is read every steps / 200 steps of the run, at least 100 apart (a reading
-    // is a pass over the points, about half a step: read every other step, it slowed the
-    // 400-step benchmark by 35 %), counted from step 0 so that a run continued with the
-    // same --steps reads it at the same steps; also at the last step and at an interrupted
-    // one. Reading it changes no result. A creation of more than kEnergyCreated of the
-    // energy in play is reported at the end, on stderr only: a run continued with
-    // --restart must write the whole run's tables, and it has not seen the steps before.
-    // The shipped decks create at most 6.3 % (freefall.deck's impact on a block 4 cells
-    // across, for one step; 5.6 % over the impact; 2.7 % and 1.0 % at 8 and 16 cells
-    // across: a first-order error in L), so the warning marks a creation 1.6 times the
-    // coarsest shipped impact's: a body too coarsely resolved for what it does, or a cycle
-    // gone wrong.
-    const long energy_every = std::max(100L, steps / 200);
-    double created = 0;  // the lowest energy_error read, and its step
-    long created_step = 0;
-    for (long n = first; n <= steps; ++n) {
-        particle_steps += double(sim.points().size());
-        sim.step();
-        if (sim.healthy() && (n % energy_every == 0 || n == steps || g_interrupted)) {
-            const double e = sim.energy().error;
-            if (e < created) { created = e; created_step = n; }
-        }
-        if (!sim.healthy()) {
-            const long k = sim.first_nonfinite_point();
-            const auto& p = sim.points();
-            std::string where;
-            if (k >= 0) {
-                where = fmt::format("; first bad point: id {} in cell ({}, {})", p.id[std::size_t(k)], p.cell[std::size_t(k)] % sim.mx(), p.cell[std::size_t(k)] / sim.mx());
-            } else {
-                int ni = 0, nj = 0;
-                long q = -1;
-                sim.worst_node(ni, nj, q);
-                where = fmt::format("; worst node ({}, {}) at x = {:.6g} m, y = {:.6g} m", ni, nj, ni * sim.cell_size(), nj * sim.cell_size());
-                if (q >= 0) where += fmt::format(", next to point id {} in cell ({}, {})", p.id[std::size_t(q)], p.cell[std::size_t(q)] % sim.mx(), p.cell[std::size_t(q)] / sim.mx());
-            }
-            const std::string why = std::isfinite(sim.kinetic_energy())
-                ? fmt::format("a node moved {:.3g} m in one step, more than half a cell: the run is unstable", sim.max_du())
-                : "a non-finite value appeared";
-            std::fprintf(stderr, "lpfdm: error: numerical trouble at step %ld (t = %.6g s): %s%s\n", n, sim.time(), why.c_str(), where.c_str());
-            // The points are still finite when the trouble is in the nodal increments: their
-            // state at this step is the last good one, so it is written as the last frame
-            // (not to a VTU series, whose velocities come from the nodes, nor a state).
-            if (k < 0)
-                for (auto& o : outs) {
-                    if (o.spec->kind == lpfdm::Output::Points) lpfdm::write_points_frame(o.f, sim, false);
-                    else if (o.spec->kind == lpfdm::Output::History && std::isfinite(sim.kinetic_energy())) lpfdm::write_history_row(o.f, sim);
-                }
-            note = fmt::format("run stopped at step {}: numerical trouble; the frames above are the last good ones", n);
-            status = kExitNumerical;
-            break;
-        }
-        // Each output due at this step, and on SIGINT every output not due (the
-        // interrupted step once).
-        const bool stop = g_interrupted;
-        for (auto& o : outs) {
-            if (!due(o, n) && !stop) continue;
-            switch (o.spec->kind) {
-            case lpfdm::Output::History: lpfdm::write_history_row(o.f, sim); break;
-            case lpfdm::Output::Points: lpfdm::write_points_frame(o.f, sim, o.first_frame); o.first_frame = false; break;
-            case lpfdm::Output::Vtu: vtu_frame(o); break;
-            case lpfdm::Output::State: save_state(o); break;
-            }
-        }
-        if (stop) {
-            note = fmt::format("run interrupted at step {} of {}", n, steps);
-            bool saved = false;
-            for (const auto& o : outs) saved |= o.spec->kind == lpfdm::Output::State;
-            std::fprintf(stderr, "\nlpfdm: interrupted at step %ld of %ld; the last frame and a history row were written%s\n", n, steps,
-                         saved ? ", and the state (--restart continues it)" : "");
-            status = kExitInterrupted;
-            break;
-        }
-        if (progress) {
-            const auto now = std::chrono::steady_clock::now();
-            if (std::chrono::duration<double>(now - last_print).count() > 0.5 || n == steps) {
-                last_print = now;
-                const double el = std::chrono::duration<double>(now - t0).count();
-                std::fprintf(stderr, "\rstep %ld/%ld (%3.0f%%)  ke %.4g J/m  %.0f s left   ", n, steps, 100.0 * n / steps, sim.kinetic_energy(),
-                             el / double(n - first + 1) * double(steps - n));
-            }
-        }
-    }
-    if (progress) std::fputc('\n', stderr);
-    if (status != kExitNumerical && created < -kEnergyCreated) {
-        const std::string w = fmt::format(
-            "warning: the cycle created energy: energy_error reached {:.3g} at step {} (t = {:.6g} s; read every {} steps), "
-            "{:.1f} % of the energy in play; such creation falls with the cell size (decks/freefall.deck's impact: 5.6, 2.7 "
-            "and 1.0 % with 4, 8 and 16 cells across the block): refine the lattice (--refine 2) and compare",
-            created, created_step, double(created_step) * sim.scene().dt_s, energy_every, -100 * created);
-        std::fprintf(stderr, "lpfdm: %s\n", w.c_str());
-    }
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (!finish_outputs(note) && status == 0) status = kExitBadInput;
-    if (opt.profile) {
-        struct rusage ru;
-        getrusage(RUSAGE_SELF, &ru);
-        double total = 0;
-        for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
-        const bool ref = sim.kernel() == lpfdm::Kernel::Reference;  // asked for, or the scene's modes ask it (Modes::why)
-        const std::string reference = *sim.modes().why ? std::string("the reference cycle (") + sim.modes().why + ")" : "the reference cycle";
-        const char* lanes = ref ? reference.c_str()
-                            : !sim.wide() ? "points, cells and nodes one at a time"
-                            : sim.scene().motion == lpfdm::Motion::Centre && sim.scene().advect == lpfdm::Advect::Eq12 && sim.scene().mapping == lpfdm::Mapping::Paper
-                                ? "points, cells and nodes four per AVX2 register"
-                                : "cells and nodes four per AVX2 register, points one at a time";
-        std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, %s\n", ref ? 1 : nthreads,
-                    double(ru.ru_maxrss) / 1024.0, sim.bytes_per_point(), lanes);
-        for (int k = 0; k < lpfdm::Simulation::kPhases; ++k)
-            std::printf("profile: %-15s %8.3f s  %5.1f %%\n", lpfdm::Simulation::phase_name(k), sim.phase_seconds()[k],
-                        total > 0 ? 100 * sim.phase_seconds()[k] / total : 0.0);
-        if (sim.return_updates() > 0)  // inside the points phase (thread seconds)
-            std::printf("profile:   of which the Mohr-Coulomb consult (elastic test and return) %.3f s, %.1f ns per point-update (%ld)\n", sim.return_seconds(),
-                        1e9 * sim.return_seconds() / double(sim.return_updates()), sim.return_updates());
-    }
+    Outputs out{opt, sim, run, digest, x0, y0, {}, false};
+    if (!out.open()) return kExitBadInput;
+    double particle_steps = 0, wall = 0;
+    const int status = run_steps(sim, opt, out, particle_steps, wall);
+    if (opt.profile) print_profile(sim, nthreads);
     if (!opt.quiet)
         std::printf("lpfdm: %ld steps, %zu points, %.3f s, %.3g particle-steps/s; mass inside %.9g, outflow %.9g, initial %.9g kg/m; kernel %s%s%s%s\n",
                     sim.step_count(), sim.points().size(), wall, wall > 0 ? particle_steps / wall : 0.0, sim.mass_inside(), sim.mass_outflow(),
