@@ -575,6 +575,18 @@ int run_steps(lpfdm::Simulation& sim, const Options& opt, Outputs& out, double& 
     return status;
 }
 
+// The kernel that ran, as the summary line says it: the provenance lines' name, and why
+// it is not the one asked for, why the points go one at a time where the processor has
+// AVX2, and why the point pass takes one thread (Simulation::modes).
+std::string kernel_said(const lpfdm::Simulation& sim, const lpfdm::RunInfo& run) {
+    const lpfdm::Modes& m = sim.modes();
+    std::string s = run.kernel;
+    if (*m.why) s += std::string(" (") + m.why + ")";
+    if (sim.wide() && *m.points_why) s += std::string(", points one at a time (") + m.points_why + ")";
+    if (sim.threads() > 1 && *m.threads_why) s += std::string(", the point pass on one thread (") + m.threads_why + ")";
+    return s;
+}
+
 // --profile: the time of each phase, peak memory, bytes per point, and which loops ran.
 void print_profile(const lpfdm::Simulation& sim, int nthreads) {
     struct rusage ru;
@@ -583,11 +595,11 @@ void print_profile(const lpfdm::Simulation& sim, int nthreads) {
     for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
     const bool ref = sim.kernel() == lpfdm::Kernel::Reference;  // asked for, or the scene's modes ask it (Modes::why)
     const std::string reference = *sim.modes().why ? std::string("the reference cycle (") + sim.modes().why + ")" : "the reference cycle";
+    const std::string options = std::string("cells and nodes four per AVX2 register, points one at a time (") + sim.modes().points_why + ")";
     const char* lanes = ref ? reference.c_str()
                         : !sim.wide() ? "points, cells and nodes one at a time"
-                        : sim.scene().motion == lpfdm::Motion::Centre && sim.scene().advect == lpfdm::Advect::Eq12 && sim.scene().mapping == lpfdm::Mapping::Paper
-                            ? "points, cells and nodes four per AVX2 register"
-                            : "cells and nodes four per AVX2 register, points one at a time";
+                        : !*sim.modes().points_why ? "points, cells and nodes four per AVX2 register"
+                        : options.c_str();
     std::printf("profile: threads %d, peak memory %.1f MiB, %.1f bytes per point in the point arrays, %s\n", ref ? 1 : nthreads,
                 double(ru.ru_maxrss) / 1024.0, sim.bytes_per_point(), lanes);
     for (int k = 0; k < lpfdm::Simulation::kPhases; ++k)
@@ -663,8 +675,8 @@ int main(int argc, char** argv) {
     const int status = run_steps(sim, opt, out, particle_steps, wall);
     if (opt.profile) print_profile(sim, nthreads);
     if (!opt.quiet)
-        std::printf("lpfdm: %ld steps, %zu points, %.3f s, %.3g particle-steps/s; mass inside %.9g, outflow %.9g, initial %.9g kg/m; kernel %s%s%s%s\n",
+        std::printf("lpfdm: %ld steps, %zu points, %.3f s, %.3g particle-steps/s; mass inside %.9g, outflow %.9g, initial %.9g kg/m; kernel %s\n",
                     sim.step_count(), sim.points().size(), wall, wall > 0 ? particle_steps / wall : 0.0, sim.mass_inside(), sim.mass_outflow(),
-                    sim.mass_initial(), run.kernel.c_str(), *sim.modes().why ? " (" : "", sim.modes().why, *sim.modes().why ? ")" : "");
+                    sim.mass_initial(), kernel_said(sim, run).c_str());
     return status;
 }

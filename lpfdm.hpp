@@ -81,14 +81,15 @@
 //   then, every REORDER steps, reorder_points: the points' storage sorted by cell (not
 //   physics: the order in which the sums of eq. 7-8 take the points; every kernel sorts)
 //
-// SECTIONS OF THIS FILE, in order (each uses only what comes before it, and the
-// declarations of the public part): the public declarations (the scene, the deck's
-// keys, points, Simulation); then, with LPFDM_IMPLEMENTATION: the equations; materials;
-// lattice and points; boundaries (fixed nodes, walls); the energy account; the reference
-// cycle; one section per option (MAPPING SMOOTH, ADVECT FLIP, ADVECT POINTS,
+// SECTIONS OF THIS FILE, in order: the public declarations (the scene, the deck's keys,
+// points, Simulation); then, with LPFDM_IMPLEMENTATION: the equations; materials; lattice
+// and points; boundaries (fixed nodes, walls); the energy account; the reference cycle;
+// one section per option (MAPPING SMOOTH, ADVECT FLIP, ADVECT POINTS, HOURGLASS,
 // earthquakes); the fast kernel and its AVX2 lanes; restart; checks; the deck reader,
-// writers and state files. Where the paper is open, the choice made and its reason head
-// the section it concerns. Decks, options and output: decks/README.md.
+// writers and state files. Each section builds on those before it; where the reference
+// cycle hands a step to an option it calls that option's section (named at the call),
+// and it never calls the fast kernel. Where the paper is open, the choice made and its
+// reason head the section it concerns. Decks, options and output: decks/README.md.
 #ifndef LPFDM_HPP
 #define LPFDM_HPP
 
@@ -103,20 +104,7 @@
 #include <vector>
 
 
-// Loops over points, cells and node rows run in parallel when compiled with OpenMP
-// (-fopenmp). Every sum that reaches a result is taken in one fixed order, so the
-// output is the same, byte for byte, with any number of threads: the cell sums of eq. 7
-// and 8 take their terms in point order (a thread's points that land in another
-// thread's cells are added afterwards, in order), node sums in row order.
-// The points are stored cell by cell (as created, and sorted so again every REORDER
-// steps; between sorts they leave that order as they cross cell edges), so the point
-// phase of an elastic scene walks runs of points sharing a cell and reads the cell's
-// strain, rotation and nodes once per run; a scene with a Mohr-Coulomb material takes
-// the points four at a time whatever cells they lie in (a flow's runs are one or two
-// points long), reading those values once where the four share a cell. A sort changes
-// the last bits of a run (the next step's sum in a cell takes the points arriving from
-// its neighbours in another order), not its bytes from one kernel or thread count to
-// another.
+// LPFDM_OMP: an OpenMP pragma where the build has OpenMP (-fopenmp), else nothing.
 #if defined(_OPENMP)
 #define LPFDM_STR_(...) #__VA_ARGS__
 #define LPFDM_OMP(...) _Pragma(LPFDM_STR_(__VA_ARGS__))
@@ -358,8 +346,6 @@ struct Scene {
     }
 };
 
-// ------------------------------------------------------------------- the deck's keys ---
-
 // --------------------------------------------------------- the deck's keys ---
 
 // The numbers of the deck language in one table: every card's positional fields (in card
@@ -471,8 +457,6 @@ inline const DeckCard kDeckCards[] = {
 };
 
 // -------------------------------------- materials, points, the lattice's index boxes ---
-
-// ----------------------------------------------------------- materials ---
 
 // Elastic constants and strength of a material in the form the step uses.
 struct MaterialConstants {
@@ -679,11 +663,17 @@ struct Modes {
     Advect advect = Advect::Eq12;      // what the lattice carries: eq. 12, ADVECT POINTS or ADVECT FLIP
     bool hourglass = false;            // HOURGLASS kappa > 0: the checkerboard's viscous force
     bool dynamic = false;              // SHAKE or ABSORB: ground motion, dashpots
+    bool shake = false;                // SHAKE: ground motion (a part of dynamic)
+    bool user = false;                 // a material has a user's model (Simulation::set_user_model)
     bool plastic = false;              // a Mohr-Coulomb material (or a user model): plastic shear and work
     bool scatter = false;              // SCATTER: each point its own strength
     Kernel asked = Kernel::Fast;       // the kernel asked for
     Kernel kernel = Kernel::Fast;      // the kernel that runs it
     const char* why = "";              // why the two differ ("" when they do not)
+    // Why the fast kernel takes the points one at a time where it has AVX2 (its lattice
+    // phases keep their lanes), and why its point pass runs on one thread ("": it does not).
+    const char* points_why = "";
+    const char* threads_why = "";
 };
 
 // --------------------------------------------------------------------- the functions ---
@@ -776,7 +766,7 @@ public:
     bool wide() const { return wide_; }
     const double* phase_seconds() const { return phase_s_; }          // kPhases entries, in step order
     // While profiling, the Mohr-Coulomb consult of the fast AVX2 point loop alone (eq. 6's
-    // elastic test and plastic return, four or eight points a register; part of the points phase):
+    // elastic test and plastic return, four points a register; part of the points phase):
     // its seconds (summed over threads) and the point-updates it consulted. Zero for the
     // other loops, which consult point by point inside the motion.
     double return_seconds() const { return return_s_; }
@@ -874,21 +864,6 @@ public:
     int cell_holding(double x, double y) const;
     // Strain increments of cell (i, j) from the nodal increments, eq. 5a-5d.
     StrainIncrement strain_of_cell(int i, int j) const;
-    // MAPPING SMOOTH: the strain increments of the part of a point's square in cell (i, j)
-    // whose centre is (x, y) (bilinear_gradient there, its trace taken at the centroid of
-    // the cell's material, cell_centroid: centroid_trace_, made once a step by
-    // centroid_traces for every cell holding material).
-    LPFDM_INLINE StrainIncrement strain_of_part(int i, int j, double x, double y) const;
-    // MAPPING SMOOTH: f(i, j, x, y, w) for each part of the square of half-width l about
-    // (x0, y0) (square_overlap along each axis): the cell (i, j) it lies in, the part's
-    // centre (x, y) and its share w > 0 of the square, in row order.
-    template <class F> LPFDM_INLINE void each_part(double x0, double y0, double l, F&& f) const;
-    void centroid_traces(const Range& cells);
-    void cell_centroid(std::size_t c, double& u, double& v) const;  // from the centre, in cells
-    // MAPPING SMOOTH: cell c's moments (shx, shy) made ready for the nodal forces, after
-    // eq. 8 scaled its sums V sigma: the transpose of strain_of_part's variation across the
-    // cell, times 2L (the forces divide by L, the sums were divided by 2L).
-    void smooth_moment(std::size_t c);
 
     // The point a non-finite value was first seen at, or -1.
     long first_nonfinite_point() const;
@@ -912,6 +887,7 @@ public:
     // is made by a step before that step reads it (resumed() clears them). The random
     // numbers are drawn when the points are made (their c0 and n_phi keep them): no
     // generator state lives on. None of it depends on the kernel or the threads.
+    // (each_state needs the implementation: the state files' reader and writer use it)
     template <class F> void each_state(F&& f) { visit_state(*this, f); }
     template <class F> void each_state(F&& f) const { visit_state(*this, f); }
     // After each_state and the points' arrays were set from a file: the lattice arrays a
@@ -933,6 +909,21 @@ public:
 
 private:
     Simulation(const Scene& scene, Kernel kernel, int);  // (the public constructor's, with the implementation's mark)
+    // MAPPING SMOOTH: the strain increments of the part of a point's square in cell (i, j)
+    // whose centre is (x, y) (bilinear_gradient there, its trace taken at the centroid of
+    // the cell's material, cell_centroid: centroid_trace_, made once a step by
+    // centroid_traces for every cell holding material).
+    LPFDM_INLINE StrainIncrement strain_of_part(int i, int j, double x, double y) const;
+    // MAPPING SMOOTH: f(i, j, x, y, w) for each part of the square of half-width l about
+    // (x0, y0) (square_overlap along each axis): the cell (i, j) it lies in, the part's
+    // centre (x, y) and its share w > 0 of the square, in row order.
+    template <class F> LPFDM_INLINE void each_part(double x0, double y0, double l, F&& f) const;
+    void centroid_traces(const Range& cells);
+    void cell_centroid(std::size_t c, double& u, double& v) const;  // from the centre, in cells
+    // MAPPING SMOOTH: cell c's moments (shx, shy) made ready for the nodal forces, after
+    // eq. 8 scaled its sums V sigma: the transpose of strain_of_part's variation across the
+    // cell, times 2L (the forces divide by L, the sums were divided by 2L).
+    void smooth_moment(std::size_t c);
     template <class S, class F> static void visit_state(S& s, F& f);
     void setup();
     void create_points();
@@ -1077,8 +1068,8 @@ private:
     // Point q was returned from the trial stress to s with plastic shear increment
     // d_gamma_p: its plastic shear, its yielded flag and the work its return dissipated,
     // V s : C^-1 (trial - s), V = energy_volume: min(V, V0) as in eq. 8 (this step's volume:
-    // every kernel changes V before the consult). The AVX2 point loop (detail::lanesN::consult's
-    // record) does the same four or eight points at a time (never with ADVECT FLIP, which the reference cycle runs):
+    // every kernel changes V before the consult). The AVX2 point loop (detail::lanes::consult's
+    // record) does the same four points at a time (never with ADVECT FLIP, which the reference cycle runs):
     // a change here is a change there.
     void record_yield(const MaterialConstants& mc, std::size_t q, double vol, double d_gamma_p, const Stress& trial, const Stress& s);
     void user_consult(const MaterialConstants& mc, std::size_t q, const StrainIncrement& e, Stress& s);
@@ -1923,8 +1914,8 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // with psi < phi they rarely (8 of 4.5 million searches in that collapse; 3 of 473 210
     // between the apex-first order and the one before it) give two
     // different returns, of which the one beside FLAC's own plane is taken. The AVX2 point
-    // loop makes those first two sets four or eight points at a time (edge_return, the end
-    // of this file: the same operations): a change to the search's order or arithmetic is a
+    // loop makes those first two sets four points at a time (detail::lanes::edge_return: the
+    // same operations): a change to the search's order or arithmetic is a
     // change there.
     bool found = false;
     const int p0 = shear_first ? shear_plane(i1, i3) : 6 + i3;
@@ -2034,6 +2025,8 @@ LPFDM_DEF void Simulation::set_user_model(int mat_id, UserModel f) {
     }
     find_mohr_groups();
     modes_.plastic = true;
+    modes_.user = true;
+    modes_.threads_why = "a user's model runs on one thread";
     if (p_.plastic_shear.empty()) {
         p_.plastic_shear.assign(p_.size(), 0.0);
         p_.yielded.assign(p_.size(), 0);
@@ -2321,6 +2314,7 @@ LPFDM_DEF Modes modes_of(const Scene& s, Kernel asked) {
     m.advect = s.advect;
     m.hourglass = s.hourglass > 0;
     m.dynamic = !s.shakes.empty() || s.absorb != 0;
+    m.shake = !s.shakes.empty();
     for (const auto& mat : s.materials) {
         m.plastic |= mat.model == Model::MohrCoulomb;
         m.scatter |= mat.scatter > 0;
@@ -2332,6 +2326,12 @@ LPFDM_DEF Modes modes_of(const Scene& s, Kernel asked) {
         m.kernel = Kernel::Reference;
         m.why = "ADVECT FLIP runs on the reference cycle only";
     }
+    // The AVX2 point loop follows the default modes only (choose_point_loop).
+    if (m.kernel == Kernel::Fast)
+        m.points_why = m.mapping == Mapping::Smooth ? "MAPPING SMOOTH has no AVX2 point loop"
+                       : m.advect == Advect::Points ? "ADVECT POINTS has no AVX2 point loop"
+                       : m.motion == Motion::Paper  ? "MOTION PAPER has no AVX2 point loop"
+                       : m.motion == Motion::Bilinear ? "MOTION BILINEAR has no AVX2 point loop" : "";
     return m;
 }
 
@@ -2367,7 +2367,7 @@ inline void Simulation::setup() {
     };
     spans(mx_, cols_);
     spans(my_, rows_);
-    if (sc_.hourglass > 0) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
+    if (modes_.hourglass) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
     if (modes_.mapping == Mapping::Smooth) for (auto* v : {&shx_, &shy_, &smu_, &smv_, &centroid_trace_}) v->assign(cells, 0.0);
     if (modes_.advect == Advect::Points)
         carried_.assign(cells, Carried{});
@@ -2639,7 +2639,7 @@ inline void Simulation::reorder_points() {
     parts_known_ = false;  // advance_parted's chunks were ranges of the old order
     // Already in order, by cell and by id within each cell (no point has changed cell since
     // the last sort: a scene at rest, or one that has not yet moved): the new order would
-    // be the old one, and nothing is moved. (bench_peer: 33 of its 40 sorts.)
+    // be the old one, and nothing is moved (most sorts of a quiet scene).
     bool in_order = true;
     for (std::size_t k = 1; k < n && in_order; ++k) in_order = cell[k - 1] < cell[k] || (cell[k - 1] == cell[k] && id[k - 1] < id[k]);
     if (in_order) return;
@@ -2692,6 +2692,21 @@ inline void Simulation::clear_row(int j, int lo, int hi) {
     if (modes_.advect == Advect::Points) std::fill(carried_.data() + c0, carried_.data() + c1, Carried{});
     if (modes_.mapping == Mapping::Smooth)
         for (auto* v : {&shx_, &shy_, &smu_, &smv_}) std::fill(v->data() + c0, v->data() + c1, 0.0);
+}
+
+// eq. 7a/7b's nodes: the increments (ux, uy) of the four nodes of the cell whose node [1]
+// is n1; and MOTION CENTRE's mean of them. Both kernels gather so (move_with_cell, the
+// point loop's parts).
+LPFDM_INLINE inline void Simulation::gather_nodes(int n1, double (&ux)[4], double (&uy)[4]) const {
+    const int n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
+    ux[0] = dux_[n1]; ux[1] = dux_[n2]; ux[2] = dux_[n3]; ux[3] = dux_[n4];
+    uy[0] = duy_[n1]; uy[1] = duy_[n2]; uy[2] = duy_[n3]; uy[3] = duy_[n4];
+}
+
+LPFDM_INLINE inline void Simulation::gather_mean(int n1, double& umx, double& umy) const {
+    double ux[4], uy[4];
+    gather_nodes(n1, ux, uy);
+    mean_of_four(ux[0], ux[1], ux[2], ux[3], umx); mean_of_four(uy[0], uy[1], uy[2], uy[3], umy);
 }
 
 // ======================================================================================
@@ -3287,9 +3302,12 @@ inline void Simulation::reference_cell_strains() {
 // then the constitutive model adds its increment (Hooke's law, then the Mohr-Coulomb
 // return if the trial lies outside the yield surface; or the user's model).
 inline void Simulation::consult_model(std::size_t k, const MaterialConstants& mc, const StrainIncrement& e, double rc, double rs, Stress& s) {
-    rotate_stress(s, rc, rs);
-    if (mc.model == Model::User) { user_consult(mc, k, e, s); return; }
-    elastic_increment(mc, e, s);  // the elastic trial
+    if (mc.model == Model::User) {
+        rotate_stress(s, rc, rs);
+        user_consult(mc, k, e, s);
+        return;
+    }
+    elastic_trial(s.xx, s.yy, s.xy, s.zz, elastic_change(mc, e), rc, rs);  // the elastic trial
     if (mc.model != Model::MohrCoulomb) return;
     modes_.scatter ? mohr_consult<true>(mc, k, p_.vol[k], s) : mohr_consult<false>(mc, k, p_.vol[k], s);
 }
@@ -3298,8 +3316,8 @@ inline void Simulation::consult_model(std::size_t k, const MaterialConstants& mc
 // strain increments e goes from (x0, y0); (dx, dy): its own increment (CENTRE, BILINEAR).
 inline void Simulation::move_with_cell(int ci, int cj, const StrainIncrement& e, double x0, double y0, double& x, double& y, double& dx, double& dy) const {
     const double xi = ci * L_, yj = cj * L_;
-    const int n1 = node(ci, cj), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
-    const double ux[4] = {dux_[n1], dux_[n2], dux_[n3], dux_[n4]}, uy[4] = {duy_[n1], duy_[n2], duy_[n3], duy_[n4]};
+    double ux[4], uy[4];
+    gather_nodes(node(ci, cj), ux, uy);  // eq. 7a/7b's nodes
     if (modes_.motion == Motion::Paper) {
         move_point_paper(x0, y0, e, xi, yj, ux[0], uy[0], x, y);
     } else if (modes_.motion == Motion::Centre) {
@@ -4167,7 +4185,7 @@ inline void Simulation::setup_dynamics() {
                     const int on = (nj == 0 ? kBottom : 0) | (nj == my_ ? kTop : 0) | (ni == 0 ? kLeft : 0) | (ni == mx_ ? kRight : 0);
                     // A direction a rigid SHAKE drives stays with the ground.
                     const int rigid = (ground_[0].spec && !ground_[0].spec->compliant ? kFixX : 0) | (ground_[1].spec && !ground_[1].spec->compliant ? kFixY : 0);
-                    released_.push_back((on & ~edges) || sc_.shakes.empty() ? std::uint8_t(0) : std::uint8_t(fixed_[n] & ~rigid));
+                    released_.push_back((on & ~edges) || !modes_.shake ? std::uint8_t(0) : std::uint8_t(fixed_[n] & ~rigid));
                 }
                 dashpots_.push_back({slot_of[n], cell(ci, cj), cx, cy, in_x ? 2 * cx : 0.0, in_y ? 2 * cy : 0.0});
             }
@@ -4184,7 +4202,7 @@ inline void Simulation::setup_dynamics() {
 inline void Simulation::dynamics_begin() {
     ground_step(step_);
     if (step_ < shake_step_) return;
-    if (!sc_.shakes.empty() && sc_.shakes.front().damping >= 0) sc_.damping = sc_.shakes.front().damping;  // the cards agree (validate)
+    if (modes_.shake && sc_.shakes.front().damping >= 0) sc_.damping = sc_.shakes.front().damping;  // the cards agree (validate)
     const bool release = step_ == shake_step_;
     const double vx = ground_[0].v_now, vy = ground_[1].v_now;
     for (std::size_t q = 0; q < absorb_nodes_.size(); ++q) {
@@ -4248,6 +4266,21 @@ inline void Simulation::absorb_increments() {
 // The same cycle as the reference, over the occupied part of the lattice only, by threads
 // (OpenMP) and four values per AVX2 register; every function here equals the reference
 // function it names, bit for bit (tests/test_reference.cpp).
+//
+// Loops over points, cells and node rows run in parallel when compiled with OpenMP
+// (-fopenmp). Every sum that reaches a result is taken in one fixed order, so the
+// output is the same, byte for byte, with any number of threads: the cell sums of eq. 7
+// and 8 take their terms in point order (a thread's points that land in another
+// thread's cells are added afterwards, in order), node sums in row order.
+// The points are stored cell by cell (as created, and sorted so again every REORDER
+// steps; between sorts they leave that order as they cross cell edges), so the point
+// phase of an elastic scene walks runs of points sharing a cell and reads the cell's
+// strain, rotation and nodes once per run; a scene with a Mohr-Coulomb material takes
+// the points four at a time whatever cells they lie in (a flow's runs are one or two
+// points long), reading those values once where the four share a cell. A sort changes
+// the last bits of a run (the next step's sum in a cell takes the points arriving from
+// its neighbours in another order), not its bytes from one kernel or thread count to
+// another.
 // ======================================================================================
 namespace detail {
 
@@ -4675,9 +4708,7 @@ namespace detail {
 // now[1 .. team-1] move halfway towards equal shares of the total time, the time of each
 // block taken as spread evenly over it (halfway: the times are those of one step, and
 // noisy). Returns whether they moved. The threads' results may not depend on the edges.
-// (3 %: with 10 %, two threads may differ by a fifth of their mean time on every step;
-// the eq. 13 loop of the elastic bench scene averaged 11.8 against 8.6 microseconds a
-// step over 400 steps with 10 %, 9.1 against 9.1 with 3 %.)
+// (3 %: with 10 %, two threads may differ by a fifth of their mean time on every step.)
 template <class T, class Was, class Seconds>
 bool balance(int team, const Was& was, const Seconds& seconds, T* now) {
     double total = 0, slowest = 0;
@@ -4733,14 +4764,14 @@ inline void Simulation::step_profiled() {
     }
 }
 
-inline void Simulation::point_pass() {
+LPFDM_DEF void Simulation::point_pass() {
     if (modes_.mapping == Mapping::Smooth) smooth_point_pass();
     else if (serial() || !advance_parted()) advance_points();
 }
 
 inline bool Simulation::serial() const {
 #if defined(_OPENMP)
-    return team_ == 1 || p_.size() <= 4096 || !user_models_.empty();
+    return team_ == 1 || p_.size() <= 4096 || modes_.user;
 #else
     return true;
 #endif
@@ -4778,18 +4809,7 @@ inline void Simulation::add_listed(int team) {
     }
 }
 
-LPFDM_INLINE inline void Simulation::gather_nodes(int n1, double (&ux)[4], double (&uy)[4]) const {
-    const int n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
-    ux[0] = dux_[n1]; ux[1] = dux_[n2]; ux[2] = dux_[n3]; ux[3] = dux_[n4];
-    uy[0] = duy_[n1]; uy[1] = duy_[n2]; uy[2] = duy_[n3]; uy[3] = duy_[n4];
-}
-
-LPFDM_INLINE inline void Simulation::gather_mean(int n1, double& umx, double& umy) const {
-    double ux[4], uy[4];
-    gather_nodes(n1, ux, uy);
-    mean_of_four(ux[0], ux[1], ux[2], ux[3], umx); mean_of_four(uy[0], uy[1], uy[2], uy[3], umy);
-}
-
+#if LPFDM_WIDE
 LPFDM_INLINE inline void Simulation::gather_mean(const detail::v4i& n1, detail::v4d& umx, detail::v4d& umy) const {
     using detail::v4d;
     const double *u = dux_.data(), *v = duy_.data();
@@ -4809,6 +4829,7 @@ template <bool Own> inline void Simulation::consult_one(const MaterialConstants&
     mohr_consult<Own>(mc, std::size_t(r), a.vol[r], s);
     a.sxx[r] = s.xx; a.syy[r] = s.yy; a.sxy[r] = s.xy; a.szz[r] = s.zz;
 }
+#endif
 
 // --------------------------------------------------------- the fast kernel ---
 
@@ -5061,8 +5082,8 @@ template <Motion M>
 inline void Simulation::advance_run(long k0, long k1, Part& part, Landing& landing) { run_points<M, false>(k0, k1, part, landing); }
 #if LPFDM_WIDE
 // Two versions: the one with blocks (a scene with a Mohr-Coulomb material) in the same
-// function made the run-by-run loop of an elastic scene run at half its speed (the
-// compiler's registers), so each has a function of its own.
+// function slowed the run-by-run loop of an elastic scene (the compiler's registers), so
+// each has a function of its own.
 __attribute__((target("avx2"), noinline)) inline void Simulation::advance_blocks_wide(long k0, long k1, Part& part, Landing& landing) { run_points<Motion::Centre, true, true>(k0, k1, part, landing); }
 __attribute__((target("avx2"))) inline void Simulation::advance_run_wide(long k0, long k1, Part& part, Landing& landing) {
     if (mohr_groups_) advance_blocks_wide(k0, k1, part, landing);
@@ -5785,7 +5806,7 @@ inline void Simulation::map_point(std::size_t k) {
     const Group& g = groups_[p_.group[k]];
     const double m = g.mass, v = std::min(p_.vol[k], g.vol0);
     add_to_cell(std::size_t(c), m, v, p_.sxx[k], p_.syy[k], p_.sxy[k]);  // eq. 7, 8
-    if (!p_.carry_dx.empty()) {
+    if (modes_.advect == Advect::Points && !p_.carry_dx.empty()) {  // (the carry arrays: with threads only)
         const int f = p_.carry_from[k];
         carry_to(c, c % mx_, c / mx_, m, p_.x[k], p_.y[k], p_.carry_dx[k], p_.carry_dy[k], {strain_[f].xx, strain_[f].yy, strain_[f].xy, strain_[f].yx});
     }
@@ -5793,7 +5814,7 @@ inline void Simulation::map_point(std::size_t k) {
 
 // map_to_lattice: eq. 7 and 8 for every point, in point order, into the cell it lies in
 // (after set-up, after a program moved points, or when advance_parted's chunks clashed).
-inline void Simulation::map_points() {
+LPFDM_DEF void Simulation::map_points() {
     if (modes_.mapping == Mapping::Smooth) {  // every cell each point's square overlaps (the reference's mapping)
         for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
         Landing t;

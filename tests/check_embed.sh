@@ -155,6 +155,61 @@ case $(basename "$exe") in
             fail "the two-unit example does not link or run: $(tail -n 2 "$split/run" 2>/dev/null | tr '\n' ' ')"
         fi
     fi
+    # The whole public API, the deck reader and the writers included, from a unit without
+    # the define: it compiles as fast against the implementation unit with I/O, and links.
+    cat >"$split/api.cpp" <<'API'
+#include "lpfdm.hpp"
+#include <cstdio>
+int main() {
+    lpfdm::Scene s;
+    lpfdm::Unread u;
+    lpfdm::Diagnostics d = lpfdm::read_deck_text("GRID 4 4 0.5\nMATERIAL 1 ELASTIC E=2E7 NU=0.25 RHO=2000\nCLUSTER 1 0 0 2 1\nFIX XY 0 0 2 0\nGRAVITY 0 -9.81\nDAMPING 0.8\nSTEP 1E-3 3\nEND\n", "api", s);
+    d = lpfdm::parse_deck_text("GRID 4 4 0.5\n", "api", s, &u);
+    lpfdm::Scene t;
+    d = lpfdm::read_deck("decks/column.deck", t);
+    d = lpfdm::validate(s, u); d = lpfdm::warnings(s); lpfdm::sort_diagnostics(d); d = lpfdm::one_error("f", 1, 1, "m");
+    std::string text;
+    d = lpfdm::load_file("decks/column.deck", text);
+    lpfdm::Shake k; d = lpfdm::read_motion("decks/quake_pulse.txt", k);
+    (void)lpfdm::record_problem(k); (void)lpfdm::apply_setting(s, "DAMPING.ALPHA", 0.5); lpfdm::refine(t, 1);
+    (void)lpfdm::stable_dt(s); (void)lpfdm::count_points(s); (void)lpfdm::estimate_bytes(s, 1); (void)lpfdm::deck_help();
+    (void)lpfdm::shortest(0.1); (void)lpfdm::nearest_name("GIRD", lpfdm::card_names()); (void)lpfdm::did_you_mean("GIRD", {"GRID"});
+    (void)lpfdm::card_synopsis(lpfdm::kDeckCards[0]); (void)lpfdm::modes_of(s, lpfdm::Kernel::Fast); (void)lpfdm::fnv1a64(text);
+    lpfdm::Simulation sim(s);
+    sim.step(); sim.step_reference(); sim.cell_strains(); sim.update_points(); sim.map_to_lattice(); sim.nodal_forces(); sim.compensate(); sim.integrate();
+    sim.set_wall_velocity(1, 0, 0); sim.set_wide(false); (void)sim.energy(); (void)sim.unbalanced_ratio(); (void)sim.by_id(); (void)sim.bytes_per_point();
+    (void)sim.cell_holding(0.1, 0.1); (void)sim.strain_of_cell(0, 0); (void)sim.first_nonfinite_point(); int i, j; long q; sim.worst_node(i, j, q);
+    (void)lpfdm::Simulation::phase_name(0); (void)lpfdm::Simulation::have_wide();
+    sim.set_user_model(1, [](const lpfdm::StrainIncrement&, lpfdm::Stress&, lpfdm::PointState&) {});
+    std::FILE* f = std::tmpfile();
+    lpfdm::RunInfo run;
+    lpfdm::write_provenance(f, sim, run); (void)lpfdm::history_columns(sim);
+    lpfdm::write_points_header(f, sim, "api", &run); lpfdm::write_points_frame(f, sim, true);
+    lpfdm::write_history_header(f, sim, "api"); lpfdm::write_history_row(f, sim);
+    lpfdm::write_vtu(f, sim, sim.points().x, sim.points().y, false); lpfdm::write_vti(f, sim, true);
+    lpfdm::write_pvd(f, {{lpfdm::vtu_frame_file("a", 1), 0.0}});
+    const std::uint64_t h = lpfdm::state_digest(text, "");
+    (void)lpfdm::write_state(f, sim, h); (void)lpfdm::read_state("/nonexistent", sim, h);
+    std::fclose(f);
+    std::puts("api: ok");
+    return d.empty() ? 0 : 0;
+}
+API
+    printf '#define LPFDM_IMPLEMENTATION\n#include "lpfdm.hpp"\n' >"$split/impl_io.cpp"
+    o2=(-std=c++17 -O2 -Wall -Wextra -Wpedantic)
+    t_api=$(compile api) t_impl_io=$(compile impl_io)
+    if [ "$t_api" = fail ] || [ "$t_impl_io" = fail ]; then
+        fail "the whole public API from a unit without LPFDM_IMPLEMENTATION (-O2, with I/O) does not compile: $(grep -m 3 -E 'error|warning' "$split/log" | tr '\n' ' ')"
+    else
+        echo "embed: -O2 compile (processor time), with I/O: a unit using the whole public API $t_api s, the implementation unit $t_impl_io s"
+        if awk -v m="$t_api" -v i="$t_impl_io" 'BEGIN { exit !(8 * m <= i) }'; then pass; else
+            fail "the unit using the whole public API took $t_api s, more than 1/8 of the implementation unit's $t_impl_io s"; fi
+        if (cd "$split" && "$cxx" api.o impl_io.o -o api -lfmt) >>"$split/log" 2>&1 && "$split/api" 2>&1 | grep -q 'api: ok'; then
+            pass
+        else
+            fail "the whole-API unit does not link with the implementation unit, or does not run: $(grep -m 3 -E 'undefined|error' "$split/log" | tr '\n' ' ')"
+        fi
+    fi
     ;;
 esac
 

@@ -209,7 +209,11 @@ TEST_CASE("modes: what a scene switches on, and which kernel runs it, and why") 
     CHECK(d.plastic);  // a Mohr-Coulomb material
     CHECK(d.kernel == Kernel::Fast);
     CHECK(std::string(d.why).empty());
+    CHECK(std::string(d.points_why).empty());  // the AVX2 point loop runs the default modes
+    CHECK(!d.shake);
     s.mapping = Mapping::Smooth;
+    CHECK(std::string(modes_of(s, Kernel::Fast).points_why) == "MAPPING SMOOTH has no AVX2 point loop");
+    CHECK(std::string(modes_of(s, Kernel::Reference).points_why).empty());
     s.hourglass = 0.05;
     CHECK(modes_of(s, Kernel::Scalar).motion == Motion::Bilinear);  // SMOOTH's default rule
     CHECK(modes_of(s, Kernel::Scalar).hourglass);
@@ -224,6 +228,15 @@ TEST_CASE("modes: what a scene switches on, and which kernel runs it, and why") 
         CHECK(std::string(sim.modes().why) == f.why);
     }
     CHECK(std::string(modes_of(s, Kernel::Reference).why).empty());  // asked for: nothing to explain
+    Scene m;  // MOTION PAPER, and a user's model: named too
+    REQUIRE(read_deck("decks/verify_collapse.deck", m).empty());
+    m.motion = Motion::Paper;
+    CHECK(std::string(modes_of(m, Kernel::Fast).points_why) == "MOTION PAPER has no AVX2 point loop");
+    Simulation sim(m);
+    CHECK(!sim.modes().user);
+    sim.set_user_model(m.materials.front().id, [](const StrainIncrement&, Stress&, PointState&) {});
+    CHECK(sim.modes().user);
+    CHECK(std::string(sim.modes().threads_why) == "a user's model runs on one thread");
 }
 
 // The AVX2 loop takes a scene with a Mohr-Coulomb material four points at a time across
