@@ -106,7 +106,15 @@ expect "misspelt option, no deck" 2 -q --stesp 10 && says "misspelt option, no d
 expect "retired --no-avx512" 2 --no-avx512 "$deck" && says "retired --no-avx512" "--no-avx512 is retired"
 # The summary line names the kernel that ran, and why when it is not the one asked for.
 expect "summary names the kernel" 0 -n 3 --kernel scalar "$deck" &&
-    { grep -q -E '; kernel scalar$' "$tmp/stdout" && ok || fail "summary names the kernel" "$(tail -n 1 "$tmp/stdout")"; }
+    { grep -q -E '; kernel scalar(;|$)' "$tmp/stdout" && ok || fail "summary names the kernel" "$(tail -n 1 "$tmp/stdout")"; }
+# The summary line says whether the scene ended at rest (the unbalanced-force ratio below
+# 1e-3: the damped column from step 1900 of 6000) or moving (the cliff collapsing).
+expect "summary: at rest" 0 decks/column.deck &&
+    { grep -q -F '; at rest: unbalanced-force ratio 1.17e-10, below 1e-3 since step 1900 (read every 100 steps)' "$tmp/stdout" && ok ||
+        fail "summary: at rest" "$(tail -n 1 "$tmp/stdout")"; }
+expect "summary: moving" 0 -n 300 decks/cliff.deck &&
+    { grep -q -E '; moving: unbalanced-force ratio [0-9.e+-]+ at the end \(at rest below 1e-3\)$' "$tmp/stdout" && ok ||
+        fail "summary: moving" "$(tail -n 1 "$tmp/stdout")"; }
 { grep -v '^END' "$deck"; printf 'MAPPING SMOOTH\nADVECT FLIP\nEND\n'; } >"$tmp/flip.deck"
 expect "summary says why FLIP runs on the reference cycle" 0 -n 3 "$tmp/flip.deck" &&
     { grep -q -F '; kernel reference (ADVECT FLIP runs on the reference cycle only)' "$tmp/stdout" && ok ||
