@@ -728,7 +728,7 @@ LPFDM_DEF void write_pvd(std::FILE* f, const std::vector<std::pair<std::string, 
 LPFDM_DEF std::uint64_t state_digest(const std::string& deck_text, const std::string& options);
 LPFDM_DEF bool write_state(std::FILE* f, const Simulation& sim, std::uint64_t digest);
 LPFDM_DEF Diagnostics read_state(const std::string& path, Simulation& sim, std::uint64_t digest);
-inline constexpr const char* kPointColumns = "x y sxx syy sxy szz ep yielded mat id";
+inline constexpr const char* kPointColumns = "x y sxx syy sxy szz ep yielded mat id ux uy";
 #endif
 
 // -------------------------------------------------------------------- the simulation ---
@@ -781,6 +781,10 @@ public:
     // The storage positions of the points in the order of their ids (the order they were
     // made in): the storage order itself unless REORDER sorted it. Writers list points so.
     const std::vector<std::int32_t>& by_id() const;
+    // Each point's position when the Simulation was made (step 0), by id [m]: the point
+    // tables' displacement ux uy is x - initial_x()[id].
+    const std::vector<double>& initial_x() const { return x0_; }
+    const std::vector<double>& initial_y() const { return y0_; }
     const std::vector<Group>& groups() const { return groups_; }      // material and mass of each point group
     const std::vector<WallState>& walls() const { return walls_; }    // force and travel of each wall, deck order
     const std::vector<std::int32_t>& driven_nodes() const { return driven_nodes_; }  // the nodes the walls drove in the last step
@@ -931,6 +935,7 @@ private:
     bool reorder_due() const { return sc_.reorder > 0 && step_ % sc_.reorder == 0; }
     void reorder_points();
     std::size_t made_ = 0;                           // points made at set-up (ids 0 .. made_-1)
+    std::vector<double> x0_, y0_;                    // their positions then, by id (initial_x)
     std::vector<std::int32_t> sorted_, cell_count_;  // reorder_points: the new order, points per cell
     std::vector<unsigned char> sort_buf_;            // reorder_points: one array in the new order
     mutable std::vector<std::int32_t> by_id_, slot_of_id_;  // by_id(): storage positions in id order
@@ -2273,7 +2278,7 @@ LPFDM_DEF double estimate_bytes(const Scene& s, double points) {
     Points().each_array([&](const char*, const auto& v, Points::Use u, bool) {
         if (uses(s, u, true)) per_point += double(sizeof(v[0]));
     });
-    return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * per_point;
+    return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * (per_point + 2 * 8);  // (+ the initial positions)
 }
 
 LPFDM_DEF double count_points(const Scene& s) {
@@ -2529,6 +2534,8 @@ inline void Simulation::create_points() {
     mass0_ = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) mass0_ += groups_[p_.group[k]].mass;
     made_ = p_.size();
+    x0_ = p_.x;  // (made in id order)
+    y0_ = p_.y;
     if (sc_.reorder > 0) {  // reorder_points' room, so that the steps allocate nothing
         sorted_.reserve(made_);
         cell_count_.assign(std::size_t(mx_) * std::size_t(my_) + 1, 0);
@@ -7646,6 +7653,7 @@ LPFDM_DEF void write_points_header(std::FILE* f, const Simulation& sim, const st
     fmt::print(f, "# units: m, Pa (tension positive); lattice {} x {} cells of {} m\n", sim.mx(), sim.my(), sim.cell_size());
     fmt::print(f, "# columns: {}\n", kPointColumns);
     fmt::print(f, "#   ep = accumulated plastic shear strain |d_eps1^p - d_eps3^p|; yielded = 1 once the point has yielded (softened)\n");
+    fmt::print(f, "#   ux uy = displacement since step 0 [m]\n");
 }
 
 LPFDM_DEF void write_points_frame(std::FILE* f, const Simulation& sim, bool first) {
@@ -7656,8 +7664,10 @@ LPFDM_DEF void write_points_frame(std::FILE* f, const Simulation& sim, bool firs
     const bool plastic = !p.plastic_shear.empty();
     for (const std::int32_t slot : sim.by_id()) {  // by id, whatever the storage order (REORDER)
         const std::size_t k = std::size_t(slot);
-        fmt::format_to(std::back_inserter(b), FMT_COMPILE("{:.9g} {:.9g} {:.7g} {:.7g} {:.7g} {:.7g} {:.6g} {} {} {}\n"), p.x[k], p.y[k], p.sxx[k], p.syy[k],
-                       p.sxy[k], p.szz[k], plastic ? p.plastic_shear[k] : 0.0, plastic ? int(p.yielded[k]) : 0, sim.material_id(k), p.id[k]);
+        const std::size_t id = std::size_t(p.id[k]);
+        fmt::format_to(std::back_inserter(b), FMT_COMPILE("{:.9g} {:.9g} {:.7g} {:.7g} {:.7g} {:.7g} {:.6g} {} {} {} {:.7g} {:.7g}\n"), p.x[k], p.y[k], p.sxx[k], p.syy[k],
+                       p.sxy[k], p.szz[k], plastic ? p.plastic_shear[k] : 0.0, plastic ? int(p.yielded[k]) : 0, sim.material_id(k), p.id[k],
+                       p.x[k] - sim.initial_x()[id], p.y[k] - sim.initial_y()[id]);
         if (b.size() > (1 << 20)) { std::fwrite(b.data(), 1, b.size(), f); b.clear(); }
     }
     std::fwrite(b.data(), 1, b.size(), f);

@@ -1657,3 +1657,44 @@ TEST_CASE("restart: a state file whose points do not fit the scene is refused, c
     }, "not in its cell");
     std::filesystem::remove_all(dir);
 }
+
+// The point table's ux uy: each point's displacement since step 0, x - x0 and y - y0 by its
+// id, whatever the storage order. A block falling freely (decks/freefall.deck, before it
+// reaches the floor) moves rigidly: every point has ux = 0 and the same uy, the block's
+// fall, g t^2 / 2 to first order in dt.
+TEST_CASE("point table: ux uy are the displacement since step 0, by id") {
+    Scene s;
+    REQUIRE(read_deck("decks/freefall.deck", s).empty());
+    s.reorder = 7;  // storage sorted anew: the table must still pair each point with its own start
+    Simulation sim(s);
+    const std::vector<double> x0 = sim.points().x, y0 = sim.points().y;  // at step 0 the storage is id order
+    const long n = 1000;
+    for (long k = 0; k < n; ++k) sim.step();
+    std::FILE* f = std::tmpfile();
+    REQUIRE(f);
+    write_points_header(f, sim, "freefall");
+    write_points_frame(f, sim, true);
+    std::rewind(f);
+    char line[512];
+    REQUIRE(std::fgets(line, sizeof line, f));
+    CHECK(std::string(line) == "x y sxx syy sxy szz ep yielded mat id ux uy\n");
+    const double t = double(n) * s.dt_s, fall = 0.5 * 9.81 * t * t;
+    long rows = 0;
+    double uy_first = 0;
+    while (std::fgets(line, sizeof line, f)) {
+        if (line[0] == '#' || line[0] == '\n') continue;
+        double x, y, sxx, syy, sxy, szz, ep, ux, uy;
+        int yielded, mat, id;
+        REQUIRE(std::sscanf(line, "%lf %lf %lf %lf %lf %lf %lf %d %d %d %lf %lf", &x, &y, &sxx, &syy, &sxy, &szz, &ep, &yielded, &mat, &id, &ux, &uy) == 12);
+        const std::size_t i = std::size_t(id);
+        CHECK(ux == approx(x - x0[i]).epsilon(1e-6).scale(1e-9));  // (x printed to 9 digits, ux to 7)
+        CHECK(uy == approx(y - y0[i]).epsilon(1e-6).scale(1e-9));
+        CHECK(std::fabs(ux) < 1e-12);
+        if (rows == 0) uy_first = uy;
+        CHECK(uy == approx(uy_first).epsilon(1e-9));  // rigid
+        ++rows;
+    }
+    std::fclose(f);
+    CHECK(rows == long(sim.points().size()));
+    CHECK(-uy_first == approx(fall).epsilon(2 * s.dt_s / t + 1e-3));  // the leapfrog's fall: g t (t + dt) / 2 or so
+}

@@ -9,7 +9,7 @@
 #   frame   frame number, 0 = initial state, -1 = last frame   default -1
 #   title   text put before "step N, t = T s"                   default ''
 #   color   the column that colours the points: a name of the table's
-#           "# columns:" line (x y sxx syy sxy szz ep yielded mat id) or
+#           "# columns:" line (x y sxx syy sxy szz ep yielded mat id ux uy) or
 #           its number, e.g. color='syy' or color=4        default 'ep'
 #   cbmin, cbmax  ends of the colour scale, each may be set alone
 #           (default: 0 to epmax for ep, else the frame's range)
@@ -143,7 +143,7 @@ set palette defined (0 '#440154', 1 '#472c7a', 2 '#3b518b', 3 '#2c718e', \
 # The colour column, by name (from the "# columns:" line; the names of this
 # version if the table has none) or by number, and its label with its unit.
 names = system(sprintf("awk '!/^#/ {exit} sub(/^#[ \t]*columns:[ \t]*/, \"\") {print; exit}' '%s'", in))
-if (words(names) == 0) names = 'x y sxx syy sxy szz ep yielded mat id'
+if (words(names) == 0) names = 'x y sxx syy sxy szz ep yielded mat id ux uy'
 cname = '' . color
 ccol = sum [k = 1:words(names)] ((word(names, k) eq cname) ? k : 0)
 digits(s) = strlen(s) > 0 && (sum [k = 1:strlen(s)] (strstrt('0123456789', s[k:k]) > 0 ? 0 : 1)) == 0
@@ -156,6 +156,7 @@ cname = word(names, ccol)
 clabel = (cname eq 'ep') ? 'plastic shear strain e_p [-]' : \
          (cname[1:1] eq 's' && strlen(cname) == 3) ? sprintf('stress {/Symbol s}_{%s} [Pa] (tension positive)', cname[2:3]) : \
          (cname eq 'x' || cname eq 'y') ? cname . ' [m]' : \
+         (cname eq 'ux' || cname eq 'uy') ? 'displacement ' . cname . ' since step 0 [m]' : \
          (cname eq 'yielded') ? 'yielded (1) or not (0) [-]' : \
          (cname eq 'mat') ? 'material id' : (cname eq 'id') ? 'point number' : cname
 if (cname eq 'ep') { set cbrange [0:epmax] } else { set cbrange [*:*] }
