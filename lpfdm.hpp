@@ -274,6 +274,12 @@ struct Shake {
 // Edges of the lattice (ABSORB).
 enum : int { kBottom = 1, kTop = 2, kLeft = 4, kRight = 8 };
 
+// TRACK x y: the history follows the point nearest (x, y) at step 0.
+struct Track {
+    double x = 0, y = 0;  // [m]
+    Pos pos;
+};
+
 struct Output {
     enum Kind { Points, History, Vtu, State } kind = Points;
     std::string file;  // VTU: the series' name (NAME.pvd, NAME_<step>.vtu)
@@ -338,6 +344,7 @@ struct Scene {
     double dt_s = 0;
     long steps = 0;
     std::vector<Output> outputs;
+    std::vector<Track> tracks;
     Pos grid_pos, step_pos, damping_pos, end_pos, advect_pos;
 
     const Material* material(int id) const {
@@ -422,6 +429,8 @@ inline const DeckKey kDeckKeys[] = {
     {"SHAKE",     "START",   "START (model time of the record's time 0, s)", "START", true, false, true, 0, kHuge, false, true,  false, "",         0,   0, LPFDM_AT(shakes, start)},
     {"SHAKE",     "DAMPING", "DAMPING (local damping alpha from START on)", "SHAKE DAMPING", true, false, true, 0, 1, false, true, false, "",     -1,   0, LPFDM_AT(shakes, damping)},
     {"OUTPUT",    "EVERY",   "EVERY n",             "EVERY n",           true,  false, true,  1,      1e9,        false, false, true,  "",         0,   0, LPFDM_AT(outputs, every)},
+    {"TRACK",     "X",       "x (m)",               "the tracked x",     false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(tracks, x)},
+    {"TRACK",     "Y",       "y (m)",               "the tracked y",     false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(tracks, y)},
 };
 #undef LPFDM_AT
 #undef LPFDM_OF
@@ -453,6 +462,7 @@ inline const DeckCard kDeckCards[] = {
     {"REORDER", "", "", "sort the points' storage by cell every n steps (default 50; 0: never), for speed as points move"},
     {"STEP", "", "", "n steps of dt seconds"},
     {"OUTPUT", "POINTS|HISTORY|VTU|STATE file", "[BINARY] [NODES]", "a point table, a history, a VTK series (VTU) or a restart file (STATE), every n steps"},
+    {"TRACK", "", "", "the history follows the point nearest (x, y) at step 0: columns tN_x tN_y tN_ux tN_uy"},
     {"END", "", "", "the end of the deck (optional)"},
 };
 
@@ -785,6 +795,10 @@ public:
     // tables' displacement ux uy is x - initial_x()[id].
     const std::vector<double>& initial_x() const { return x0_; }
     const std::vector<double>& initial_y() const { return y0_; }
+    // TRACK: the id of the point each card follows (the nearest to its (x, y) at step 0;
+    // the lowest id of those as near), and the storage position of point id now (-1: it left).
+    const std::vector<std::int32_t>& tracked() const { return tracked_; }
+    long slot_of(std::int32_t id) const;
     const std::vector<Group>& groups() const { return groups_; }      // material and mass of each point group
     const std::vector<WallState>& walls() const { return walls_; }    // force and travel of each wall, deck order
     const std::vector<std::int32_t>& driven_nodes() const { return driven_nodes_; }  // the nodes the walls drove in the last step
@@ -936,6 +950,7 @@ private:
     void reorder_points();
     std::size_t made_ = 0;                           // points made at set-up (ids 0 .. made_-1)
     std::vector<double> x0_, y0_;                    // their positions then, by id (initial_x)
+    std::vector<std::int32_t> tracked_;              // TRACK: the points the cards follow (tracked())
     std::vector<std::int32_t> sorted_, cell_count_;  // reorder_points: the new order, points per cell
     std::vector<unsigned char> sort_buf_;            // reorder_points: one array in the new order
     mutable std::vector<std::int32_t> by_id_, slot_of_id_;  // by_id(): storage positions in id order
@@ -2536,6 +2551,15 @@ inline void Simulation::create_points() {
     made_ = p_.size();
     x0_ = p_.x;  // (made in id order)
     y0_ = p_.y;
+    for (const Track& t : sc_.tracks) {  // TRACK: the nearest point at step 0
+        std::int32_t best = -1;
+        double d2 = std::numeric_limits<double>::infinity();
+        for (std::size_t k = 0; k < x0_.size(); ++k) {
+            const double dx = x0_[k] - t.x, dy = y0_[k] - t.y, e = dx * dx + dy * dy;
+            if (e < d2) { d2 = e; best = std::int32_t(k); }
+        }
+        tracked_.push_back(best);
+    }
     if (sc_.reorder > 0) {  // reorder_points' room, so that the steps allocate nothing
         sorted_.reserve(made_);
         cell_count_.assign(std::size_t(mx_) * std::size_t(my_) + 1, 0);
@@ -2554,6 +2578,12 @@ inline void Simulation::add_to_cell(std::size_t c, double m, double v, double sx
     CellSums a = cell_sums(c);
     a.add(m, v, sxx, syy, sxy);
     store_sums(c, a);
+}
+
+LPFDM_DEF long Simulation::slot_of(std::int32_t id) const {
+    for (std::size_t k = 0; k < p_.size(); ++k)
+        if (p_.id[k] == id) return long(k);
+    return -1;
 }
 
 LPFDM_DEF const std::vector<std::int32_t>& Simulation::by_id() const {
@@ -6487,8 +6517,9 @@ LPFDM_DEF std::string apply_setting(Scene& s, const std::string& key_in, double 
             if ((card == "MATERIAL" ? s.materials[i].id : s.walls[i].id) == num) { index = i; found = true; }
         if (!found) return "no " + card + " with id " + std::to_string(num);
         if (card == "MATERIAL") model = s.materials[index].model == Model::MohrCoulomb ? kMohr : kElastic;
-    } else if (card == "CLUSTER" || card == "FIX" || card == "OUTPUT" || card == "SHAKE") {
-        count = card == "CLUSTER" ? s.clusters.size() : card == "FIX" ? s.fixes.size() : card == "SHAKE" ? s.shakes.size() : s.outputs.size();
+    } else if (card == "CLUSTER" || card == "FIX" || card == "OUTPUT" || card == "SHAKE" || card == "TRACK") {
+        count = card == "CLUSTER" ? s.clusters.size() : card == "FIX" ? s.fixes.size() : card == "SHAKE" ? s.shakes.size()
+                : card == "TRACK" ? s.tracks.size() : s.outputs.size();
         if (num < 1 || std::size_t(num) > count) return "there is no " + card + " number " + std::to_string(num) + " (cards of a kind count from 1)";
         index = std::size_t(num - 1);
     }
@@ -7508,6 +7539,11 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
             r.fields("STEP", sc, 0);
         } else if (kw == "OUTPUT") {
             read_output(r, sc, kp);
+        } else if (kw == "TRACK") {
+            sc.tracks.emplace_back();
+            sc.tracks.back().pos = kp;
+            r.fields("TRACK", sc, sc.tracks.size() - 1);
+            if (!r.ok()) sc.tracks.pop_back();
         } else if (kw == "HOURGLASS") {
             once(have_hourglass);
             r.fields("HOURGLASS", sc, 0);
@@ -7641,6 +7677,7 @@ LPFDM_DEF std::string history_columns(const Simulation& sim) {
     for (std::size_t a = 0; a < sim.scene().fixes.size(); ++a) h += fmt::format(" f{0}_rx f{0}_ry", a + 1);
     h += " e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error";
     if (sim.dynamic()) h += " w_ground d_absorb ground_dx ground_dy";  // SHAKE, ABSORB
+    for (std::size_t t = 0; t < sim.tracked().size(); ++t) h += fmt::format(" t{0}_x t{0}_y t{0}_ux t{0}_uy", t + 1);  // TRACK
     return h;
 }
 
@@ -7702,6 +7739,13 @@ LPFDM_DEF void write_history_row(std::FILE* f, const Simulation& sim) {
                    e.w_fixes, e.w_gravity, e.d_damping, e.d_plastic, e.error);
     if (sim.dynamic())
         fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g}", e.w_ground, e.d_absorb, sim.ground_displacement(0), sim.ground_displacement(1));
+    for (const std::int32_t id : sim.tracked()) {  // TRACK: the point's place and displacement (nan once it left the lattice)
+        const long k = id < 0 ? -1 : sim.slot_of(id);
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        const double x = k < 0 ? nan : sim.points().x[std::size_t(k)], y = k < 0 ? nan : sim.points().y[std::size_t(k)];
+        const double ux = k < 0 ? nan : x - sim.initial_x()[std::size_t(id)], uy = k < 0 ? nan : y - sim.initial_y()[std::size_t(id)];
+        fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.7g} {:.7g}", x, y, ux, uy);
+    }
     b.push_back('\n');
     std::fwrite(b.data(), 1, b.size(), f);
 }

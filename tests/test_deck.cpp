@@ -1394,7 +1394,7 @@ TEST_CASE("one table of cards and keys: --help lists it, decks/README.md documen
         if (k.param) CHECK(doc.find(std::string(k.name) + "=") != std::string::npos);  // in its card's synopsis
         if (!k.settable) continue;
         // the --set table: a row "| `CARD<..>` | `KEY`, ... |"
-        const std::size_t row = doc.find(std::string("| `") + k.card + (std::strcmp(k.card, "MATERIAL") == 0 || std::strcmp(k.card, "WALL") == 0 ? "<id>` |" : std::strcmp(k.card, "CLUSTER") == 0 || std::strcmp(k.card, "FIX") == 0 || std::strcmp(k.card, "SHAKE") == 0 || std::strcmp(k.card, "OUTPUT") == 0 ? "<n>` |" : "` |"));
+        const std::size_t row = doc.find(std::string("| `") + k.card + (std::strcmp(k.card, "MATERIAL") == 0 || std::strcmp(k.card, "WALL") == 0 ? "<id>` |" : std::strcmp(k.card, "CLUSTER") == 0 || std::strcmp(k.card, "FIX") == 0 || std::strcmp(k.card, "SHAKE") == 0 || std::strcmp(k.card, "OUTPUT") == 0 || std::strcmp(k.card, "TRACK") == 0 ? "<n>` |" : "` |"));
         REQUIRE(row != std::string::npos);
         const std::string line = doc.substr(row, doc.find('\n', row) - row);
         CHECK(line.find(std::string("`") + k.name + "`") != std::string::npos);
@@ -1697,4 +1697,58 @@ TEST_CASE("point table: ux uy are the displacement since step 0, by id") {
     std::fclose(f);
     CHECK(rows == long(sim.points().size()));
     CHECK(-uy_first == approx(fall).epsilon(2 * s.dt_s / t + 1e-3));  // the leapfrog's fall: g t (t + dt) / 2 or so
+}
+
+// TRACK x y: the history follows the point nearest (x, y) at step 0 (tN_x tN_y tN_ux tN_uy,
+// after the other columns, so theirs keep their numbers); --set TRACKn.X moves card n.
+TEST_CASE("TRACK: the history follows a point: its place and its displacement since step 0") {
+    std::string text;
+    REQUIRE(load_file("decks/freefall.deck", text).empty());
+    text = text.substr(0, text.rfind("END")) + "TRACK 0.5 2.5\nTRACK 0.1 2.1\nEND\n";
+    Scene s;
+    REQUIRE(read_deck_text(text, "freefall+track", s).empty());
+    REQUIRE(s.tracks.size() == 2);
+    CHECK(s.tracks[1].x == 0.1);
+    CHECK(apply_setting(s, "TRACK2.Y", 2.2).empty());
+    CHECK(s.tracks[1].y == 2.2);
+    CHECK(apply_setting(s, "TRACK3.X", 0).find("there is no TRACK number 3") != std::string::npos);
+    s.tracks[1].y = 2.1;
+    Simulation sim(s);
+    // The nearest points at step 0: (0.5, 2.5) lies on four points' corner, the lowest id
+    // of them taken; (0.1, 2.1) is nearest the block's corner point (0.0625, 2.0625).
+    REQUIRE(sim.tracked().size() == 2);
+    const auto& p = sim.points();
+    CHECK(p.x[std::size_t(sim.tracked()[1])] == 0.0625);
+    CHECK(p.y[std::size_t(sim.tracked()[1])] == 2.0625);
+    CHECK(std::hypot(p.x[std::size_t(sim.tracked()[0])] - 0.5, p.y[std::size_t(sim.tracked()[0])] - 2.5) == approx(std::hypot(0.0625, 0.0625)).epsilon(1e-12));
+    const std::string cols = history_columns(sim);
+    const std::string tail = " t1_x t1_y t1_ux t1_uy t2_x t2_y t2_ux t2_uy";
+    REQUIRE(cols.size() > tail.size());
+    CHECK(cols.compare(cols.size() - tail.size(), tail.size(), tail) == 0);
+    for (int k = 0; k < 1000; ++k) sim.step();
+    std::FILE* f = std::tmpfile();
+    REQUIRE(f);
+    write_history_row(f, sim);
+    std::rewind(f);
+    char line[4096];
+    REQUIRE(std::fgets(line, sizeof line, f));
+    std::fclose(f);
+    std::vector<double> v;
+    for (const char* c = line; *c;) {
+        char* end = nullptr;
+        const double x = std::strtod(c, &end);
+        if (end == c) break;
+        v.push_back(x);
+        c = end;
+    }
+    REQUIRE(v.size() >= 8);
+    const std::size_t n = v.size();
+    const std::int32_t id = sim.tracked()[1];
+    const long k = sim.slot_of(id);
+    REQUIRE(k >= 0);
+    CHECK(v[n - 4] == approx(p.x[std::size_t(k)]).epsilon(1e-8));
+    CHECK(v[n - 3] == approx(p.y[std::size_t(k)]).epsilon(1e-8));
+    CHECK(v[n - 2] == approx(0.0).scale(1e-12));
+    CHECK(v[n - 1] == approx(p.y[std::size_t(k)] - 2.0625).epsilon(1e-6));
+    CHECK(v[n - 1] == approx(v[n - 5]).epsilon(1e-9));  // the block falls rigidly: both points alike
 }
