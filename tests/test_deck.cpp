@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include "../lpfdm.hpp"
+#include "common.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -1663,6 +1664,7 @@ TEST_CASE("restart: a state file whose points do not fit the scene is refused, c
 // reaches the floor) moves rigidly: every point has ux = 0 and the same uy, the block's
 // fall, g t^2 / 2 to first order in dt.
 TEST_CASE("point table: ux uy are the displacement since step 0, by id") {
+    using namespace lpfdm;
     Scene s;
     REQUIRE(read_deck("decks/freefall.deck", s).empty());
     s.reorder = 7;  // storage sorted anew: the table must still pair each point with its own start
@@ -1702,6 +1704,7 @@ TEST_CASE("point table: ux uy are the displacement since step 0, by id") {
 // TRACK x y: the history follows the point nearest (x, y) at step 0 (tN_x tN_y tN_ux tN_uy,
 // after the other columns, so theirs keep their numbers); --set TRACKn.X moves card n.
 TEST_CASE("TRACK: the history follows a point: its place and its displacement since step 0") {
+    using namespace lpfdm;
     std::string text;
     REQUIRE(load_file("decks/freefall.deck", text).empty());
     text = text.substr(0, text.rfind("END")) + "TRACK 0.5 2.5\nTRACK 0.1 2.1\nEND\n";
