@@ -5287,8 +5287,8 @@ LPFDM_INLINE inline long Simulation::run_end(const Loop& lp, long k, const long 
     long kend = k + 1;
 #if LPFDM_WIDE
     if constexpr (Wide) {  // four cell numbers per compare: one branch per four points, not one per point
-        typedef int v4i __attribute__((vector_size(16)));
-        typedef float v4f __attribute__((vector_size(16)));
+        using detail::v4i;
+        using detail::v4f;
         for (; kend + 4 <= stop; kend += 4) {
             v4i w;
             std::memcpy(&w, lp.pcell + kend, sizeof w);
@@ -5511,8 +5511,8 @@ LPFDM_INLINE inline void Simulation::run_motion(Loop& lp, const long k, const lo
 // bookkeeping. MOTION CENTRE only (the AVX2 loop's).
 LPFDM_INLINE inline long Simulation::usual_runs(Loop& lp, long k, const long stop) {
     using detail::v4d;
-    typedef int v4i __attribute__((vector_size(16)));
-    typedef float v4f __attribute__((vector_size(16)));
+    using detail::v4i;
+    using detail::v4f;
     double* __restrict px = lp.px;
     double* __restrict py = lp.py;
     double* __restrict psxx = lp.psxx;
@@ -5644,8 +5644,8 @@ LPFDM_INLINE inline void Simulation::consult_timed(Loop& lp, const long b0, cons
 // consulted stresses (land_block).
 LPFDM_INLINE inline void Simulation::move_block(Loop& lp, long b0, const long b1) {
     using detail::v4d;
-    typedef int v4i __attribute__((vector_size(16)));
-    typedef float v4f __attribute__((vector_size(16)));
+    using detail::v4i;
+    using detail::v4f;
     double* __restrict px = lp.px;
     double* __restrict py = lp.py;
     double* __restrict psxx = lp.psxx;
@@ -5775,8 +5775,8 @@ LPFDM_INLINE inline void Simulation::move_block(Loop& lp, long b0, const long b1
 // cell it landed in, in point order, or listed when that cell is another chunk's.
 LPFDM_INLINE inline void Simulation::land_block(Loop& lp, long b0, const long b1) {
     using detail::v4d;
-    typedef int v4i __attribute__((vector_size(16)));
-    typedef float v4f __attribute__((vector_size(16)));
+    using detail::v4i;
+    using detail::v4f;
     const double* pvol = lp.pvol;
     const double* psxx = lp.psxx;
     const double* psyy = lp.psyy;
@@ -6050,7 +6050,7 @@ LPFDM_DEF void Simulation::compensate() {
 #if LPFDM_WIDE
                 using detail::v4d;
                 using detail::v4m;
-                typedef int v4i __attribute__((vector_size(16)));
+                using detail::v4i;
                 const int n = j * (mx + 1) + i;
                 v4d ux, uy, mp;
                 detail::load(ux_n + n, ux); detail::load(uy_n + n, uy); detail::load(nm_prev + n, mp);

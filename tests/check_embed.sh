@@ -134,12 +134,13 @@ case $(basename "$exe") in
         t=$( { TIMEFORMAT='%3U %3S'; time (cd "$split" && "$cxx" "${o2[@]}" -c "$1.cpp" -o "$1.o" >>"$split/log" 2>&1); } 2>&1 ) || { echo fail; return; }
         awk -v t="$t" 'BEGIN { split(t, a, " "); printf "%.2f", a[1] + a[2] }'
     }
+    eighth() { awk -v m="$1" -v i="$2" 'BEGIN { exit !(8 * m <= i) }'; }  # eighth T_UNIT T_IMPL: T_UNIT <= T_IMPL / 8
     t_mine=$(compile mine) t_impl=$(compile impl)
     if [ "$t_mine" = fail ] || [ "$t_impl" = fail ]; then
         fail "the two-unit build (-O2) does not compile: $(grep -m 3 -E 'error|warning' "$split/log" | tr '\n' ' ')"
     else
         echo "embed: -O2 compile (processor time): the declarations unit $t_mine s, the implementation unit $t_impl s"
-        if awk -v m="$t_mine" -v i="$t_impl" 'BEGIN { exit !(8 * m <= i) }'; then pass; else
+        if eighth "$t_mine" "$t_impl"; then pass; else
             fail "the unit without LPFDM_IMPLEMENTATION took $t_mine s, more than 1/8 of the implementation unit's $t_impl s"; fi
         if (cd "$split" && "$cxx" mine.o -o alone) >"$split/link" 2>&1; then
             fail "the declarations unit linked without an implementation unit"
@@ -202,7 +203,7 @@ API
         fail "the whole public API from a unit without LPFDM_IMPLEMENTATION (-O2, with I/O) does not compile: $(grep -m 3 -E 'error|warning' "$split/log" | tr '\n' ' ')"
     else
         echo "embed: -O2 compile (processor time), with I/O: a unit using the whole public API $t_api s, the implementation unit $t_impl_io s"
-        if awk -v m="$t_api" -v i="$t_impl_io" 'BEGIN { exit !(8 * m <= i) }'; then pass; else
+        if eighth "$t_api" "$t_impl_io"; then pass; else
             fail "the unit using the whole public API took $t_api s, more than 1/8 of the implementation unit's $t_impl_io s"; fi
         if (cd "$split" && "$cxx" api.o impl_io.o -o api -lfmt) >>"$split/log" 2>&1 && "$split/api" 2>&1 | grep -q 'api: ok'; then
             pass
