@@ -20,14 +20,17 @@ dir=$(mktemp -d); trap 'rm -rf "$dir"' EXIT
 # writes $dir/built.NAME (its exit status) when it ends.
 built() {
     local t=${1#./}
-    local mark=$dir/built.${t//\//_}
+    local mark=$dir/built.${t//\//_} since
+    since=$(date +%s)
     while [ ! -e "$mark" ]; do sleep 1; done
+    waited=$(($(date +%s) - since))  # (the job's core idle meanwhile: run.sh's last lines)
     [ "$(cat "$mark")" = 0 ] || { echo "the build of $1 failed (its log is printed below)"; return 1; }
 }
 # job N KIND ARG: KIND build (ARG a make target), unit-o2, unit-san, or check (ARG "SCRIPT
 # EXE"); writes $dir/N.log and $dir/N.rc.
 job() {
-    local n=$1 kind=$2 arg=${3:-} start=$SECONDS rc
+    local n=$1 kind=$2 arg=${3:-} start=$SECONDS rc t waited=0
+    t=$(date +%s)
     case $kind in
         # each target by one make, so that no two write the same file
         build) make --no-print-directory "$arg"; rc=$?; echo $rc >"$dir/built.${arg//\//_}"; [ $rc = 0 ] ;;
@@ -40,9 +43,10 @@ job() {
     esac >"$dir/$n.log" 2>&1
     echo $? >"$dir/$n.rc"
     echo "$((SECONDS - start)) $kind${arg:+ $arg}" >"$dir/$n.time"
+    echo "$((t + waited - t0)) $(($(date +%s) - t0)) $kind${arg:+ $arg}" >"$dir/$n.span"
 }
 export -f job built
-export dir
+export dir t0=$(date +%s)
 
 # Jobs 1 and 2 are the unit runs, then every tests/check_*.sh with each build of the program
 # (./lpfdm, then build/lpfdm-san), then the four builds. The queue takes the builds first:
@@ -98,5 +102,9 @@ for ((k = 3; k <= builds; k++)); do
 done
 # How long each job took (seconds, longest first): where make test's time goes.
 echo "longest jobs, seconds each ($workers at a time): $(cat "$dir"/*.time 2>/dev/null | sort -rn | head -n 8 | sed 's/ tests\/check_/ /; s/\.sh / /' | paste -sd ';' | sed 's/;/; /g')"
+# Where the cores waited: the queue's wall time against the jobs' own, and when each job ran.
+sort -n "$dir"/*.span 2>/dev/null | awk -v w="$workers" '{ busy += $2 - $1; if ($2 > end) end = $2 }
+    END { if (end > 0) printf "the queue: %d s wall, %d of %d core-seconds in jobs (%.0f %% busy)\n", end, busy, w * end, 100 * busy / (w * end) }'
+echo "the last to end (start-end s): $(sort -k2 -n "$dir"/*.span 2>/dev/null | tail -n 4 | awk '{ printf "%s%s-%s %s %s", NR > 1 ? "; " : "", $1, $2, $3, $4 }' | sed 's/tests\/check_//g; s/\.sh//g')"
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
