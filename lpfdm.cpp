@@ -26,13 +26,7 @@ constexpr int kExitBadInput = 2, kExitNumerical = 3, kExitInterrupted = 130;
 // The energy the cycle may create, as a fraction of the energy in play, before the run is
 // warned of it (see the run loop).
 constexpr double kEnergyCreated = 0.1;
-// A scene is at rest when its unbalanced-force ratio (Simulation::unbalanced_ratio: the
-// largest unbalanced nodal force over the mean gross one) is below this. The ratio takes
-// the largest force, not the mean, so the bound is FLAC's classic 1e-3 rather than its
-// 1e-5 for a mean: decks/column.deck falls below it at step 1900 of 6000 and ends at 1e-10,
-// a slope standing after an earthquake (decks/quake_slope.deck) ends at 3e-5, a collapsing
-// cliff stays above 0.3.
-constexpr double kAtRest = 1e-3;  // (Rest::said writes it)
+using lpfdm::kAtRest;  // at rest below it (lpfdm.hpp; Rest::said writes it)
 
 // Whether the scene ended at rest: the unbalanced-force ratio read with the energy account
 // (run_steps), the last reading and the first step of the last stretch of readings below
@@ -57,7 +51,7 @@ struct OptionSpec {
     const char* arg;  // the value's name, or nullptr for a flag
     const char* help; // lines after the first are indented under it
 };
-constexpr int kSeed = 256, kStrict = 257, kNoAvx2 = 258, kRestart = 259;  // getopt values of the options without a short form
+constexpr int kSeed = 256, kStrict = 257, kNoAvx2 = 258, kRestart = 259, kFos = 260, kFosTol = 261;  // getopt values of the options without a short form
 const OptionSpec kOptions[] = {
     {"output", 'o', "DIR", "write the output files into DIR (created; default: the current directory)"},
     {"steps", 'n', "N", "run N steps instead of the deck's"},
@@ -73,6 +67,11 @@ const OptionSpec kOptions[] = {
     {"restart", 0, "F", "continue the run saved in the state file F (OUTPUT STATE) from its step; the deck and the\n"
                         "options --refine, --seed and --set must be the run's own (--steps may run it further)"},
     {"strict", 0, nullptr, "warnings are errors: a deck that draws one stops with exit status 2"},
+    {"fos", 0, nullptr, "the factor of safety by strength reduction instead of the run: trials of the deck's scene with\n"
+                        "c / F and tan(phi) / F, F bracketed between one that stands and one that fails; the\n"
+                        "deck's outputs of the last trial that stood go to DIR/stands, of the first that failed to\n"
+                        "DIR/fails. Exit status 0 with a factor, 3 when the scene fails even at the smallest F"},
+    {"fos-tol", 0, "D", "--fos brackets F to within D (default 0.01)"},
     {"profile", 'p', nullptr, "print the time of each phase of the cycle, peak memory and bytes per point"},
     {"no-avx2", 0, nullptr, "the same as --kernel scalar"},
     {"quiet", 'q', nullptr, "no progress line and no summary"},
@@ -82,13 +81,14 @@ const OptionSpec kOptions[] = {
 int option_value(const OptionSpec& o) {
     if (o.brief) return o.brief;
     const std::string n = o.name;
-    return n == "seed" ? kSeed : n == "strict" ? kStrict : n == "restart" ? kRestart : kNoAvx2;
+    return n == "seed" ? kSeed : n == "strict" ? kStrict : n == "restart" ? kRestart : n == "fos" ? kFos : n == "fos-tol" ? kFosTol : kNoAvx2;
 }
 
 // The usage text: the synopsis, each option from kOptions, the exit status.
 std::string usage_text() {
     std::string out = "usage: lpfdm [options] DECK\n"
                       "       lpfdm [options] --restart F DECK\n"
+                      "       lpfdm [options] --fos DECK\n"
                       "Runs the Lagrangian Particle Finite Difference Method on the scene of DECK.\n"
                       "\n"
                       "options (a value may follow as the next word or after '=': --steps 100, --steps=100, -n 100):\n";
@@ -106,7 +106,8 @@ std::string usage_text() {
         }
         out += head + help + "\n";
     }
-    out += "\nexit status: 0 done, 2 bad deck, options or state file, 3 numerical trouble, 130 interrupted\n"
+    out += "\nexit status: 0 done, 2 bad deck, options or state file, 3 numerical trouble (--fos: or the scene fails\n"
+           "at the smallest trial factor), 130 interrupted\n"
            "(SIGINT: the step under way is finished, its frame, history row and state written)\n";
     return out;
 }
@@ -115,7 +116,8 @@ struct Options {
     std::string deck, outdir = ".", restart;
     long refine = 1, steps = 0;
     long long seed = -1;
-    bool quiet = false, profile = false, strict = false;
+    bool quiet = false, profile = false, strict = false, fos = false;
+    double fos_tol = 0.01;
     lpfdm::Kernel kernel = lpfdm::Kernel::Fast;
     long threads = 0;
     std::vector<std::pair<std::string, double>> settings;
@@ -168,6 +170,13 @@ bool take_option(int c, const char* arg, Options& opt, std::vector<std::string>&
     case 'p': opt.profile = true; break;
     case kStrict: opt.strict = true; break;
     case kNoAvx2: opt.kernel = lpfdm::Kernel::Scalar; break;
+    case kFos: opt.fos = true; break;
+    case kFosTol: {
+        double x = 0;
+        if (!lpfdm::detail::parse_real(arg, x) || !(x >= 1e-4 && x <= 1)) cli_errors.push_back(std::string("--fos-tol needs a number from 1e-4 to 1, not '") + arg + "'");
+        else opt.fos_tol = x;
+        break;
+    }
     case 'o':
         if (!*arg) cli_errors.push_back("-o needs a directory");
         else opt.outdir = arg;
@@ -635,18 +644,129 @@ void print_profile(const lpfdm::Simulation& sim, int nthreads) {
                     1e9 * sim.return_seconds() / double(sim.return_updates()), sim.return_updates());
 }
 
+
+// --fos: what keeps the deck's scene from having a factor of safety (a scene that cannot
+// come to rest, or has no strength to reduce), at the cards concerned.
+lpfdm::Diagnostics fos_problems(const lpfdm::Scene& scene) {
+    lpfdm::Diagnostics d;
+    bool mohr = false;
+    for (const auto& m : scene.materials) mohr |= m.model == lpfdm::Model::MohrCoulomb;
+    if (!mohr) d.push_back({scene.grid_pos, "--fos reduces the strength of MOHR materials, and the deck has none"});
+    for (const auto& k : scene.shakes)
+        d.push_back({k.pos, "--fos finds the factor of safety of a scene at rest under GRAVITY, and SHAKE moves the ground (a seismic coefficient is a horizontal GRAVITY gx)"});
+    for (const auto& w : scene.walls)
+        if (w.vx != 0 || w.vy != 0) d.push_back({w.pos, fmt::format("--fos finds the factor of safety of a scene at rest, and WALL {} moves", w.id)});
+    return d;
+}
+
+// The deck's outputs of one --fos trial, into DIR (created): the trial run again to its
+// last step with the deck's OUTPUT cards, its provenance naming the reduced strengths as
+// the --set options that reproduce it. False when a file cannot be written.
+bool write_trial(const lpfdm::Scene& scene, const Options& opt, const std::string& text, const lpfdm::FosTrial& t, const std::string& dir, int nthreads) {
+    lpfdm::Scene sc = lpfdm::strength_reduced(scene, t.F);
+    sc.steps = t.steps;
+    Options o = opt;
+    o.outdir = dir;
+    o.quiet = true;
+    if (!make_dir(dir)) {
+        std::fprintf(stderr, "lpfdm: error: cannot create the output directory '%s': %s\n", dir.c_str(), std::strerror(errno));
+        return false;
+    }
+    lpfdm::Simulation sim(sc, opt.kernel);
+    lpfdm::RunInfo run;
+    run.deck = opt.deck;
+    run.deck_digest = lpfdm::fnv1a64(text);
+    run.settings = opt.setting_text;
+    for (std::size_t k = 0; k < sc.materials.size(); ++k) {
+        const lpfdm::Material &m = sc.materials[k], &was = scene.materials[k];
+        if (m.model != lpfdm::Model::MohrCoulomb) continue;
+        run.settings.push_back(fmt::format("MATERIAL{}.C={:.17g}", m.id, m.c));
+        run.settings.push_back(fmt::format("MATERIAL{}.PHI={:.17g}", m.id, m.phi_deg));
+        if (was.psi_deg != 0) run.settings.push_back(fmt::format("MATERIAL{}.PSI={:.17g}", m.id, m.psi_deg));
+        if (was.tension >= 0) run.settings.push_back(fmt::format("MATERIAL{}.TENSION={:.17g}", m.id, m.tension));
+    }
+    run.steps = t.steps;
+    run.refine = opt.refine;
+    run.seed = opt.seed;
+    run.threads = sim.kernel() == lpfdm::Kernel::Reference ? 1 : nthreads;
+    run.kernel = sim.kernel() == lpfdm::Kernel::Reference ? "reference" : sim.wide() ? "fast (AVX2)" : opt.kernel == lpfdm::Kernel::Fast ? "fast (no AVX2 here)" : "scalar";
+    std::vector<double> x0, y0;
+    for (const auto& out : sc.outputs)
+        if (out.kind == lpfdm::Output::Vtu) { x0 = sim.points().x; y0 = sim.points().y; }
+    Outputs out{o, sim, run, 0, x0, y0, {}, false};
+    if (!out.open()) return false;
+    double particle_steps = 0, wall = 0;
+    Rest rest;
+    return run_steps(sim, o, out, particle_steps, wall, rest) == 0;
+}
+
+// lpfdm --fos: the factor of safety (lpfdm::factor_of_safety), a line per trial unless
+// --quiet, then the answer's line; the outputs of the bracket's two trials. The exit status.
+int run_fos(const lpfdm::Scene& scene, const Options& opt, const std::string& text, int nthreads) {
+    const auto t0 = std::chrono::steady_clock::now();
+    lpfdm::FosOptions fo;
+    fo.tol = opt.fos_tol;
+    fo.kernel = opt.kernel;
+    long n = 0;
+    const lpfdm::FosResult r = lpfdm::factor_of_safety(scene, fo, [&](const lpfdm::FosTrial& t) {
+        if (opt.quiet) return;
+        std::printf("trial %ld: F = %.6g %s (unbalanced-force ratio %.3g; largest displacement %.3g m)\n", ++n, t.F,
+                    t.trouble ? fmt::format("fails: numerical trouble at step {}", t.steps).c_str()
+                    : t.stands ? fmt::format("stands: at rest at step {}", t.steps).c_str()
+                    : fmt::format("fails: still moving after {} steps", t.steps).c_str(), t.ratio, t.moved);
+        std::fflush(stdout);
+    });
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (r.outcome == lpfdm::FosResult::NeverAtRest) {
+        std::fprintf(stderr, "%s\n", lpfdm::Diagnostic{scene.step_pos, fmt::format(
+            "--fos: even with unlimited strength (every MOHR material elastic) the scene is still moving after its {} steps "
+            "(unbalanced-force ratio {:.3g}, at rest below {:g}): it needs DAMPING, or more steps (STEP, --steps), to come to rest",
+            r.response_steps, r.ratio, kAtRest)}.str().c_str());
+        return kExitBadInput;
+    }
+    // The digits of F that the tolerance makes: F to one place more than tol, the bracket to two.
+    const int places = std::max(0, int(std::ceil(-std::log10(opt.fos_tol)))) ;
+    const std::string how = fmt::format("{} trials of at most {} steps ({} response times of {} steps), {:.3g} s", r.trials.size(), r.budget,
+                                        fo.responses, r.response_steps, secs);
+    if (r.outcome == lpfdm::FosResult::FailsAtSmallest) {
+        std::printf("factor of safety: below %g: the scene fails even at F = %g, with %g times the deck's strength (%s)\n", fo.smallest, r.fails_at, 1 / r.fails_at, how.c_str());
+    } else if (r.outcome == lpfdm::FosResult::StandsAtLargest) {
+        std::printf("factor of safety: above %g: the scene stands at F = %g, the largest trial (%s)\n", fo.largest, r.stands_at, how.c_str());
+    } else {
+        std::printf("factor of safety: %.*f (stands at %.*f, fails at %.*f, %s)\n", places, r.F, places + 1, r.stands_at, places + 1, r.fails_at, how.c_str());
+    }
+    std::fflush(stdout);
+    bool ok = true;
+    for (const auto& t : r.trials) {
+        const bool last_standing = r.stands_at > 0 && t.F == r.stands_at, first_failing = r.fails_at > 0 && t.F == r.fails_at;
+        if (!scene.outputs.empty() && (last_standing || first_failing))
+            ok &= write_trial(scene, opt, text, t, opt.outdir + (last_standing ? "/stands" : "/fails"), nthreads);
+    }
+    if (!ok) return kExitBadInput;
+    return r.outcome == lpfdm::FosResult::FailsAtSmallest ? kExitNumerical : 0;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
     Options opt;
     std::vector<std::string> cli_errors;  // every mistake, reported with the deck's
     if (const int done = read_command_line(argc, argv, opt, cli_errors); done >= 0) return done;
+    if (opt.fos && !opt.restart.empty()) cli_errors.push_back("--fos runs each trial from the deck's start: it takes no --restart");
     lpfdm::Scene scene;
     std::string text;
     lpfdm::Diagnostics diags = read_and_check(opt, cli_errors, scene, text);
     const std::uint64_t digest = scene_digest(opt, scene, text);
     bool stop = !cli_errors.empty();
     for (const auto& e : cli_errors) std::fprintf(stderr, "lpfdm: error: %s\n", e.c_str());
+    if (opt.fos && !stop) {  // (a scene that did not read cannot be asked)
+        bool errors = false;
+        for (const auto& d : diags) errors |= !d.warning;
+        if (!errors) {
+            const lpfdm::Diagnostics f = fos_problems(scene);
+            diags.insert(diags.end(), f.begin(), f.end());
+            lpfdm::sort_diagnostics(diags);
+        }
+    }
     for (const auto& d : diags) {
         std::fprintf(stderr, "%s\n", d.str().c_str());
         stop |= !d.warning;
@@ -663,6 +783,7 @@ int main(int argc, char** argv) {
 #else
     const int nthreads = 1;
 #endif
+    if (opt.fos) return run_fos(scene, opt, text, nthreads);
     lpfdm::Simulation sim(scene, opt.kernel);
     sim.set_profiling(opt.profile);
     lpfdm::RunInfo run;

@@ -25,6 +25,7 @@
 //     for (long n = 0; n < s.steps; ++n) sim.step();
 //     const lpfdm::Points& p = sim.points();    // p.x[k], p.syy[k], ... (structure of arrays)
 //   Your own eq. 6: sim.set_user_model(mat_id, f), f(const StrainIncrement&, Stress&, PointState&).
+//   A slope's factor of safety: lpfdm::factor_of_safety(s).F (strength reduction, --fos).
 //   A program without the implementation unit fails to link, naming
 //   define_LPFDM_IMPLEMENTATION_in_one_unit.
 //
@@ -85,8 +86,8 @@
 // points, Simulation); then, with LPFDM_IMPLEMENTATION: the equations; materials; lattice
 // and points; boundaries (fixed nodes, walls); the energy account; the reference cycle;
 // one section per option (MAPPING SMOOTH, ADVECT FLIP, ADVECT POINTS, HOURGLASS,
-// earthquakes); the fast kernel and its AVX2 lanes; restart; checks; the deck reader,
-// writers and state files. Each section builds on those before it; where the reference
+// earthquakes); the fast kernel and its AVX2 lanes; restart; the factor of safety by
+// strength reduction (lpfdm --fos); checks; the deck reader, writers and state files. Each section builds on those before it; where the reference
 // cycle hands a step to an option it calls that option's section (named at the call),
 // and it never calls the fast kernel. Where the paper is open, the choice made and its
 // reason head the section it concerns. Decks, options and output: decks/README.md.
@@ -707,6 +708,42 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread = Unread());
 LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread = Unread());
 LPFDM_DEF std::string record_problem(const Shake& k);
 
+// A scene is at rest when its unbalanced-force ratio (Simulation::unbalanced_ratio: the
+// largest unbalanced nodal force over the mean gross one) is below this. The ratio takes
+// the largest force, not the mean, so the bound is FLAC's classic 1e-3 rather than its
+// 1e-5 for a mean: decks/column.deck falls below it at step 1900 of 6000 and ends at 1e-10,
+// a slope standing after an earthquake (decks/quake_slope.deck) ends at 3e-5, a collapsing
+// cliff stays above 0.3.
+inline constexpr double kAtRest = 1e-3;
+// Factor of safety by strength reduction (lpfdm --fos; the section FACTOR OF SAFETY).
+struct FosTrial {
+    double F = 0;         // the trial's factor
+    bool stands = false;  // came to rest within the trial's steps
+    long steps = 0;       // steps run: to rest, or the whole budget
+    double ratio = 0;     // the unbalanced-force ratio at the end
+    double moved = 0;     // the largest point displacement at the end [m]
+    bool trouble = false; // the run went wrong (Simulation::healthy): it counts as failing
+};
+struct FosOptions {
+    double tol = 0.01;                           // F is bracketed to within this
+    double smallest = 1.0 / 16, largest = 16;    // the range of trial factors
+    long responses = 8;                          // a trial's budget in response times N_r
+    Kernel kernel = Kernel::Fast;
+};
+struct FosResult {
+    enum Outcome { Found, FailsAtSmallest, StandsAtLargest, NeverAtRest } outcome = Found;
+    double F = 0, stands_at = 0, fails_at = 0;   // F = (stands_at + fails_at) / 2
+    long response_steps = 0;                     // N_r (NeverAtRest: the steps tried)
+    long budget = 0;                             // each trial's steps: FosOptions::responses N_r
+    double ratio = 0;                            // NeverAtRest: the ratio it ended at
+    std::vector<FosTrial> trials;                // in the order run
+};
+LPFDM_DEF Scene strength_reduced(const Scene& s, double F);
+LPFDM_DEF long response_steps(const Scene& s, Kernel k, double* ratio = nullptr);
+LPFDM_DEF FosTrial fos_trial(const Scene& s, double F, long budget, Kernel k);
+LPFDM_DEF FosResult factor_of_safety(const Scene& s, const FosOptions& o = FosOptions(),
+                                     const std::function<void(const FosTrial&)>& told = nullptr);
+
 #ifndef LPFDM_NO_IO
 // The deck reader, the writers and the state files.
 // How a run was made: what the provenance lines of each output file record.
@@ -738,6 +775,7 @@ LPFDM_DEF void write_pvd(std::FILE* f, const std::vector<std::pair<std::string, 
 LPFDM_DEF std::uint64_t state_digest(const std::string& deck_text, const std::string& options);
 LPFDM_DEF bool write_state(std::FILE* f, const Simulation& sim, std::uint64_t digest);
 LPFDM_DEF Diagnostics read_state(const std::string& path, Simulation& sim, std::uint64_t digest);
+
 inline constexpr const char* kPointColumns = "x y sxx syy sxy szz ep yielded mat id ux uy";
 #endif
 
@@ -6316,6 +6354,129 @@ template <class S, class F> inline void Simulation::visit_state(S& s, F& f) {
         f("energy_d_absorb", e.d_absorb); f("energy_h_absorb", e.h_absorb); f("energy_w_held", e.w_held); f("energy_h_held", e.h_held);
         f("absorb_hold_x", s.hold_fx_); f("absorb_hold_y", s.hold_fy_);
     }
+}
+
+// ======================================================================================
+// FACTOR OF SAFETY BY STRENGTH REDUCTION (lpfdm --fos; not in the paper)
+//
+// By what factor F could the soil's strength fall before the scene fails? Each trial
+// runs the scene from its start with every Mohr-Coulomb material's strength divided by
+// F, and F is bracketed between the largest trial that stands and the smallest that
+// fails: FLAC's strength-reduction solve (Dawson, Roth and Drescher 1999), and what
+// finite-element codes do with the loss of convergence (Griffiths and Lane 1999).
+// Where this is open, the choices (each tested in tests/test_fos.cpp):
+// * The reduction (strength_reduced): c / F, tan(phi) / F, tan(psi) / F (a dilation
+//   below friction stays below it) and TENSION / F. The apex c / tan(phi) does not move,
+//   so a tension limit below it stays below it. SOFTEN (a fraction of c) stays; SCATTER
+//   scatters each point about the reduced means with the same coefficient and seed (each
+//   point's c is exactly its c / F). Elastic materials and user models stay as they are.
+// * Stands (fos_trial): the unbalanced-force ratio (Simulation::unbalanced_ratio) below
+//   kAtRest at two readings in a row (kFosRead steps apart: one reading can fall on an
+//   oscillation's turning of force) within FosOptions::responses N_r steps. N_r, the scene's
+//   response time (response_steps), is the number of steps it takes to come to rest so
+//   with unlimited strength (every Mohr-Coulomb material elastic), at most its STEPS: a
+//   scene that does not come to rest even so has no factor (NeverAtRest). Rest alone
+//   cannot tell failure here, since a slope that fails flows and comes to rest at the end
+//   of its runout; within the budget, a failing slope is still moving. Near the factor
+//   the motion slows (a trial 1 % above it moves for long), which the budget measures in
+//   the scene's own time, as FLAC's N_r does.
+// * The bracket (factor_of_safety): from F = 1, doubling or halving until one trial
+//   stands and one fails, within FosOptions::smallest and largest; then halving the
+//   bracket until it is at most FosOptions::tol wide. F is its middle.
+// ======================================================================================
+
+namespace detail {
+constexpr long kFosRead = 10;  // steps between readings of the unbalanced-force ratio
+
+// Runs sim up to budget steps, reading the ratio every kFosRead steps: the steps run when
+// it fell below kAtRest at two readings in a row (-1 if it did not), the last ratio read,
+// and whether the run stayed healthy.
+inline long steps_to_rest(Simulation& sim, long budget, double& ratio, bool& healthy) {
+    int below = 0;
+    healthy = true;
+    for (long n = 1; n <= budget; ++n) {
+        sim.step();
+        if (!sim.healthy()) { healthy = false; return -1; }
+        if (n % kFosRead && n != budget) continue;
+        ratio = sim.unbalanced_ratio();
+        below = ratio < kAtRest ? below + 1 : 0;
+        if (below == 2) return n;
+    }
+    return -1;
+}
+}  // namespace detail
+
+LPFDM_DEF Scene strength_reduced(const Scene& s, double F) {
+    Scene r = s;
+    const double rad = detail::kPi / 180;
+    for (Material& m : r.materials) {
+        if (m.model != Model::MohrCoulomb) continue;
+        m.c /= F;
+        m.phi_deg = std::atan(std::tan(m.phi_deg * rad) / F) / rad;
+        m.psi_deg = std::atan(std::tan(m.psi_deg * rad) / F) / rad;
+        if (m.tension >= 0) m.tension /= F;
+    }
+    return r;
+}
+
+LPFDM_DEF long response_steps(const Scene& s, Kernel k, double* ratio) {
+    Scene e = s;
+    for (Material& m : e.materials)
+        if (m.model == Model::MohrCoulomb) m.model = Model::Elastic;
+    Simulation sim(e, k);
+    double r = 0;
+    bool healthy = true;
+    const long n = detail::steps_to_rest(sim, s.steps, r, healthy);
+    if (ratio) *ratio = r;
+    return n;
+}
+
+LPFDM_DEF FosTrial fos_trial(const Scene& s, double F, long budget, Kernel k) {
+    FosTrial t;
+    t.F = F;
+    Simulation sim(strength_reduced(s, F), k);
+    bool healthy = true;
+    const long n = detail::steps_to_rest(sim, budget, t.ratio, healthy);
+    t.stands = n > 0;
+    t.trouble = !healthy;
+    t.steps = sim.step_count();
+    const Points& p = sim.points();
+    for (std::size_t q = 0; q < p.size(); ++q) {
+        const std::size_t id = std::size_t(p.id[q]);
+        t.moved = std::max(t.moved, std::hypot(p.x[q] - sim.initial_x()[id], p.y[q] - sim.initial_y()[id]));
+    }
+    return t;
+}
+
+LPFDM_DEF FosResult factor_of_safety(const Scene& s, const FosOptions& o, const std::function<void(const FosTrial&)>& told) {
+    FosResult r;
+    r.response_steps = response_steps(s, o.kernel, &r.ratio);
+    if (r.response_steps < 0) {
+        r.outcome = FosResult::NeverAtRest;
+        r.response_steps = s.steps;
+        return r;
+    }
+    r.budget = o.responses * r.response_steps;
+    auto stands = [&](double F) {
+        r.trials.push_back(fos_trial(s, F, r.budget, o.kernel));
+        if (told) told(r.trials.back());
+        return r.trials.back().stands;
+    };
+    double lo = 0, hi = 0;  // the largest factor that stood, the smallest that failed (0: none yet)
+    for (double F = 1; lo == 0 || hi == 0;) {
+        if (F > o.largest) { r.outcome = FosResult::StandsAtLargest; r.stands_at = r.F = lo; return r; }
+        if (F < o.smallest) { r.outcome = FosResult::FailsAtSmallest; r.fails_at = r.F = hi; return r; }
+        if (stands(F)) { lo = F; F *= 2; }
+        else { hi = F; F /= 2; }
+    }
+    while (hi - lo > o.tol) {
+        const double F = 0.5 * (lo + hi);
+        (stands(F) ? lo : hi) = F;
+    }
+    r.stands_at = lo;
+    r.fails_at = hi;
+    r.F = 0.5 * (lo + hi);
+    return r;
 }
 
 // ======================================================================================

@@ -105,6 +105,8 @@ echo "longest jobs, seconds each ($workers at a time): $(cat "$dir"/*.time 2>/de
 # Where the cores waited: the queue's wall time against the jobs' own, and when each job ran.
 sort -n "$dir"/*.span 2>/dev/null | awk -v w="$workers" '{ busy += $2 - $1; if ($2 > end) end = $2 }
     END { if (end > 0) printf "the queue: %d s wall, %d of %d core-seconds in jobs (%.0f %% busy)\n", end, busy, w * end, 100 * busy / (w * end) }'
-echo "the last to end (start-end s): $(sort -k2 -n "$dir"/*.span 2>/dev/null | tail -n 4 | awk '{ printf "%s%s-%s %s %s", NR > 1 ? "; " : "", $1, $2, $3, $4 }' | sed 's/tests\/check_//g; s/\.sh//g')"
+echo "the last to end (start-end s): $(sort -k2 -n "$dir"/*.span 2>/dev/null | tail -n 4 | awk '{ printf "%s%s-%s %s %s%s", (NR > 1 ? "; " : ""), $1, $2, $3, $4, (NF > 4 ? " " $5 : "") }' | sed 's/tests\/check_//g; s/\.sh//g')"
+echo "core-seconds by kind: $(cat "$dir"/*.span 2>/dev/null | awk '{ k = $3 == "check" ? ($5 ~ /san/ ? "checks (sanitizer program)" : "checks (plain program)") : $3 == "build" ? "builds" : "unit runs"; t[k] += $2 - $1 }
+    END { for (k in t) printf "%s%s %d", (n++ ? "; " : ""), k, t[k] }')"
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

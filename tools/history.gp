@@ -25,12 +25,14 @@ if (!exists("xcol"))   xcol = 'time'
 if (!exists("ycol"))   ycol = 'ke'
 if (!exists("xscale")) xscale = 1
 if (!exists("yscale")) yscale = 1
-# The unit of each column of a history (per wall: w<id>_fx _fy in N/m, _dx _dy in m).
+# The unit of each column of a history (per wall: w<id>_fx _fy in N/m, _dx _dy in m;
+# per TRACK: t<n>_x _y _ux _uy in m).
 tail2(n) = strlen(n) > 2 ? n[strlen(n) - 1:strlen(n)] : ''
 unit(n) = (n eq 'time') ? 's' : (n eq 'ke') ? 'J/m' : (n eq 'mass_in' || n eq 'mass_out') ? 'kg/m' : \
           (n eq 'rx' || n eq 'ry') ? 'N/m' : (n eq 'step' || n eq 'unbal') ? '-' : \
           (n[1:1] eq 'w' && (tail2(n) eq 'fx' || tail2(n) eq 'fy')) ? 'N/m' : \
-          (n[1:1] eq 'w' && (tail2(n) eq 'dx' || tail2(n) eq 'dy')) ? 'm' : '?'
+          (n[1:1] eq 'w' && (tail2(n) eq 'dx' || tail2(n) eq 'dy')) ? 'm' : \
+          (n[1:1] eq 't' && strstrt(n, '_') > 2 && (tail2(n) eq 'ux' || tail2(n) eq 'uy' || tail2(n) eq '_x' || tail2(n) eq '_y')) ? 'm' : '?'
 axis(n, f) = (f == 1) ? sprintf("%s [%s]", n, unit(n)) : sprintf("%s [%s] × %g", n, unit(n), f)
 if (!exists("xlabel")) xlabel = axis(xcol, xscale)
 if (!exists("ylabel")) ylabel = axis(ycol, yscale)

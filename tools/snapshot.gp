@@ -10,7 +10,8 @@
 #   title   text put before "step N, t = T s"                   default ''
 #   color   the column that colours the points: a name of the table's
 #           "# columns:" line (x y sxx syy sxy szz ep yielded mat id ux uy) or
-#           its number, e.g. color='syy' or color=4        default 'ep'
+#           its number, e.g. color='syy' or color=4, or u: the size of the
+#           displacement, sqrt(ux^2 + uy^2)                  default 'ep'
 #   cbmin, cbmax  ends of the colour scale, each may be set alone
 #           (default: 0 to epmax for ep, else the frame's range)
 #   epmax   top of the colour scale for ep (plastic shear strain) default 0.5
@@ -145,18 +146,27 @@ set palette defined (0 '#440154', 1 '#472c7a', 2 '#3b518b', 3 '#2c718e', \
 names = system(sprintf("awk '!/^#/ {exit} sub(/^#[ \t]*columns:[ \t]*/, \"\") {print; exit}' '%s'", in))
 if (words(names) == 0) names = 'x y sxx syy sxy szz ep yielded mat id ux uy'
 cname = '' . color
-ccol = sum [k = 1:words(names)] ((word(names, k) eq cname) ? k : 0)
+colnum(n) = sum [k = 1:words(names)] ((word(names, k) eq n) ? k : 0)
+uxcol = colnum('ux')
+uycol = colnum('uy')
+ccol = colnum(cname)
 digits(s) = strlen(s) > 0 && (sum [k = 1:strlen(s)] (strstrt('0123456789', s[k:k]) > 0 ? 0 : 1)) == 0
 if (ccol == 0 && digits(cname)) ccol = int(real(cname))
-if (ccol < 1 || ccol > words(names)) {
-    print sprintf("snapshot.gp: columns in '%s': %s", in, names)
-    exit error sprintf("snapshot.gp: no column '%s' to colour by", cname)
+if (cname eq 'u' && uxcol > 0 && uycol > 0) {
+    ccol = 0  # |u|, from the columns ux and uy
+} else {
+    if (ccol < 1 || ccol > words(names)) {
+        print sprintf("snapshot.gp: columns in '%s': %s (and u, the displacement's size, where ux and uy are)", in, names)
+        exit error sprintf("snapshot.gp: no column '%s' to colour by", cname)
+    }
+    cname = word(names, ccol)
 }
-cname = word(names, ccol)
+cvalue(dummy) = ccol > 0 ? column(ccol) : sqrt(column(uxcol)**2 + column(uycol)**2)
 clabel = (cname eq 'ep') ? 'plastic shear strain e_p [-]' : \
          (cname[1:1] eq 's' && strlen(cname) == 3) ? sprintf('stress {/Symbol s}_{%s} [Pa] (tension positive)', cname[2:3]) : \
          (cname eq 'x' || cname eq 'y') ? cname . ' [m]' : \
          (cname eq 'ux' || cname eq 'uy') ? 'displacement ' . cname . ' since step 0 [m]' : \
+         (cname eq 'u') ? 'displacement |u| since step 0 [m]' : \
          (cname eq 'yielded') ? 'yielded (1) or not (0) [-]' : \
          (cname eq 'mat') ? 'material id' : (cname eq 'id') ? 'point number' : cname
 if (cname eq 'ep') { set cbrange [0:epmax] } else { set cbrange [*:*] }
@@ -192,7 +202,7 @@ if (keybelow) {
 
 # The ring symbol is drawn at data size, too small to read in the key,
 # so the key entry comes from an empty curve with a larger symbol.
-plot in index frame using 1:2:ccol with points pt 7 ps ptsize lc palette notitle, \
+plot in index frame using 1:2:(cvalue(0)) with points pt 7 ps ptsize lc palette notitle, \
      ''  index frame using 1:($8 > 0.5 ? $2 : NaN) with points pt 6 ps ptsize \
          lw 0.5 lc rgb '#202020' notitle, \
      NaN with points pt 6 ps 1.5 lw 1 lc rgb '#202020' title 'yielded (dark ring)'
