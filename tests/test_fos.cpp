@@ -131,13 +131,13 @@ TEST_CASE("--fos converges as L halves: 10, 20 and 40 cells over H [slow][verify
 TEST_CASE("--fos: a scene that never settles, one that fails at the smallest factor, one that stands at the largest") {
     Scene s;
     s.mx = 12; s.my = 8; s.cell_m = 0.5;
-    s.fixes.push_back({kFixX, {0, 0, 0, 4}});
-    s.fixes.push_back({kFixX, {6, 0, 6, 4}});
-    s.fixes.push_back({kFixX | kFixY, {0, 0, 6, 0}});
+    s.fixes.push_back({kFixX, {0, 0, 0, 4}, {}});
+    s.fixes.push_back({kFixX, {6, 0, 6, 4}, {}});
+    s.fixes.push_back({kFixX | kFixY, {0, 0, 6, 0}, {}});
     s.gravity_y = -9.81; s.damping = 0.8; s.dt_s = 1e-3; s.steps = 3000;
     // a layer confined on both sides: it stands at any strength
     s.materials.push_back(Material::mohr(1, 5e7, 0.3, 2000, 30, 5000));
-    s.clusters.push_back({1, {0, 0, 6, 2}});
+    s.clusters.push_back({1, {0, 0, 6, 2}, 2, {}});
     REQUIRE(validate(s).empty());
     FosOptions o;
     o.largest = 4;
