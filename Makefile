@@ -102,9 +102,9 @@ build/lpfdm-san: lpfdm.cpp lpfdm.hpp | deps
 	@mkdir -p build
 	$(CXX) $(WARN) -Werror $(SAN) $(OMP) -o $@ lpfdm.cpp $(LIBS)
 
-# tests/run.sh builds the four programs as jobs of its queue, beside the checks that need
-# only ./lpfdm.
-test: | test-deps
+# tests/run.sh installs the packages (test-deps) and builds the four programs as jobs of its
+# queue, beside the checks that need only ./lpfdm.
+test:
 	@bash tests/run.sh
 
 demo: lpfdm | picture-deps

@@ -33,13 +33,15 @@ job() {
     t=$(date +%s)
     case $kind in
         # each target by one make, so that no two write the same file
-        build) make --no-print-directory "$arg"; rc=$?; echo $rc >"$dir/built.${arg//\//_}"; [ $rc = 0 ] ;;
+        # (the test builds wait for the packages' job, so that two apt-get never run at once)
+        build) case $arg in build/tests*) built test-deps ;; esac && make --no-print-directory "$arg"; rc=$?
+               echo $rc >"$dir/built.${arg//\//_}"; [ $rc = 0 ] ;;
         # the cases tagged [verify] are make verify's: a case without it checks the same at a coarser size
         unit-o2) built build/tests && OMP_NUM_THREADS=1 build/tests --no-version=1 --test-case-exclude='*[verify]*' ;;
         # the sanitizer build leaves out the [slow] cases; the kernel's own threads stay at one
         unit-san) built build/tests-san && OMP_NUM_THREADS=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
                       build/tests-san --no-version=1 --test-case-exclude='*[slow]*' ;;
-        check) built "${arg#* }" && bash ${arg% *} "${arg#* }" ;;
+        check) built test-deps && built "${arg#* }" && bash ${arg% *} "${arg#* }" ;;
     esac >"$dir/$n.log" 2>&1
     echo $? >"$dir/$n.rc"
     echo "$((SECONDS - start)) $kind${arg:+ $arg}" >"$dir/$n.time"
@@ -48,11 +50,19 @@ job() {
 export -f job built
 export dir t0=$(date +%s)
 
+# The Debian packages. The program's (fmt) first, alone. The tests' (Eigen, doctest, Clang,
+# CMake, gnuplot, Python's readers) are the queue's first job, `make test-deps`, when this
+# runs as root: on a fresh machine their installation takes a minute or two, which the
+# other core spends building the two programs, which need fmt only; the test builds and
+# every check wait for it. Not root: make test-deps stops here with the apt-get command.
+make --no-print-directory deps || exit 1
+[ "$(id -u)" = 0 ] || make --no-print-directory test-deps || exit 1
+
 # Jobs 1 and 2 are the unit runs, then every tests/check_*.sh with each build of the program
-# (./lpfdm, then build/lpfdm-san), then the four builds. The queue takes the builds first:
-# ./lpfdm (half a minute) and the sanitizer tests (the longest), the -O2 tests, check_cmake.sh
-# with ./lpfdm (its own CMake build, the longest run), the sanitizer program, then the unit
-# runs and the others in the order above.
+# (./lpfdm, then build/lpfdm-san), then the packages and the four builds. The queue takes
+# those first: the packages, the two programs beside them, the sanitizer tests (the longest
+# build), the -O2 tests, check_cmake.sh with ./lpfdm (its own CMake build, the longest
+# run), then the unit runs and the others in the order above.
 n=0 list=()
 add() { n=$((n + 1)); list+=("$n $1${2:+ $2}"); }
 add unit-o2
@@ -63,14 +73,13 @@ for exe in ./lpfdm build/lpfdm-san; do
     for script in $scripts; do add check "$script $exe"; done
 done
 builds=$n
-for target in lpfdm build/tests-san build/tests build/lpfdm-san; do add build "$target"; done
+for target in test-deps lpfdm build/lpfdm-san build/tests-san build/tests; do add build "$target"; done
 cmake_job=$(printf '%s\n' "${list[@]}" | grep -m 1 ' check tests/check_cmake.sh ./lpfdm$')
 workers=$(nproc 2>/dev/null || echo 2)
 [ "$workers" -ge 2 ] || workers=2
 {
-    printf '%s\n' "${list[@]:builds:3}"
+    printf '%s\n' "${list[@]:builds}"
     [ -n "$cmake_job" ] && echo "$cmake_job"
-    printf '%s\n' "${list[@]:builds+3}"
     printf '%s\n' "${list[@]:0:builds}" | grep -vxF "${cmake_job:-none}"
 } | xargs -P "$workers" -L 1 bash -c 'job "$1" "$2" "${*:3}"' _
 
