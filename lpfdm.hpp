@@ -2794,7 +2794,10 @@ LPFDM_INLINE inline void Simulation::gather_mean(int n1, double& umx, double& um
 //   this stop 14 % of a collapsing column left through its rough floor.
 // * Moving walls: all nodes of a wall get (vx, vy) dt each step; after each whole cell
 //   of travel along an axis the wall passes to the next line of nodes on that axis.
-//   Where a wall meets a fixed node, the fixed direction wins. While the wall's face lies
+//   Constraints combine: a wall and a FIX (or two walls) may share nodes where they set
+//   different directions, a SMOOTH wall's x beside a smooth base's FIX Y (validate refuses
+//   a direction set by both at the start). Where a moving wall later meets a fixed node,
+//   the fixed direction wins. While the wall's face lies
 //   between two lines of nodes both are driven (the cell between moves with the wall): a
 //   node behind the face left free, with the little mass of the points beside the face
 //   and no material beyond it, let sand flow through a retaining wall moved away from
@@ -6819,6 +6822,22 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
         detail::node_span(b.y0, b.y1, s.cell_m, s.my, j0, j1);
         return (i1 < i0 || j1 < j0) ? 0L : (i1 - i0 + 1L) * (j1 - j0 + 1L);
     };
+    // The directions a wall sets at its start: a rough one both, a SMOOTH one across its
+    // line (a column of nodes x, a row y; Simulation::impose_supports).
+    auto wall_dirs = [&](const Wall& w) {
+        if (!w.smooth) return kFixX | kFixY;
+        int i0, i1, j0, j1;
+        detail::node_span(w.box.x0, w.box.x1, s.cell_m, s.mx, i0, i1);
+        detail::node_span(w.box.y0, w.box.y1, s.cell_m, s.my, j0, j1);
+        return i1 == i0 ? int(kFixX) : int(kFixY);
+    };
+    auto fmt_nodes = [&](const std::string& m, const Box& b) {  // m, and where the nodes of box b are
+        int i0, i1, j0, j1;
+        detail::node_span(b.x0, b.x1, s.cell_m, s.mx, i0, i1);
+        detail::node_span(b.y0, b.y1, s.cell_m, s.my, j0, j1);
+        auto span = [&](int a0, int a1) { return shortest(a0 * s.cell_m) + (a1 > a0 ? " to " + shortest(a1 * s.cell_m) : std::string()); };
+        return m + " (x = " + span(i0, i1) + " m, y = " + span(j0, j1) + " m)";
+    };
     for (std::size_t a = 0; a < s.fixes.size(); ++a) {
         const Fix& f = s.fixes[a];
         keys("FIX", a, f.pos, 0);
@@ -6849,10 +6868,22 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
                           std::hypot(w.vx, w.vy) * s.dt_s / s.cell_m);
             err(w.pos, buf);
         }
-        for (const auto& f : s.fixes) {
-            const Box i{std::max(w.box.x0, f.box.x0), std::max(w.box.y0, f.box.y0), std::min(w.box.x1, f.box.x1), std::min(w.box.y1, f.box.y1)};
-            if (node_count(i) > 0) { err(w.pos, "the wall's nodes include fixed nodes (FIX at line " + std::to_string(f.pos.line) + ")"); break; }
-        }
+        // Constraints combine: a wall may share nodes with a FIX or another wall where they
+        // set different directions (a SMOOTH wall's x beside a base's FIX Y); where both set
+        // one direction the deck is refused, naming both cards (the nodes in the box of both).
+        const int wd = wall_dirs(w);
+        auto shared = [&](const Box& o, int od, const std::string& other) {
+            const Box i{std::max(w.box.x0, o.x0), std::max(w.box.y0, o.y0), std::min(w.box.x1, o.x1), std::min(w.box.y1, o.y1)};
+            if (!(wd & od) || n <= 0 || node_count(i) <= 0) return false;
+            const char* d = (wd & od) == (kFixX | kFixY) ? "x and y" : (wd & od) == kFixX ? "x" : "y";
+            err(w.pos, fmt_nodes("WALL " + std::to_string(w.id) + " and " + other + " both set " + d + " at the nodes they share", i));
+            return true;
+        };
+        bool refused = false;
+        for (const auto& f : s.fixes)
+            if (!refused) refused = shared(f.box, f.dirs, "the FIX at line " + std::to_string(f.pos.line));
+        for (std::size_t b = 0; b < a && !refused; ++b)
+            refused = shared(s.walls[b].box, wall_dirs(s.walls[b]), "WALL " + std::to_string(s.walls[b].id) + " (line " + std::to_string(s.walls[b].pos.line) + ")");
     }
     for (std::size_t a = 0; a < s.shakes.size(); ++a) {
         const Shake& k = s.shakes[a];

@@ -875,10 +875,18 @@ TEST_CASE("deck error: dt above the stable limit; the message gives the limit") 
                     "above the stable limit 0.00045607 s");
 }
 
-TEST_CASE("deck error: walls that select no node, hold fixed nodes or move too fast") {
+TEST_CASE("deck error: walls that select no node, set a direction another card sets at a node they share, or move too fast") {
     CHECK_ONE_ERROR(plus("WALL 1 0.2 0.2 0.8 0.8 0 0"), 5, 1, "the WALL box holds no node");
     CHECK_ONE_ERROR(plus("WALL 1 4 3 4 1 -1 0"), 5, 1, "the box needs x0 <= x1 and y0 <= y1");
-    CHECK_ONE_ERROR(kBase + "FIX XY 0 0 4 0\nWALL 1 4 0 4 4 -1 0\n", 6, 1, "the wall's nodes include fixed nodes (FIX at line 5)");
+    // Constraints combine where they set different directions; where both set one, both cards are named.
+    CHECK_ONE_ERROR(kBase + "FIX XY 0 0 4 0\nWALL 1 4 0 4 4 -1 0\n", 6, 1, "WALL 1 and the FIX at line 5 both set x and y at the nodes they share (x = 4 m, y = 0 m)");
+    CHECK_ONE_ERROR(kBase + "FIX XY 0 0 4 0\nWALL 1 4 0 4 4 -1 0 SMOOTH\n", 6, 1, "WALL 1 and the FIX at line 5 both set x at the nodes they share (x = 4 m, y = 0 m)");
+    CHECK_ONE_ERROR(kBase + "FIX Y 0 0 4 0\nWALL 1 4 0 4 4 -1 0\n", 6, 1, "WALL 1 and the FIX at line 5 both set y at the nodes they share (x = 4 m, y = 0 m)");
+    CHECK_ONE_ERROR(kBase + "FIX X 4 0 4 4\nWALL 1 4 2 4 4 0 0 SMOOTH\n", 6, 1, "WALL 1 and the FIX at line 5 both set x at the nodes they share (x = 4 m, y = 2 to 4 m)");
+    CHECK_ONE_ERROR(kBase + "WALL 1 4 1 4 4 -1 0 SMOOTH\nWALL 2 2 4 4 4 0 -1\n", 6, 1, "WALL 2 and WALL 1 (line 5) both set x at the nodes they share (x = 4 m, y = 4 m)");
+    read_ok(kBase + "FIX Y 0 0 4 0\nWALL 1 4 0 4 4 -1 0 SMOOTH\n");                       // a smooth wall's x, the base's y
+    read_ok(kBase + "WALL 1 4 1 4 4 -1 0 SMOOTH\nWALL 2 2 4 4 4 0 -1 SMOOTH\n");             // a column's x, a row's y
+    read_ok(kBase + "FIX X 0 0 0 4\nFIX Y 0 0 4 0\nWALL 1 0 4 4 4 0 -1 SMOOTH\n");         // a cap pressing down between smooth sides
     // 0.1 cell per step is allowed, more is not: L = 1 m, dt = 1e-4 s.
     read_ok(plus("WALL 1 4 1 4 4 -1000 0"));
     CHECK_ONE_ERROR(plus("WALL 1 4 1 4 4 -1001 0"), 5, 1, "at most 0.1 is allowed");
