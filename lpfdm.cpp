@@ -399,7 +399,6 @@ struct Outputs {
     lpfdm::Simulation& sim;
     const lpfdm::RunInfo& run;
     std::uint64_t digest;
-    std::vector<double> x0, y0;  // the points' positions at step 0, by id (the VTU series' displacement)
     std::vector<OutFile> outs;
     bool write_failed = false;
 
@@ -448,7 +447,7 @@ struct Outputs {
     void vtu_frame(OutFile& o) {
         const std::string file = lpfdm::vtu_frame_file(o.spec->file, sim.step_count());
         write_failed |= !write_whole(opt.outdir + "/" + file, [&](std::FILE* f) {
-            lpfdm::write_vtu(f, sim, x0, y0, o.spec->binary);
+            lpfdm::write_vtu(f, sim, sim.initial_x(), sim.initial_y(), o.spec->binary);  // displacement from step 0, by id
             return !std::ferror(f);
         });
         o.frames.push_back({file, sim.time()});
@@ -690,10 +689,7 @@ bool write_trial(const lpfdm::Scene& scene, const Options& opt, const std::strin
     run.seed = opt.seed;
     run.threads = sim.kernel() == lpfdm::Kernel::Reference ? 1 : nthreads;
     run.kernel = sim.kernel() == lpfdm::Kernel::Reference ? "reference" : sim.wide() ? "fast (AVX2)" : opt.kernel == lpfdm::Kernel::Fast ? "fast (no AVX2 here)" : "scalar";
-    std::vector<double> x0, y0;
-    for (const auto& out : sc.outputs)
-        if (out.kind == lpfdm::Output::Vtu) { x0 = sim.points().x; y0 = sim.points().y; }
-    Outputs out{o, sim, run, 0, x0, y0, {}, false};
+    Outputs out{o, sim, run, 0, {}, false};
     if (!out.open()) return false;
     double particle_steps = 0, wall = 0;
     Rest rest;
@@ -795,11 +791,6 @@ int main(int argc, char** argv) {
     run.seed = opt.seed;
     run.threads = sim.kernel() == lpfdm::Kernel::Reference ? 1 : nthreads;
     run.kernel = sim.kernel() == lpfdm::Kernel::Reference ? "reference" : sim.wide() ? "fast (AVX2)" : opt.kernel == lpfdm::Kernel::Fast ? "fast (no AVX2 here)" : "scalar";
-    // The positions at step 0, by point id (the VTU series' displacement), taken before a
-    // restart replaces the points.
-    std::vector<double> x0, y0;
-    for (const auto& o : scene.outputs)
-        if (o.kind == lpfdm::Output::Vtu) { x0 = sim.points().x; y0 = sim.points().y; }
     if (!opt.restart.empty()) {
         diags = lpfdm::read_state(opt.restart, sim, digest);
         if (diags.empty() && sim.step_count() >= scene.steps)
@@ -815,7 +806,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "lpfdm: error: cannot create the output directory '%s': %s\n", opt.outdir.c_str(), std::strerror(errno));
         return kExitBadInput;
     }
-    Outputs out{opt, sim, run, digest, x0, y0, {}, false};
+    Outputs out{opt, sim, run, digest, {}, false};
     if (!out.open()) return kExitBadInput;
     double particle_steps = 0, wall = 0;
     Rest rest;
