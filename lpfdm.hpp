@@ -338,6 +338,8 @@ struct Scene {
     std::vector<Shake> shakes;          // SHAKE cards (at most one per direction)
     int absorb = 0;                     // ABSORB: edges with viscous dashpots (kBottom | kTop | kLeft | kRight)
     Pos absorb_pos;
+    int outflow = 0;                    // OUTFLOW: edges the material is meant to leave through (no warning)
+    Pos outflow_pos;
     double gravity_x = 0, gravity_y = 0;
     double damping = 0;                 // alpha of eq. 14
     std::uint64_t seed = 1;
@@ -453,6 +455,7 @@ inline const DeckCard kDeckCards[] = {
     {"WALL", "", "[SMOOTH|ROUGH]", "nodes in the box driven at (VX, VY) m/s; a line inside the material drives the material line it started on, others pass to the next line of nodes after each cell; no point crosses its faces; SMOOTH: a line driven across itself only"},
     {"SHAKE", "X|Y FILE=motion.txt", "[COMPLIANT] [BASELINE]", "ground acceleration history (time s, m/s^2): fixed nodes move with the ground, or COMPLIANT: it enters through an absorbing base"},
     {"ABSORB", "BOTTOM|TOP|LEFT|RIGHT ...", "", "viscous dashpots rho c_p (normal) and rho c_s (shear) on those edges of the lattice: outgoing waves leave"},
+    {"OUTFLOW", "BOTTOM|TOP|LEFT|RIGHT ...", "", "material is meant to leave the lattice through those edges (an opening under it draws no warning)"},
     {"GRAVITY", "", "", "gravity [m/s^2]"},
     {"DAMPING", "", "", "local non-viscous damping, eq. 13-14"},
     {"HOURGLASS", "", "", "viscous control of the checkerboard mode eq. 5 cannot see (0: off)"},
@@ -6915,6 +6918,7 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
                            ", and no FIX card holds that direction (or make it COMPLIANT: through an absorbing base)");
     }
     if (s.absorb & ~(kBottom | kTop | kLeft | kRight)) err(s.absorb_pos, "ABSORB names BOTTOM, TOP, LEFT or RIGHT");
+    if (s.outflow & ~(kBottom | kTop | kLeft | kRight)) err(s.outflow_pos, "OUTFLOW names BOTTOM, TOP, LEFT or RIGHT");
     if (lattice && s.absorb)  // a wall drives its nodes: a dashpot there would only be overruled, its energy counted twice
         for (const Wall& w : s.walls) {
             const bool on = ((s.absorb & kLeft) && w.box.x0 <= tol) || ((s.absorb & kRight) && w.box.x1 >= X - tol) ||
@@ -6963,7 +6967,7 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
 // Each warning is at the card it comes from. What `unread` names is not looked at.
 LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
     Diagnostics d;
-    char b[256];
+    char b[320];
     auto warn = [&](const Pos& p) {
         Diagnostic w;
         w.pos = p; w.message = b; w.warning = true;
@@ -7015,6 +7019,74 @@ LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
                 warn(k.pos);
             }
         }
+    // Material over an opening: under gravity, a line of cells (a column for GRAVITY's gy,
+    // a row for its gx) whose material has no held line of nodes beneath it, down to the
+    // lattice's edge, falls out through that edge (held: fixed or walled in the direction of
+    // gravity; an ABSORB edge counts as held). OUTFLOW names the edges it is meant to leave by.
+    if (!unread.grid && !unread.clusters && !unread.fixes && s.mx > 0 && s.my > 0 && s.cell_m > 0 && double(s.mx) * s.my <= 5e7) {
+        const int mx = s.mx, my = s.my;
+        std::vector<int> owner(std::size_t(mx) * std::size_t(my), -1);
+        for (std::size_t ci = 0; ci < s.clusters.size(); ++ci)
+            detail::cluster_cells(s.clusters[ci], s.cell_m, mx, my, [&](int i0, int i1, int j) {
+                for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = int(ci);
+            });
+        std::vector<std::uint8_t> held(std::size_t(mx + 1) * std::size_t(my + 1), 0);
+        auto hold = [&](const Box& b, int dirs) {
+            int i0, i1, j0, j1;
+            detail::node_span(b.x0, b.x1, s.cell_m, mx, i0, i1);
+            detail::node_span(b.y0, b.y1, s.cell_m, my, j0, j1);
+            for (int j = std::max(j0, 0); j <= std::min(j1, my); ++j)
+                for (int i = std::max(i0, 0); i <= std::min(i1, mx); ++i) held[std::size_t(j) * std::size_t(mx + 1) + std::size_t(i)] |= std::uint8_t(dirs);
+        };
+        for (const Fix& f : s.fixes) hold(f.box, f.dirs);
+        for (const Wall& w : s.walls) hold(w.box, kFixX | kFixY);
+        struct Edge { int bit; const char* name; bool down; };  // down: gravity points out through it
+        const Edge edges[] = {{kBottom, "BOTTOM", s.gravity_y < 0}, {kTop, "TOP", s.gravity_y > 0}, {kLeft, "LEFT", s.gravity_x < 0}, {kRight, "RIGHT", s.gravity_x > 0}};
+        for (const Edge& e : edges) {
+            if (!e.down || (s.outflow & e.bit) || (s.absorb & e.bit)) continue;
+            const bool across_y = e.bit == kBottom || e.bit == kTop;  // columns of cells fall through it
+            const int lines = across_y ? mx : my, depth = across_y ? my : mx;
+            // cell a of line at d cells from the edge; the nodes of its side towards the edge
+            auto cell_at = [&](int a, int d, int& i, int& j) {
+                i = across_y ? a : (e.bit == kLeft ? d : mx - 1 - d);
+                j = across_y ? (e.bit == kBottom ? d : my - 1 - d) : a;
+            };
+            auto side_held = [&](int a, int d) {
+                int i, j;
+                cell_at(a, d, i, j);
+                const int dir = across_y ? kFixY : kFixX;
+                int n0, n1;  // the two nodes
+                if (e.bit == kBottom) { n0 = j * (mx + 1) + i; n1 = n0 + 1; }
+                else if (e.bit == kTop) { n0 = (j + 1) * (mx + 1) + i; n1 = n0 + 1; }
+                else if (e.bit == kLeft) { n0 = j * (mx + 1) + i; n1 = n0 + (mx + 1); }
+                else { n0 = j * (mx + 1) + i + 1; n1 = n0 + (mx + 1); }
+                return (held[std::size_t(n0)] & dir) && (held[std::size_t(n1)] & dir);
+            };
+            int first = -1, last = -1, count = 0, cluster = -1;
+            for (int a = 0; a < lines; ++a) {
+                int d0 = 0, i = 0, j = 0;
+                for (; d0 < depth; ++d0) {
+                    cell_at(a, d0, i, j);
+                    if (owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] >= 0) break;
+                }
+                if (d0 == depth) continue;  // no material along this line
+                bool open = true;
+                for (int d = d0; d >= 0 && open; --d) open = !side_held(a, d);
+                if (!open) continue;
+                if (first < 0) { first = a; cluster = owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)]; }
+                if (last < 0 || a == last + 1 || count == 0) last = a;
+                ++count;
+            }
+            if (count == 0) continue;
+            const char* what = across_y ? "columns" : "rows";
+            const char* axis = across_y ? "x" : "y";
+            std::snprintf(b, sizeof b,
+                          "material over an opening falls out through the lattice's %s edge under gravity: %d %s of cells (the first %d to %d, %s = %s to %s m) "
+                          "have no fixed or walled line of nodes beneath their material; OUTFLOW %s says it is meant",
+                          e.name, count, what, first, last, axis, shortest(first * s.cell_m).c_str(), shortest((last + 1) * s.cell_m).c_str(), e.name);
+            warn(s.clusters[std::size_t(cluster)].pos);
+        }
+    }
     if (!unread.step && s.steps >= 1)
         for (const Output& o : s.outputs)
             if (o.every > s.steps) {
@@ -7587,19 +7659,20 @@ inline void read_shake(CardReader& r, Scene& sc, const Pos& kp, const std::strin
     }
     if (!r.ok()) sc.shakes.pop_back();
 }
-// ABSORB BOTTOM|TOP|LEFT|RIGHT ...
-inline void read_absorb(CardReader& r, Scene& sc, const Pos& kp) {
-    const int before = sc.absorb;
-    if (!sc.absorb) sc.absorb_pos = kp;
+// ABSORB BOTTOM|TOP|LEFT|RIGHT ... and OUTFLOW BOTTOM|TOP|LEFT|RIGHT ...: the edges into
+// edges (kBottom | kTop | kLeft | kRight), the first card's place into at.
+inline void read_edges(CardReader& r, const char* card, int& edges, Pos& at, const Pos& kp) {
+    const int before = edges;
+    if (!edges) at = kp;
     do {
         const int e = r.word_of("edge", {"BOTTOM", "TOP", "LEFT", "RIGHT"});
         if (e < 0) break;
         const int bit = 1 << e;
         static const char* const edge_names[] = {"BOTTOM", "TOP", "LEFT", "RIGHT"};
-        if (sc.absorb & bit) { r.fail(kp, std::string("ABSORB ") + edge_names[e] + " is given twice"); break; }
-        sc.absorb |= bit;
+        if (edges & bit) { r.fail(kp, std::string(card) + " " + edge_names[e] + " is given twice"); break; }
+        edges |= bit;
     } while (r.ok() && !r.at_end());
-    if (!r.ok()) sc.absorb = before;
+    if (!r.ok()) edges = before;
 }
 // OUTPUT POINTS|HISTORY|VTU|STATE file [BINARY] [NODES] [EVERY n]
 inline void read_output(CardReader& r, Scene& sc, const Pos& kp) {
@@ -7714,7 +7787,9 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
         } else if (kw == "SHAKE") {
             read_shake(r, sc, kp, file);
         } else if (kw == "ABSORB") {
-            read_absorb(r, sc, kp);
+            read_edges(r, "ABSORB", sc.absorb, sc.absorb_pos, kp);
+        } else if (kw == "OUTFLOW") {
+            read_edges(r, "OUTFLOW", sc.outflow, sc.outflow_pos, kp);
         } else if (kw == "GRAVITY") {
             once(have_gravity);
             r.fields("GRAVITY", sc, 0);

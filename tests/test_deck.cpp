@@ -1763,3 +1763,33 @@ TEST_CASE("TRACK: the history follows a point: its place and its displacement si
     CHECK(v[n - 1] == approx(p.y[std::size_t(k)] - 2.0625).epsilon(1e-6));
     CHECK(v[n - 1] == approx(v[n - 5]).epsilon(1e-9));  // the block falls rigidly: both points alike
 }
+
+// Material over an opening: under gravity, a column of cells with no fixed or walled row of
+// nodes beneath its material down to the lattice's edge falls out there (a row of cells
+// for a horizontal gravity); OUTFLOW says it is meant, an ABSORB edge holds.
+TEST_CASE("deck warning: material over an opening in its support falls out of the lattice, unless OUTFLOW names the edge") {
+    const std::string bin = "GRID 4 4 1\nMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nCLUSTER 1 0 2 4 4\nSTEP 1E-4 10\n"
+                            "GRAVITY 0 -9.81\nFIX XY 0 2 1 2\nFIX XY 3 2 4 2\n";  // a floor at y = 2 with a hole from x = 1 to 3
+    Diagnostics w = lpfdm::warnings(read_ok(bin));
+    INFO(listing(w));
+    REQUIRE(w.size() == 1);
+    CHECK(w[0].pos.line == 3);  // the CLUSTER whose material is over it
+    CHECK(has(w[0].message, "falls out through the lattice's BOTTOM edge under gravity: 2 columns of cells (the first 1 to 2, x = 1 to 3 m)"));
+    CHECK(has(w[0].message, "OUTFLOW BOTTOM says it is meant"));
+    CHECK(lpfdm::warnings(read_ok(bin + "OUTFLOW BOTTOM\n")).empty());
+    CHECK(lpfdm::warnings(read_ok(bin + "OUTFLOW LEFT BOTTOM\n")).empty());
+    CHECK(lpfdm::warnings(read_ok(bin + "ABSORB BOTTOM\n")).empty());
+    CHECK(lpfdm::warnings(read_ok(bin + "FIX Y 0 0 4 0\n")).empty());      // a floor lower down catches it
+    CHECK(lpfdm::warnings(read_ok(bin + "WALL 1 1 1 3 1 0 0\n")).empty());  // so does a wall
+    CHECK(!lpfdm::warnings(read_ok(bin + "FIX X 0 0 4 0\n")).empty());      // held across, not against gravity
+    CHECK(lpfdm::warnings(read_ok(kBase + "FIX XY 0 0 4 0\nGRAVITY 0 -9.81\n")).empty());
+    // Sideways: gravity along +x and nothing holding the lattice's right edge
+    w = lpfdm::warnings(read_ok(kBase + "FIX XY 0 0 4 0\nGRAVITY 9.81 0\n"));
+    INFO(listing(w));
+    REQUIRE(w.size() == 1);
+    CHECK(has(w[0].message, "RIGHT edge under gravity: 2 rows of cells (the first 0 to 1, y = 0 to 2 m)"));
+    CHECK(lpfdm::warnings(read_ok(kBase + "FIX XY 0 0 4 0\nGRAVITY 9.81 0\nFIX X 4 0 4 4\n")).empty());
+    // OUTFLOW's own errors
+    CHECK_ONE_ERROR(plus("OUTFLOW SIDEWAYS"), 5, 9, "edge");
+    CHECK_ONE_ERROR(plus("OUTFLOW BOTTOM BOTTOM"), 5, 1, "OUTFLOW BOTTOM is given twice");
+}
