@@ -7039,7 +7039,12 @@ LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
                 for (int i = std::max(i0, 0); i <= std::min(i1, mx); ++i) held[std::size_t(j) * std::size_t(mx + 1) + std::size_t(i)] |= std::uint8_t(dirs);
         };
         for (const Fix& f : s.fixes) hold(f.box, f.dirs);
-        for (const Wall& w : s.walls) hold(w.box, kFixX | kFixY);
+        for (const Wall& w : s.walls) {  // a rough wall holds both directions, a SMOOTH one across its line
+            int i0, i1, j0, j1;
+            detail::node_span(w.box.x0, w.box.x1, s.cell_m, mx, i0, i1);
+            detail::node_span(w.box.y0, w.box.y1, s.cell_m, my, j0, j1);
+            hold(w.box, !w.smooth ? kFixX | kFixY : i1 == i0 ? int(kFixX) : int(kFixY));
+        }
         struct Edge { int bit; const char* name; bool down; };  // down: gravity points out through it
         const Edge edges[] = {{kBottom, "BOTTOM", s.gravity_y < 0}, {kTop, "TOP", s.gravity_y > 0}, {kLeft, "LEFT", s.gravity_x < 0}, {kRight, "RIGHT", s.gravity_x > 0}};
         for (const Edge& e : edges) {

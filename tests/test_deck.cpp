@@ -1789,6 +1789,15 @@ TEST_CASE("deck warning: material over an opening in its support falls out of th
     REQUIRE(w.size() == 1);
     CHECK(has(w[0].message, "RIGHT edge under gravity: 2 rows of cells (the first 0 to 1, y = 0 to 2 m)"));
     CHECK(lpfdm::warnings(read_ok(kBase + "FIX XY 0 0 4 0\nGRAVITY 9.81 0\nFIX X 4 0 4 4\n")).empty());
+    // A smooth wall holds across its line only: a base stopping short of its lowest node
+    // leaves that cell open (the backfill drained out there); the base reaching it holds.
+    const std::string wall = "GRID 8 4 1\nMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nCLUSTER 1 2 0 8 2\nSTEP 1E-4 10\nGRAVITY 0 -9.81\n"
+                             "WALL 1 2 0 2 4 0 0 SMOOTH\n";
+    w = lpfdm::warnings(read_ok(wall + "FIX Y 3 0 8 0\n"));
+    INFO(listing(w));
+    REQUIRE(w.size() == 1);
+    CHECK(has(w[0].message, "BOTTOM edge under gravity: 1 columns of cells (the first 2 to 2, x = 2 to 3 m)"));
+    CHECK(lpfdm::warnings(read_ok(wall + "FIX Y 2 0 8 0\n")).empty());
     // OUTFLOW's own errors
     CHECK_ONE_ERROR(plus("OUTFLOW SIDEWAYS"), 5, 9, "edge");
     CHECK_ONE_ERROR(plus("OUTFLOW BOTTOM BOTTOM"), 5, 1, "OUTFLOW BOTTOM is given twice");
