@@ -644,6 +644,20 @@ void print_profile(const lpfdm::Simulation& sim, int nthreads) {
 }
 
 
+// How the run was made, for the provenance lines of its files (lpfdm::write_provenance).
+lpfdm::RunInfo run_info(const lpfdm::Simulation& sim, const Options& opt, const std::string& text, int nthreads) {
+    lpfdm::RunInfo run;
+    run.deck = opt.deck;
+    run.deck_digest = lpfdm::fnv1a64(text);
+    run.settings = opt.setting_text;
+    run.steps = opt.steps;
+    run.refine = opt.refine;
+    run.seed = opt.seed;
+    run.threads = sim.kernel() == lpfdm::Kernel::Reference ? 1 : nthreads;
+    run.kernel = sim.kernel() == lpfdm::Kernel::Reference ? "reference" : sim.wide() ? "fast (AVX2)" : opt.kernel == lpfdm::Kernel::Fast ? "fast (no AVX2 here)" : "scalar";
+    return run;
+}
+
 // --fos: what keeps the deck's scene from having a factor of safety (a scene that cannot
 // come to rest, or has no strength to reduce), at the cards concerned.
 lpfdm::Diagnostics fos_problems(const lpfdm::Scene& scene) {
@@ -672,10 +686,7 @@ bool write_trial(const lpfdm::Scene& scene, const Options& opt, const std::strin
         return false;
     }
     lpfdm::Simulation sim(sc, opt.kernel);
-    lpfdm::RunInfo run;
-    run.deck = opt.deck;
-    run.deck_digest = lpfdm::fnv1a64(text);
-    run.settings = opt.setting_text;
+    lpfdm::RunInfo run = run_info(sim, opt, text, nthreads);
     for (std::size_t k = 0; k < sc.materials.size(); ++k) {
         const lpfdm::Material &m = sc.materials[k], &was = scene.materials[k];
         if (m.model != lpfdm::Model::MohrCoulomb) continue;
@@ -685,10 +696,6 @@ bool write_trial(const lpfdm::Scene& scene, const Options& opt, const std::strin
         if (was.tension >= 0) run.settings.push_back(fmt::format("MATERIAL{}.TENSION={:.17g}", m.id, m.tension));
     }
     run.steps = t.steps;
-    run.refine = opt.refine;
-    run.seed = opt.seed;
-    run.threads = sim.kernel() == lpfdm::Kernel::Reference ? 1 : nthreads;
-    run.kernel = sim.kernel() == lpfdm::Kernel::Reference ? "reference" : sim.wide() ? "fast (AVX2)" : opt.kernel == lpfdm::Kernel::Fast ? "fast (no AVX2 here)" : "scalar";
     Outputs out{o, sim, run, 0, {}, false};
     if (!out.open()) return false;
     double particle_steps = 0, wall = 0;
@@ -782,15 +789,7 @@ int main(int argc, char** argv) {
     if (opt.fos) return run_fos(scene, opt, text, nthreads);
     lpfdm::Simulation sim(scene, opt.kernel);
     sim.set_profiling(opt.profile);
-    lpfdm::RunInfo run;
-    run.deck = opt.deck;
-    run.deck_digest = lpfdm::fnv1a64(text);
-    run.settings = opt.setting_text;
-    run.steps = opt.steps;
-    run.refine = opt.refine;
-    run.seed = opt.seed;
-    run.threads = sim.kernel() == lpfdm::Kernel::Reference ? 1 : nthreads;
-    run.kernel = sim.kernel() == lpfdm::Kernel::Reference ? "reference" : sim.wide() ? "fast (AVX2)" : opt.kernel == lpfdm::Kernel::Fast ? "fast (no AVX2 here)" : "scalar";
+    const lpfdm::RunInfo run = run_info(sim, opt, text, nthreads);
     if (!opt.restart.empty()) {
         diags = lpfdm::read_state(opt.restart, sim, digest);
         if (diags.empty() && sim.step_count() >= scene.steps)
