@@ -6769,6 +6769,43 @@ inline std::string cluster_place_problem(const Scene& s, const Cluster& c, Pos& 
 
 // Everything that would make a scene unrunnable, with the card each problem came from.
 // All problems are reported, not the first; what `unread` names is not checked again.
+namespace detail {
+// The directions wall w sets at its start: a rough one both, a SMOOTH one across its line
+// (a column of nodes x, a row y; Simulation::impose_supports).
+inline int wall_dirs(const Scene& s, const Wall& w) {
+    if (!w.smooth) return kFixX | kFixY;
+    int i0, i1, j0, j1;
+    node_span(w.box.x0, w.box.x1, s.cell_m, s.mx, i0, i1);
+    node_span(w.box.y0, w.box.y1, s.cell_m, s.my, j0, j1);
+    return i1 == i0 ? int(kFixX) : int(kFixY);
+}
+// Constraints combine: a wall may share nodes with a FIX or an earlier wall where they set
+// different directions (a SMOOTH wall's x beside a smooth base's FIX Y). Where both set one
+// direction at a node of both boxes, wall a is refused: the message names both cards and
+// the nodes; "" when it is not.
+inline std::string wall_conflict(const Scene& s, std::size_t a) {
+    const Wall& w = s.walls[a];
+    const int wd = wall_dirs(s, w);
+    auto clash = [&](const Box& o, int od, const std::string& other) -> std::string {
+        int i0, i1, j0, j1;
+        node_span(std::max(w.box.x0, o.x0), std::min(w.box.x1, o.x1), s.cell_m, s.mx, i0, i1);
+        node_span(std::max(w.box.y0, o.y0), std::min(w.box.y1, o.y1), s.cell_m, s.my, j0, j1);
+        if (!(wd & od) || i1 < i0 || j1 < j0) return "";
+        const char* d = (wd & od) == (kFixX | kFixY) ? "x and y" : (wd & od) == kFixX ? "x" : "y";
+        auto span = [&](int a0, int a1) { return shortest(a0 * s.cell_m) + (a1 > a0 ? " to " + shortest(a1 * s.cell_m) : std::string()); };
+        return "WALL " + std::to_string(w.id) + " and " + other + " both set " + d + " at the nodes they share (x = " + span(i0, i1) +
+               " m, y = " + span(j0, j1) + " m)";
+    };
+    for (const Fix& f : s.fixes)
+        if (std::string m = clash(f.box, f.dirs, "the FIX at line " + std::to_string(f.pos.line)); !m.empty()) return m;
+    for (std::size_t b = 0; b < a; ++b)
+        if (std::string m = clash(s.walls[b].box, wall_dirs(s, s.walls[b]), "WALL " + std::to_string(s.walls[b].id) + " (line " +
+                                  std::to_string(s.walls[b].pos.line) + ")"); !m.empty())
+            return m;
+    return "";
+}
+}  // namespace detail
+
 LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
     Diagnostics d;
     auto err = [&](const Pos& p, std::string m) { d.push_back({p, std::move(m)}); };
@@ -6825,22 +6862,6 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
         detail::node_span(b.y0, b.y1, s.cell_m, s.my, j0, j1);
         return (i1 < i0 || j1 < j0) ? 0L : (i1 - i0 + 1L) * (j1 - j0 + 1L);
     };
-    // The directions a wall sets at its start: a rough one both, a SMOOTH one across its
-    // line (a column of nodes x, a row y; Simulation::impose_supports).
-    auto wall_dirs = [&](const Wall& w) {
-        if (!w.smooth) return kFixX | kFixY;
-        int i0, i1, j0, j1;
-        detail::node_span(w.box.x0, w.box.x1, s.cell_m, s.mx, i0, i1);
-        detail::node_span(w.box.y0, w.box.y1, s.cell_m, s.my, j0, j1);
-        return i1 == i0 ? int(kFixX) : int(kFixY);
-    };
-    auto fmt_nodes = [&](const std::string& m, const Box& b) {  // m, and where the nodes of box b are
-        int i0, i1, j0, j1;
-        detail::node_span(b.x0, b.x1, s.cell_m, s.mx, i0, i1);
-        detail::node_span(b.y0, b.y1, s.cell_m, s.my, j0, j1);
-        auto span = [&](int a0, int a1) { return shortest(a0 * s.cell_m) + (a1 > a0 ? " to " + shortest(a1 * s.cell_m) : std::string()); };
-        return m + " (x = " + span(i0, i1) + " m, y = " + span(j0, j1) + " m)";
-    };
     for (std::size_t a = 0; a < s.fixes.size(); ++a) {
         const Fix& f = s.fixes[a];
         keys("FIX", a, f.pos, 0);
@@ -6871,22 +6892,8 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
                           std::hypot(w.vx, w.vy) * s.dt_s / s.cell_m);
             err(w.pos, buf);
         }
-        // Constraints combine: a wall may share nodes with a FIX or another wall where they
-        // set different directions (a SMOOTH wall's x beside a base's FIX Y); where both set
-        // one direction the deck is refused, naming both cards (the nodes in the box of both).
-        const int wd = wall_dirs(w);
-        auto shared = [&](const Box& o, int od, const std::string& other) {
-            const Box i{std::max(w.box.x0, o.x0), std::max(w.box.y0, o.y0), std::min(w.box.x1, o.x1), std::min(w.box.y1, o.y1)};
-            if (!(wd & od) || n <= 0 || node_count(i) <= 0) return false;
-            const char* d = (wd & od) == (kFixX | kFixY) ? "x and y" : (wd & od) == kFixX ? "x" : "y";
-            err(w.pos, fmt_nodes("WALL " + std::to_string(w.id) + " and " + other + " both set " + d + " at the nodes they share", i));
-            return true;
-        };
-        bool refused = false;
-        for (const auto& f : s.fixes)
-            if (!refused) refused = shared(f.box, f.dirs, "the FIX at line " + std::to_string(f.pos.line));
-        for (std::size_t b = 0; b < a && !refused; ++b)
-            refused = shared(s.walls[b].box, wall_dirs(s.walls[b]), "WALL " + std::to_string(s.walls[b].id) + " (line " + std::to_string(s.walls[b].pos.line) + ")");
+        if (n > 0)
+            if (const std::string c = detail::wall_conflict(s, a); !c.empty()) err(w.pos, c);
     }
     for (std::size_t a = 0; a < s.shakes.size(); ++a) {
         const Shake& k = s.shakes[a];
@@ -6949,6 +6956,81 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
     return d;
 }
 
+namespace detail {
+// Material over an opening: under gravity, a line of cells (a column for GRAVITY's gy,
+// a row for its gx) whose material has no held line of nodes beneath it, down to the
+// lattice's edge, falls out through that edge (held: fixed or walled in the direction of
+// gravity; an ABSORB edge counts as held). OUTFLOW names the edges it is meant to leave by.
+inline void opening_warnings(const Scene& s, Diagnostics& d) {
+    if (!(s.mx > 0 && s.my > 0 && s.cell_m > 0 && double(s.mx) * s.my <= 5e7)) return;
+    const int mx = s.mx, my = s.my;
+    std::vector<int> owner(std::size_t(mx) * std::size_t(my), -1);
+    for (std::size_t ci = 0; ci < s.clusters.size(); ++ci)
+        cluster_cells(s.clusters[ci], s.cell_m, mx, my, [&](int i0, int i1, int j) {
+            for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = int(ci);
+        });
+    std::vector<std::uint8_t> held(std::size_t(mx + 1) * std::size_t(my + 1), 0);
+    auto hold = [&](const Box& b, int dirs) {
+        int i0, i1, j0, j1;
+        node_span(b.x0, b.x1, s.cell_m, mx, i0, i1);
+        node_span(b.y0, b.y1, s.cell_m, my, j0, j1);
+        for (int j = std::max(j0, 0); j <= std::min(j1, my); ++j)
+            for (int i = std::max(i0, 0); i <= std::min(i1, mx); ++i) held[std::size_t(j) * std::size_t(mx + 1) + std::size_t(i)] |= std::uint8_t(dirs);
+    };
+    for (const Fix& f : s.fixes) hold(f.box, f.dirs);
+    for (const Wall& w : s.walls) hold(w.box, wall_dirs(s, w));  // a SMOOTH wall holds across its line only
+    struct Edge { int bit; const char* name; bool down; };  // down: gravity points out through it
+    const Edge edges[] = {{kBottom, "BOTTOM", s.gravity_y < 0}, {kTop, "TOP", s.gravity_y > 0}, {kLeft, "LEFT", s.gravity_x < 0}, {kRight, "RIGHT", s.gravity_x > 0}};
+    for (const Edge& e : edges) {
+        if (!e.down || (s.outflow & e.bit) || (s.absorb & e.bit)) continue;
+        const bool across_y = e.bit == kBottom || e.bit == kTop;  // columns of cells fall through it
+        const int lines = across_y ? mx : my, depth = across_y ? my : mx;
+        // cell a of line at d cells from the edge; the nodes of its side towards the edge
+        auto cell_at = [&](int a, int d, int& i, int& j) {
+            i = across_y ? a : (e.bit == kLeft ? d : mx - 1 - d);
+            j = across_y ? (e.bit == kBottom ? d : my - 1 - d) : a;
+        };
+        auto side_held = [&](int a, int d) {
+            int i, j;
+            cell_at(a, d, i, j);
+            const int dir = across_y ? kFixY : kFixX;
+            int n0, n1;  // the two nodes
+            if (e.bit == kBottom) { n0 = j * (mx + 1) + i; n1 = n0 + 1; }
+            else if (e.bit == kTop) { n0 = (j + 1) * (mx + 1) + i; n1 = n0 + 1; }
+            else if (e.bit == kLeft) { n0 = j * (mx + 1) + i; n1 = n0 + (mx + 1); }
+            else { n0 = j * (mx + 1) + i + 1; n1 = n0 + (mx + 1); }
+            return (held[std::size_t(n0)] & dir) && (held[std::size_t(n1)] & dir);
+        };
+        int first = -1, last = -1, count = 0, cluster = -1;
+        for (int a = 0; a < lines; ++a) {
+            int d0 = 0, i = 0, j = 0;
+            for (; d0 < depth; ++d0) {
+                cell_at(a, d0, i, j);
+                if (owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] >= 0) break;
+            }
+            if (d0 == depth) continue;  // no material along this line
+            bool open = true;
+            for (int d = d0; d >= 0 && open; --d) open = !side_held(a, d);
+            if (!open) continue;
+            if (first < 0) { first = a; cluster = owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)]; }
+            if (last < 0 || a == last + 1 || count == 0) last = a;
+            ++count;
+        }
+        if (count == 0) continue;
+        const char* what = across_y ? "columns" : "rows";
+        const char* axis = across_y ? "x" : "y";
+        char b[320];
+        std::snprintf(b, sizeof b,
+                      "material over an opening falls out through the lattice's %s edge under gravity: %d %s of cells (the first %d to %d, %s = %s to %s m) "
+                      "have no fixed or walled line of nodes beneath their material; OUTFLOW %s says it is meant",
+                      e.name, count, what, first, last, axis, shortest(first * s.cell_m).c_str(), shortest((last + 1) * s.cell_m).c_str(), e.name);
+        Diagnostic w;
+        w.pos = s.clusters[std::size_t(cluster)].pos; w.message = b; w.warning = true;
+        d.push_back(std::move(w));
+    }
+}
+}  // namespace detail
+
 // What is legal but probably a mistake, as warnings (the program's --strict makes them
 // errors). Units are SI and angles degrees, so a number off by a unit's factor runs
 // without complaint; these rules catch the usual slips:
@@ -6964,10 +7046,11 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
 //   OUTPUT EVERY above the steps the run writes its last frame or row only
 //   SHAKE moving the ground more than L/4   the lattice does not follow it (a record
 //                                that drifts: BASELINE)
+//   material over an opening     it falls out of the lattice (opening_warnings; OUTFLOW)
 // Each warning is at the card it comes from. What `unread` names is not looked at.
 LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
     Diagnostics d;
-    char b[320];
+    char b[256];
     auto warn = [&](const Pos& p) {
         Diagnostic w;
         w.pos = p; w.message = b; w.warning = true;
@@ -7019,79 +7102,7 @@ LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
                 warn(k.pos);
             }
         }
-    // Material over an opening: under gravity, a line of cells (a column for GRAVITY's gy,
-    // a row for its gx) whose material has no held line of nodes beneath it, down to the
-    // lattice's edge, falls out through that edge (held: fixed or walled in the direction of
-    // gravity; an ABSORB edge counts as held). OUTFLOW names the edges it is meant to leave by.
-    if (!unread.grid && !unread.clusters && !unread.fixes && s.mx > 0 && s.my > 0 && s.cell_m > 0 && double(s.mx) * s.my <= 5e7) {
-        const int mx = s.mx, my = s.my;
-        std::vector<int> owner(std::size_t(mx) * std::size_t(my), -1);
-        for (std::size_t ci = 0; ci < s.clusters.size(); ++ci)
-            detail::cluster_cells(s.clusters[ci], s.cell_m, mx, my, [&](int i0, int i1, int j) {
-                for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = int(ci);
-            });
-        std::vector<std::uint8_t> held(std::size_t(mx + 1) * std::size_t(my + 1), 0);
-        auto hold = [&](const Box& b, int dirs) {
-            int i0, i1, j0, j1;
-            detail::node_span(b.x0, b.x1, s.cell_m, mx, i0, i1);
-            detail::node_span(b.y0, b.y1, s.cell_m, my, j0, j1);
-            for (int j = std::max(j0, 0); j <= std::min(j1, my); ++j)
-                for (int i = std::max(i0, 0); i <= std::min(i1, mx); ++i) held[std::size_t(j) * std::size_t(mx + 1) + std::size_t(i)] |= std::uint8_t(dirs);
-        };
-        for (const Fix& f : s.fixes) hold(f.box, f.dirs);
-        for (const Wall& w : s.walls) {  // a rough wall holds both directions, a SMOOTH one across its line
-            int i0, i1, j0, j1;
-            detail::node_span(w.box.x0, w.box.x1, s.cell_m, mx, i0, i1);
-            detail::node_span(w.box.y0, w.box.y1, s.cell_m, my, j0, j1);
-            hold(w.box, !w.smooth ? kFixX | kFixY : i1 == i0 ? int(kFixX) : int(kFixY));
-        }
-        struct Edge { int bit; const char* name; bool down; };  // down: gravity points out through it
-        const Edge edges[] = {{kBottom, "BOTTOM", s.gravity_y < 0}, {kTop, "TOP", s.gravity_y > 0}, {kLeft, "LEFT", s.gravity_x < 0}, {kRight, "RIGHT", s.gravity_x > 0}};
-        for (const Edge& e : edges) {
-            if (!e.down || (s.outflow & e.bit) || (s.absorb & e.bit)) continue;
-            const bool across_y = e.bit == kBottom || e.bit == kTop;  // columns of cells fall through it
-            const int lines = across_y ? mx : my, depth = across_y ? my : mx;
-            // cell a of line at d cells from the edge; the nodes of its side towards the edge
-            auto cell_at = [&](int a, int d, int& i, int& j) {
-                i = across_y ? a : (e.bit == kLeft ? d : mx - 1 - d);
-                j = across_y ? (e.bit == kBottom ? d : my - 1 - d) : a;
-            };
-            auto side_held = [&](int a, int d) {
-                int i, j;
-                cell_at(a, d, i, j);
-                const int dir = across_y ? kFixY : kFixX;
-                int n0, n1;  // the two nodes
-                if (e.bit == kBottom) { n0 = j * (mx + 1) + i; n1 = n0 + 1; }
-                else if (e.bit == kTop) { n0 = (j + 1) * (mx + 1) + i; n1 = n0 + 1; }
-                else if (e.bit == kLeft) { n0 = j * (mx + 1) + i; n1 = n0 + (mx + 1); }
-                else { n0 = j * (mx + 1) + i + 1; n1 = n0 + (mx + 1); }
-                return (held[std::size_t(n0)] & dir) && (held[std::size_t(n1)] & dir);
-            };
-            int first = -1, last = -1, count = 0, cluster = -1;
-            for (int a = 0; a < lines; ++a) {
-                int d0 = 0, i = 0, j = 0;
-                for (; d0 < depth; ++d0) {
-                    cell_at(a, d0, i, j);
-                    if (owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] >= 0) break;
-                }
-                if (d0 == depth) continue;  // no material along this line
-                bool open = true;
-                for (int d = d0; d >= 0 && open; --d) open = !side_held(a, d);
-                if (!open) continue;
-                if (first < 0) { first = a; cluster = owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)]; }
-                if (last < 0 || a == last + 1 || count == 0) last = a;
-                ++count;
-            }
-            if (count == 0) continue;
-            const char* what = across_y ? "columns" : "rows";
-            const char* axis = across_y ? "x" : "y";
-            std::snprintf(b, sizeof b,
-                          "material over an opening falls out through the lattice's %s edge under gravity: %d %s of cells (the first %d to %d, %s = %s to %s m) "
-                          "have no fixed or walled line of nodes beneath their material; OUTFLOW %s says it is meant",
-                          e.name, count, what, first, last, axis, shortest(first * s.cell_m).c_str(), shortest((last + 1) * s.cell_m).c_str(), e.name);
-            warn(s.clusters[std::size_t(cluster)].pos);
-        }
-    }
+    if (!unread.grid && !unread.clusters && !unread.fixes) detail::opening_warnings(s, d);
     if (!unread.step && s.steps >= 1)
         for (const Output& o : s.outputs)
             if (o.every > s.steps) {
