@@ -608,13 +608,12 @@ int run_steps(lpfdm::Simulation& sim, const Options& opt, Outputs& out, double& 
     return status;
 }
 
-// The kernel that ran, as the summary line says it: the provenance lines' name, and why
-// it is not the one asked for, why the points go one at a time where the processor has
-// AVX2, and why the point pass takes one thread (Simulation::modes).
+// The kernel that ran, as the summary line says it: the provenance lines' name, why the
+// points go one at a time where the processor has AVX2, and why the point pass takes one
+// thread (Simulation::modes).
 std::string kernel_said(const lpfdm::Simulation& sim, const lpfdm::RunInfo& run) {
     const lpfdm::Modes& m = sim.modes();
     std::string s = run.kernel;
-    if (*m.why) s += std::string(" (") + m.why + ")";
     if (sim.wide() && *m.points_why) s += std::string(", points one at a time (") + m.points_why + ")";
     if (sim.threads() > 1 && *m.threads_why) s += std::string(", the point pass on one thread (") + m.threads_why + ")";
     return s;
@@ -626,10 +625,9 @@ void print_profile(const lpfdm::Simulation& sim, int nthreads) {
     getrusage(RUSAGE_SELF, &ru);
     double total = 0;
     for (int k = 0; k < lpfdm::Simulation::kPhases; ++k) total += sim.phase_seconds()[k];
-    const bool ref = sim.kernel() == lpfdm::Kernel::Reference;  // asked for, or the scene's modes ask it (Modes::why)
-    const std::string reference = *sim.modes().why ? std::string("the reference cycle (") + sim.modes().why + ")" : "the reference cycle";
+    const bool ref = sim.kernel() == lpfdm::Kernel::Reference;
     const std::string options = std::string("cells and nodes four per AVX2 register, points one at a time (") + sim.modes().points_why + ")";
-    const char* lanes = ref ? reference.c_str()
+    const char* lanes = ref ? "the reference cycle"
                         : !sim.wide() ? "points, cells and nodes one at a time"
                         : !*sim.modes().points_why ? "points, cells and nodes four per AVX2 register"
                         : options.c_str();

@@ -44,8 +44,7 @@
 //   Scalar     Fast without AVX2.
 //   All give the same numbers, bit for bit, on every deck (tests/test_reference.cpp).
 //   What a scene switches on (mapping, motion rule, transfer, hourglass control,
-//   earthquakes) is read once into Simulation::modes(); ADVECT FLIP runs on the
-//   reference cycle whatever the kernel asked for, and modes().why says so.
+//   earthquakes) is read once into Simulation::modes(); every kernel runs every mode.
 //
 // THE PAPER'S EQUATIONS, AND THE FUNCTION THAT COMPUTES EACH
 //   eq. 5a-5d  cell strain increments from nodal increments     cell_strain (MAPPING SMOOTH:
@@ -531,13 +530,16 @@ struct Points {
     std::vector<double> carry_dx, carry_dy;
     std::vector<std::int32_t> carry_from;
     // ADVECT FLIP: the point's own increment in x and y over the last step [m] (its
-    // velocity times dt), state.
+    // velocity times dt), state; and with threads each point's change in a step
+    // (Simulation::flip_return), scratch.
     std::vector<double> flip_ux, flip_uy;
+    std::vector<double> flip_gx, flip_gy;
 
     std::size_t size() const { return x.size(); }
     // Which scenes hold an array: every one, with a Mohr-Coulomb material, with scatter,
-    // with more than one thread, with ADVECT POINTS and threads, with ADVECT FLIP.
-    enum Use : std::uint8_t { kAlways, kPlastic, kScatter, kThreads, kCarry, kFlip };
+    // with more than one thread, with ADVECT POINTS and threads, with ADVECT FLIP, with
+    // ADVECT FLIP and threads.
+    enum Use : std::uint8_t { kAlways, kPlastic, kScatter, kThreads, kCarry, kFlip, kFlipThreads };
     // f(name, array, use, state) for every array above, in this order; state: part of a
     // point's state (not scratch).
     template <class F> void each_array(F&& f) { visit(*this, f); }
@@ -554,6 +556,7 @@ private:
         f("listed", p.listed, kThreads, false);
         f("carry_dx", p.carry_dx, kCarry, false); f("carry_dy", p.carry_dy, kCarry, false); f("carry_from", p.carry_from, kCarry, false);
         f("flip_ux", p.flip_ux, kFlip, true); f("flip_uy", p.flip_uy, kFlip, true);
+        f("flip_gx", p.flip_gx, kFlipThreads, false); f("flip_gy", p.flip_gy, kFlipThreads, false);
     }
 };
 
@@ -681,9 +684,7 @@ struct Modes {
     bool user = false;                 // a material has a user's model (Simulation::set_user_model)
     bool plastic = false;              // a Mohr-Coulomb material (or a user model): plastic shear and work
     bool scatter = false;              // SCATTER: each point its own strength
-    Kernel asked = Kernel::Fast;       // the kernel asked for
-    Kernel kernel = Kernel::Fast;      // the kernel that runs it
-    const char* why = "";              // why the two differ ("" when they do not)
+    Kernel kernel = Kernel::Fast;      // the kernel that runs it (every kernel runs every mode)
     // Why the fast kernel takes the points one at a time where it has AVX2 (its lattice
     // phases keep their lanes), and why its point pass runs on one thread ("": it does not).
     const char* points_why = "";
@@ -1158,13 +1159,19 @@ private:
     void reference_nodal_forces();
     void reference_compensate();
     void reference_integrate();
-    // ADVECT FLIP (flip_transfer): the transfer, the stress's second half, eq. 13-14.
-    void flip_transfer();
-    void flip_second_half();
-    void flip_changes();
-    void flip_return();
-    void flip_integrate();
-    void nodal_kinetic();
+    // ADVECT FLIP (flip_transfer): the transfer, the stress's second half, eq. 13-14, each
+    // on a box of nodes (cells) that holds every node (cell) with mass or an increment.
+    void flip_transfer(const Range& nodes);
+    void flip_second_half(const Range& nodes, const Range& cells);
+    void flip_second_strain(std::size_t k);
+    void flip_changes(const Range& nodes);
+    void flip_point_change(std::size_t k, double& gx, double& gy) const;
+    double flip_point_return(std::size_t k, double gx, double gy);
+    void flip_return(const Range& nodes);
+    Range flip_integrate(const Range& nodes, const Range& now);
+    Range flip_nodes() const;
+    template <class F> void each_point(const F& f);
+    void nodal_kinetic(const Range& nodes);
     void smooth_node_force(int c, bool right, bool left, bool above, bool below, double& fx, double& fy) const;
     void hourglass_node_force(int c, bool right, bool left, bool above, bool below, double khg, double& fx, double& fy) const;
     template <class F> void flip_weights(std::size_t k, const F& f) const;
@@ -2323,6 +2330,7 @@ inline bool uses(const Scene& s, Points::Use u, bool threads) {
     case Points::kThreads: return threads;
     case Points::kCarry: return threads && s.advect == Advect::Points;
     case Points::kFlip: return s.advect == Advect::Flip;
+    case Points::kFlipThreads: return threads && s.advect == Advect::Flip;
     default: return true;
     }
 }
@@ -2380,13 +2388,7 @@ LPFDM_DEF Modes modes_of(const Scene& s, Kernel asked) {
         m.plastic |= mat.model == Model::MohrCoulomb;
         m.scatter |= mat.scatter > 0;
     }
-    m.asked = m.kernel = asked;
-    // ADVECT FLIP is written once, in the reference cycle (the fast kernels have no FLIP
-    // transfer to equal): it runs there whatever kernel was asked for, and says so.
-    if (s.advect == Advect::Flip && asked != Kernel::Reference) {
-        m.kernel = Kernel::Reference;
-        m.why = "ADVECT FLIP runs on the reference cycle only";
-    }
+    m.kernel = asked;
     // The AVX2 point loop follows the default modes only (choose_point_loop).
     if (m.kernel == Kernel::Fast)
         m.points_why = m.mapping == Mapping::Smooth ? "MAPPING SMOOTH has no AVX2 point loop"
@@ -3569,7 +3571,7 @@ inline void Simulation::reference_compensate() {
 // 5. eq. 13-14 at every node with mass (a node without mass does not move), then fixed
 // directions and moving walls; the kinetic energy summed by rows, in node order.
 inline void Simulation::reference_integrate() {
-    if (modes_.advect == Advect::Flip) { flip_integrate(); return; }  // ADVECT FLIP's own step 5 (its section)
+    if (modes_.advect == Advect::Flip) { flip_integrate(flip_nodes(), {0, mx_ + 1, 0, my_ + 1}); return; }  // ADVECT FLIP's own step 5 (its section)
     const double dt2 = sc_.dt_s * sc_.dt_s;
     if (modes_.dynamic) dynamics_begin();  // the ground's step, the boundary forces (SHAKE, ABSORB)
     keep_increments({0, mx_ + 1, 0, my_ + 1});  // for the energy account
@@ -3583,17 +3585,17 @@ inline void Simulation::reference_integrate() {
     impose_supports();
     for (int j = 0; j <= my_; ++j) energy_row_terms(j, 0, mx_ + 1, std::false_type{});
     tally_energy(0, my_ + 1);
-    nodal_kinetic();
+    nodal_kinetic({0, mx_ + 1, 0, my_ + 1});
 }
 
 // The nodes' kinetic energy (ke, at the last half step) summed by rows in node order, and
-// the largest increment (the run's health check).
-inline void Simulation::nodal_kinetic() {
+// the largest increment (the run's health check), over a box holding every node with mass.
+inline void Simulation::nodal_kinetic(const Range& nodes) {
     const double dt2 = sc_.dt_s * sc_.dt_s;
     double ke = 0, maxdu = 0;
-    for (int j = 0; j <= my_; ++j) {
+    for (int j = nodes.j0; j < nodes.j1; ++j) {
         double row_ke = 0;
-        for (int i = 0; i <= mx_; ++i) {
+        for (int i = nodes.i0; i < nodes.i1; ++i) {
             const std::size_t n = std::size_t(node(i, j));
             const double m = nmass_[n], ux = dux_[n], uy = duy_[n];
             if (m == 0) continue;
@@ -3760,7 +3762,7 @@ inline void Simulation::reference_points_smooth() {
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
     Landing t;
     smooth_map(t);
-    if (modes_.advect == Advect::Flip) flip_second_half();
+    if (modes_.advect == Advect::Flip) flip_second_half(flip_nodes(), {0, mx_, 0, my_});
 }
 
 // eq. 7 and 8 for point k at (x, y), MAPPING SMOOTH: its mass m and V sigma shared out
@@ -3784,23 +3786,18 @@ inline void Simulation::smear_point(std::size_t k, double x, double y, double m,
 // MAPPING SMOOTH's point phase in the fast kernel: reference_points_smooth, with the
 // points' first pass (smooth_move, each point on its own) by threads, the cells cleared
 // in the box the last step's points touched, and the box they touch now kept for the
-// lattice phases.
+// lattice phases; ADVECT FLIP's transfer and second half on the boxes of flip_nodes and
+// those cells.
 inline void Simulation::smooth_point_pass() {
-    const long n = long(p_.size());
     centroid_traces(strained_);  // the cells around those holding material (cell_strains)
-#if defined(_OPENMP)
-    if (!serial()) {
-        LPFDM_OMP(omp parallel for schedule(static) num_threads(team_))
-        for (long k = 0; k < n; ++k) smooth_move(std::size_t(k));
-    } else
-#endif
-        for (long k = 0; k < n; ++k) smooth_move(std::size_t(k));
+    each_point([&](std::size_t k) { smooth_move(k); });
     clear_cells();
     Landing t;
     smooth_map(t);
     departed_ = std::size_t(t.departed);
     occupied_ = landed(t);
     parts_known_ = false;
+    if (modes_.advect == Advect::Flip) flip_second_half(flip_nodes(), occupied_);  // ADVECT FLIP's transfer
 }
 
 // reference_nodal_forces' share of MAPPING SMOOTH at the node that is corner [1] of cell c
@@ -3823,10 +3820,11 @@ inline void Simulation::smooth_node_force(int c, bool right, bool left, bool abo
 //   made from them with GIMP's weights, its change goes back to them, the stress takes
 //   half its strain from each lattice of the step and works on the initial volume. An
 //   undamped dropped block keeps its energy account within 0.11 % (eq. 12: 10-70 %).
-//   The reference cycle runs it for every kernel. See Simulation::flip_transfer.
+//   Every kernel runs it: the fast kernel on the boxes its points touch, each point's own
+//   work by threads, every sum in point order. See Simulation::flip_transfer.
 // ======================================================================================
 
-// ADVECT FLIP (MAPPING SMOOTH, MOTION BILINEAR; the reference cycle only). Each point p
+// ADVECT FLIP (MAPPING SMOOTH, MOTION BILINEAR). Each point p
 // keeps an increment of its own, d_p (its velocity times dt). Node n's share of point p,
 // w_np (flip_weights), is GIMP's: the mean over p's square of n's bilinear function, the
 // transpose of the interpolation by which the point moves. A step:
@@ -3884,23 +3882,55 @@ template <class F> void Simulation::flip_weights(std::size_t k, const F& f) cons
     });
 }
 
+// FLIP's loops over nodes visit a box `nodes` that holds every node with mass or an
+// increment, before and after the step (the reference cycle: the whole lattice; the fast
+// kernel: flip_nodes); every node outside it has none of either, and a sum over it of
+// zeros is the same bits. Its loops over points take them one at a time, or by threads
+// where each point's result is its own (each_point); its sums take their terms in point
+// order, one thread.
+
+// f(k) for every point k, where f writes point k's own values only: by threads in the
+// fast kernel's threaded point pass (serial(): not in the reference cycle, one thread, 4
+// 096 points or fewer, a user's model), in point order otherwise; the same numbers.
+template <class F> inline void Simulation::each_point(const F& f) {
+    const long n = long(p_.size());
+#if defined(_OPENMP)
+    if (!serial()) {
+        LPFDM_OMP(omp parallel for schedule(static) num_threads(team_))
+        for (long k = 0; k < n; ++k) f(std::size_t(k));
+        return;
+    }
+#endif
+    for (long k = 0; k < n; ++k) f(std::size_t(k));
+}
+
+// The fast kernel's box for FLIP: the nodes of the cells the points' squares touch now
+// (occupied_, as the points' phase left it), and those the last step left an increment
+// at (live_nodes_: its points' nodes and the walls').
+inline Range Simulation::flip_nodes() const {
+    const Range now{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
+    return reference_only() ? Range{0, mx_ + 1, 0, my_ + 1} : now.unite(live_nodes_);
+}
+
 // 2: b_n and M_n from the points' increments where they are now.
-inline void Simulation::flip_transfer() {
+inline void Simulation::flip_transfer(const Range& nodes) {
     for (const std::int32_t u : driven_nodes_) {  // the walls' increments of the last step
         flip_sx_[std::size_t(u)] = dux_[std::size_t(u)];
         flip_sy_[std::size_t(u)] = duy_[std::size_t(u)];
     }
-    std::fill(dux_.begin(), dux_.end(), 0.0);
-    std::fill(duy_.begin(), duy_.end(), 0.0);
-    std::fill(flip_mass_.begin(), flip_mass_.end(), 0.0);
+    for (int j = nodes.j0; j < nodes.j1; ++j)
+        for (auto* v : {&dux_, &duy_, &flip_mass_}) std::fill(v->data() + node(nodes.i0, j), v->data() + node(nodes.i1 - 1, j) + 1, 0.0);
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const double m = groups_[p_.group[k]].mass, ux = p_.flip_ux[k], uy = p_.flip_uy[k];
         flip_weights(k, [&](std::size_t n, double w) {
             dux_[n] += w * m * ux; duy_[n] += w * m * uy; flip_mass_[n] += w * m;
         });
     }
-    for (std::size_t n = 0; n < dux_.size(); ++n)
-        if (flip_mass_[n] > 0) { dux_[n] /= flip_mass_[n]; duy_[n] /= flip_mass_[n]; }
+    for (int j = nodes.j0; j < nodes.j1; ++j)
+        for (int i = nodes.i0; i < nodes.i1; ++i) {
+            const std::size_t n = std::size_t(node(i, j));
+            if (flip_mass_[n] > 0) { dux_[n] /= flip_mass_[n]; duy_[n] /= flip_mass_[n]; }
+        }
     // A support's direction takes nothing from the points: it starts from its support's
     // last increment, 0 at a fixed node and the wall's at a node a wall drove in the last
     // step. (A node a wall takes for the first time starts from the points' increment, and
@@ -3915,98 +3945,135 @@ inline void Simulation::flip_transfer() {
     }
 }
 
-// 2: the transfer, then each point's second half of strain from b where it is now (with
-// MAPPING SMOOTH's B-bar trace at the centroids of the sums just made), its stress and
-// volume; then eq. 7 and 8 again.
-inline void Simulation::flip_second_half() {
-    flip_transfer();
-    centroid_traces(Range{0, mx_, 0, my_});
-    for (std::size_t k = 0; k < p_.size(); ++k) {
-        StrainIncrement e;  // as smooth_move's
-        each_part(p_.x[k], p_.y[k], groups_[p_.group[k]].half, [&](int ci, int cj, double px, double py, double w) {
-            const StrainIncrement ep = strain_of_part(ci, cj, px, py);
-            e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
-        });
-        e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5;
-        smooth_stress(k, e);
-    }
-    for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
+// Point k's second half of strain from b where it is now (with MAPPING SMOOTH's B-bar
+// trace at the centroids of the sums just made), its stress and volume.
+inline void Simulation::flip_second_strain(std::size_t k) {
+    StrainIncrement e;  // as smooth_move's
+    each_part(p_.x[k], p_.y[k], groups_[p_.group[k]].half, [&](int ci, int cj, double px, double py, double w) {
+        const StrainIncrement ep = strain_of_part(ci, cj, px, py);
+        e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
+    });
+    e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5;
+    smooth_stress(k, e);
+}
+
+// 2: the transfer, then each point's second half of strain (flip_second_strain); then
+// eq. 7 and 8 again, into the sums of `cells` (the box of every cell holding material).
+inline void Simulation::flip_second_half(const Range& nodes, const Range& cells) {
+    flip_transfer(nodes);
+    centroid_traces(cells);
+    each_point([&](std::size_t k) { flip_second_strain(k); });
+    for (int j = cells.j0; j < cells.j1; ++j)
+        for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_})
+            std::fill(v->data() + cell(cells.i0, j), v->data() + cell(cells.i1 - 1, j) + 1, 0.0);
     Landing t;
-    smooth_map(t);
+    smooth_map(t);  // the points have not moved since the first: the same cells, none leaves
 }
 
 // 3: eq. 13-14 on M_n: each node's change a_n and its own increment b_n + a_n, which the
 // supports then see as eq. 13's (impose_supports: fixed directions, walls).
-inline void Simulation::flip_changes() {
+inline void Simulation::flip_changes(const Range& nodes) {
     const double dt2 = sc_.dt_s * sc_.dt_s;
-    for (std::size_t n = 0; n < dux_.size(); ++n) {
-        double ax = 0, ay = 0;
-        const double M = flip_mass_[n];
-        if (M > 0) {
-            double cx, cy;
-            damped_increment(dux_[n], fx_[n], M, dt2, sc_.damping, cx);  // eq. 13, 14
-            damped_increment(duy_[n], fy_[n], M, dt2, sc_.damping, cy);
-            ax = cx - dux_[n];  // a held direction's is replaced in flip_return
-            ay = cy - duy_[n];
+    for (int j = nodes.j0; j < nodes.j1; ++j)
+        for (int i = nodes.i0; i < nodes.i1; ++i) {
+            const std::size_t n = std::size_t(node(i, j));
+            double ax = 0, ay = 0;
+            const double M = flip_mass_[n];
+            if (M > 0) {
+                double cx, cy;
+                damped_increment(dux_[n], fx_[n], M, dt2, sc_.damping, cx);  // eq. 13, 14
+                damped_increment(duy_[n], fy_[n], M, dt2, sc_.damping, cy);
+                ax = cx - dux_[n];  // a held direction's is replaced in flip_return
+                ay = cy - duy_[n];
+            }
+            flip_ax_[n] = ax; flip_ay_[n] = ay;
+            dux_[n] = M > 0 ? dux_[n] + ax : 0.0;
+            duy_[n] = M > 0 ? duy_[n] + ay : 0.0;
         }
-        flip_ax_[n] = ax; flip_ay_[n] = ay;
-        dux_[n] = M > 0 ? dux_[n] + ax : 0.0;
-        duy_[n] = M > 0 ? duy_[n] + ay : 0.0;
-    }
+}
+
+// Point k's change where it is, g = sum_n w_nk a_n.
+inline void Simulation::flip_point_change(std::size_t k, double& gx, double& gy) const {
+    gx = gy = 0;
+    flip_weights(k, [&](std::size_t n, double w) { gx += w * flip_ax_[n]; gy += w * flip_ay_[n]; });
+}
+
+// Point k takes its change (gx, gy): its increment d + g, its share of what the lattice
+// gets back, sum_n w_nk m_k g; returns its kinetic energy's term m d(old) . d(new) / 2.
+inline double Simulation::flip_point_return(std::size_t k, double gx, double gy) {
+    const double m = groups_[p_.group[k]].mass, ux = p_.flip_ux[k], uy = p_.flip_uy[k];
+    p_.flip_ux[k] = ux + gx; p_.flip_uy[k] = uy + gy;
+    flip_weights(k, [&](std::size_t n, double w) { flip_sx_[n] += w * m * gx; flip_sy_[n] += w * m * gy; });
+    return 0.5 * m * (ux * (ux + gx) + uy * (uy + gy));
 }
 
 // 3, after the supports: a direction a support holds (fixed, or driven by a wall) takes
 // the change that brings it to the support's increment, d - b_n; the points take the
 // change where they are, d_p += g_p = sum_n w_np a_n; the lattice moves by what they will
 // bring back, c_n = b_n + sum_p w_np m_p g_p / M_n, the held directions at the support's
-// increment again; and the points' kinetic energy.
-inline void Simulation::flip_return() {
+// increment again; and the points' kinetic energy, summed in point order. With threads the
+// changes are found first, each point on its own, and kept (Points::flip_gx).
+inline void Simulation::flip_return(const Range& nodes) {
     const double dt2 = sc_.dt_s * sc_.dt_s;
-    for (std::size_t n = 0; n < dux_.size(); ++n) {
-        const std::uint8_t held = std::uint8_t(fixed_[n] | driven_[n]);
-        if ((held & kFixX) && flip_mass_[n] > 0) flip_ax_[n] = dux_[n] - dux_old_[n];
-        if ((held & kFixY) && flip_mass_[n] > 0) flip_ay_[n] = duy_[n] - duy_old_[n];
-    }
-    std::fill(flip_sx_.begin(), flip_sx_.end(), 0.0);
-    std::fill(flip_sy_.begin(), flip_sy_.end(), 0.0);
+    for (int j = nodes.j0; j < nodes.j1; ++j)
+        for (int i = nodes.i0; i < nodes.i1; ++i) {
+            const std::size_t n = std::size_t(node(i, j));
+            const std::uint8_t held = std::uint8_t(fixed_[n] | driven_[n]);
+            if ((held & kFixX) && flip_mass_[n] > 0) flip_ax_[n] = dux_[n] - dux_old_[n];
+            if ((held & kFixY) && flip_mass_[n] > 0) flip_ay_[n] = duy_[n] - duy_old_[n];
+        }
+    for (int j = nodes.j0; j < nodes.j1; ++j)
+        for (auto* v : {&flip_sx_, &flip_sy_}) std::fill(v->data() + node(nodes.i0, j), v->data() + node(nodes.i1 - 1, j) + 1, 0.0);
     double kinetic = 0;
-    for (std::size_t k = 0; k < p_.size(); ++k) {
-        double gx = 0, gy = 0;
-        flip_weights(k, [&](std::size_t n, double w) { gx += w * flip_ax_[n]; gy += w * flip_ay_[n]; });
-        const double m = groups_[p_.group[k]].mass, ux = p_.flip_ux[k], uy = p_.flip_uy[k];
-        kinetic += 0.5 * m * (ux * (ux + gx) + uy * (uy + gy));  // m d(old) . d(new) / 2
-        p_.flip_ux[k] = ux + gx; p_.flip_uy[k] = uy + gy;
-        flip_weights(k, [&](std::size_t n, double w) { flip_sx_[n] += w * m * gx; flip_sy_[n] += w * m * gy; });
+    if (!serial() && p_.flip_gx.size() >= p_.size()) {
+        double *gx = p_.flip_gx.data(), *gy = p_.flip_gy.data();
+        each_point([&](std::size_t k) { flip_point_change(k, gx[k], gy[k]); });
+        for (std::size_t k = 0; k < p_.size(); ++k) kinetic += flip_point_return(k, gx[k], gy[k]);
+    } else {
+        for (std::size_t k = 0; k < p_.size(); ++k) {
+            double gx, gy;
+            flip_point_change(k, gx, gy);
+            kinetic += flip_point_return(k, gx, gy);
+        }
     }
     flip_kinetic_ = kinetic / dt2;
-    for (std::size_t n = 0; n < dux_.size(); ++n) {
-        const double M = flip_mass_[n];
-        const std::uint8_t held = std::uint8_t(fixed_[n] | driven_[n]);
-        if (!(held & kFixX)) dux_[n] = M > 0 ? dux_old_[n] + flip_sx_[n] / M : 0.0;  // a held direction keeps its support's
-        if (!(held & kFixY)) duy_[n] = M > 0 ? duy_old_[n] + flip_sy_[n] / M : 0.0;
-    }
+    for (int j = nodes.j0; j < nodes.j1; ++j)
+        for (int i = nodes.i0; i < nodes.i1; ++i) {
+            const std::size_t n = std::size_t(node(i, j));
+            const double M = flip_mass_[n];
+            const std::uint8_t held = std::uint8_t(fixed_[n] | driven_[n]);
+            if (!(held & kFixX)) dux_[n] = M > 0 ? dux_old_[n] + flip_sx_[n] / M : 0.0;  // a held direction keeps its support's
+            if (!(held & kFixY)) duy_[n] = M > 0 ? duy_old_[n] + flip_sy_[n] / M : 0.0;
+        }
 }
 
-// ADVECT FLIP's step 5 (reference_integrate's, for it): eq. 10 put gravity on m_n into F,
+// ADVECT FLIP's step 5 (reference_integrate's and integrate's, for it) on the box `nodes`
+// (flip_nodes), of which `now` holds the nodes with mass this step (the rest are cleared:
+// the fast kernel's nodal_forces wrote `now` only): eq. 10 put gravity on m_n into F,
 // and F is the force on the transfer's M_n (inertia); eq. 13, 14 on those masses
 // (flip_changes), the supports, then the change back to the points (flip_return), whose
 // kinetic energy is the account's. FLIP takes neither SHAKE nor ABSORB (validate).
-inline void Simulation::flip_integrate() {
-    for (std::size_t n = 0; n < nmass_.size(); ++n) {
-        fx_[n] += sc_.gravity_x * (flip_mass_[n] - nmass_[n]);
-        fy_[n] += sc_.gravity_y * (flip_mass_[n] - nmass_[n]);
-    }
-    keep_increments({0, mx_ + 1, 0, my_ + 1});  // for the energy account
-    flip_changes();  // eq. 13, 14 on the transfer's masses
-    integrated_ = {0, mx_ + 1, 0, my_ + 1};
-    impose_supports();
-    flip_return();  // the change to the points, and back
-    for (int j = 0; j <= my_; ++j) energy_row_terms(j, 0, mx_ + 1, std::false_type{});
+// Returns the box of the nodes the walls drove.
+inline Range Simulation::flip_integrate(const Range& nodes, const Range& now) {
+    for (int j = nodes.j0; j < nodes.j1; ++j)
+        for (int i = nodes.i0; i < nodes.i1; ++i) {
+            const std::size_t n = std::size_t(node(i, j));
+            if (i < now.i0 || i >= now.i1 || j < now.j0 || j >= now.j1) { nmass_[n] = fx_[n] = fy_[n] = 0; continue; }
+            fx_[n] += sc_.gravity_x * (flip_mass_[n] - nmass_[n]);
+            fy_[n] += sc_.gravity_y * (flip_mass_[n] - nmass_[n]);
+        }
+    keep_increments(nodes);  // for the energy account
+    flip_changes(nodes);     // eq. 13, 14 on the transfer's masses
+    integrated_ = nodes;
+    const Range walls = impose_supports();
+    flip_return(nodes);  // the change to the points, and back
+    for (int j = nodes.j0; j < nodes.j1; ++j) energy_row_terms(j, nodes.i0, nodes.i1, std::false_type{});
     const double peak = es_.peak_kinetic;
-    tally_energy(0, my_ + 1);
+    if (!nodes.empty()) tally_energy(nodes.j0, nodes.j1);
     es_.kinetic = flip_kinetic_;  // the points' (flip_return)
     es_.peak_kinetic = std::max(peak, es_.kinetic);
-    nodal_kinetic();
+    nodal_kinetic(nodes);
+    return walls;
 }
 
 // ======================================================================================
@@ -6042,6 +6109,7 @@ LPFDM_DEF void Simulation::nodal_forces() {
 // correct it with the strain increments of the cell found there.
 LPFDM_DEF void Simulation::compensate() {
     const Range nr{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
+    if (modes_.advect == Advect::Flip) return;  // its transfer came in the points' phase
     if (modes_.advect == Advect::Points) { carried_increments(nr); return; }
     // Nodes that gained mass this step take the mean increment of their neighbours that
     // had mass (read before those are compensated, so the order does not matter); only
@@ -6190,6 +6258,10 @@ LPFDM_DEF void Simulation::compensate() {
 LPFDM_DEF void Simulation::integrate() {
     const Range nodes_now{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     const Range nr = nodes_now.unite(live_nodes_);
+    if (modes_.advect == Advect::Flip) {  // its own step 5, on the same box as its transfer (flip_nodes)
+        live_nodes_ = nodes_now.unite(flip_integrate(nr, nodes_now));
+        return;
+    }
     if (modes_.dynamic) dynamics_begin();  // the ground's step, the boundary forces (SHAKE, ABSORB)
     const double dt2 = sc_.dt_s * sc_.dt_s, alpha = sc_.damping;
     double ke = 0, maxdu = 0;

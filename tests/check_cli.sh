@@ -115,10 +115,6 @@ expect "summary: at rest" 0 decks/column.deck &&
 expect "summary: moving" 0 -n 300 decks/cliff.deck &&
     { grep -q -E '; moving: unbalanced-force ratio [0-9.e+-]+ at the end \(at rest below 1e-3\)$' "$tmp/stdout" && ok ||
         fail "summary: moving" "$(tail -n 1 "$tmp/stdout")"; }
-{ grep -v '^END' "$deck"; printf 'MAPPING SMOOTH\nADVECT FLIP\nEND\n'; } >"$tmp/flip.deck"
-expect "summary says why FLIP runs on the reference cycle" 0 -n 3 "$tmp/flip.deck" &&
-    { grep -q -F '; kernel reference (ADVECT FLIP runs on the reference cycle only)' "$tmp/stdout" && ok ||
-        fail "summary says why FLIP runs on the reference cycle" "$(tail -n 1 "$tmp/stdout")"; }
 expect "unknown option, value and deck" 2 -q --frobnicate 3 "$deck" && { says "unknown option, value and deck" "unknown option '--frobnicate'"; errors "unknown option, value and deck" 1; }
 
 # --- a long option is written in full: a beginning of one (--thread) is refused, with the option meant ---

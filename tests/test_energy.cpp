@@ -159,7 +159,6 @@ FlipDrop flip_drop(int n, double frac) {
     s.steps = long(1.2 / s.dt_s);
     REQUIRE(validate(s).empty());
     Simulation sim(s);
-    CHECK(sim.kernel() == Kernel::Reference);  // FLIP is the reference cycle's
     const Points& p = sim.points();
     FlipDrop d;
     bool contact = false;
