@@ -604,6 +604,14 @@ struct Range {  // half-open index box
 };
 namespace detail {
 
+// MAPPING SMOOTH: a point's square across the cells (square_overlap along each axis): its
+// first cell (a, b), the fractions of the square in that cell and the next along x and y,
+// and the centres of those parts.
+struct Overlap {
+    int a = 0, b = 0;
+    double wx[2] = {}, wy[2] = {}, cx[2] = {}, cy[2] = {};
+};
+
 #if LPFDM_WIDE
 // Four doubles (and four lane masks) as GCC/Clang vectors: AVX2 registers inside a
 // function built for AVX2; four cell or node numbers.
@@ -978,6 +986,11 @@ private:
     // (x0, y0) (square_overlap along each axis): the cell (i, j) it lies in, the part's
     // centre (x, y) and its share w > 0 of the square, in row order.
     template <class F> LPFDM_INLINE void each_part(double x0, double y0, double l, F&& f) const;
+    template <class F> LPFDM_INLINE void each_part(const detail::Overlap& o, F&& f) const;
+    detail::Overlap overlap_of(double x0, double y0, double l) const;
+    // ADVECT FLIP: each point's square as the map left it (smooth_map), read by the rest of
+    // the step (the points do not move again in it); scratch.
+    std::vector<detail::Overlap> overlap_;
     void centroid_traces(const Range& cells);
     void cell_centroid(std::size_t c, double& u, double& v) const;  // from the centre, in cells
     // MAPPING SMOOTH: cell c's moments (shx, shy) made ready for the nodal forces, after
@@ -1014,7 +1027,8 @@ private:
         }
     };
     void smooth_map(Landing& t);
-    void smear_point(std::size_t k, double x, double y, double m, double v, double sxx, double syy, double sxy, Landing& t);
+    void smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, Landing& t);
+    void smear_again();
     // A thread's share of the threaded point pass (advance_parted): the cells own_lo ..
     // own_hi-1 take its chunk's sums directly; a point landing in any other cell is listed
     // in p_.listed[list_at ..] (listed of them). The defaults: every cell (one thread).
@@ -2490,6 +2504,7 @@ inline void Simulation::setup() {
         fix_owner_.push_back({ox, oy});
     }
     create_points();
+    if (modes_.advect == Advect::Flip) overlap_.assign(p_.size(), {});
     setup_dynamics();
     for (std::size_t w = 0; w < walls_.size(); ++w) contact_side(walls_[w], sc_.walls[w]);
     for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
@@ -3634,17 +3649,24 @@ inline void Simulation::nodal_kinetic(const Range& nodes) {
 //   it is not the default.
 // ======================================================================================
 
-template <class F> LPFDM_INLINE inline void Simulation::each_part(double x0, double y0, double l, F&& f) const {
-    int a, b;
-    double wx[2], wy[2], cx[2], cy[2];
-    square_overlap(x0, l, L_, mx_, a, wx, cx);
-    square_overlap(y0, l, L_, my_, b, wy, cy);
+inline detail::Overlap Simulation::overlap_of(double x0, double y0, double l) const {
+    detail::Overlap o;
+    square_overlap(x0, l, L_, mx_, o.a, o.wx, o.cx);
+    square_overlap(y0, l, L_, my_, o.b, o.wy, o.cy);
+    return o;
+}
+
+template <class F> LPFDM_INLINE inline void Simulation::each_part(const detail::Overlap& o, F&& f) const {
     for (int q = 0; q < 2; ++q)
         for (int r = 0; r < 2; ++r) {
-            const double w = wx[r] * wy[q];
+            const double w = o.wx[r] * o.wy[q];
             if (!(w > 0)) continue;
-            f(a + r, b + q, cx[r], cy[q], w);
+            f(o.a + r, o.b + q, o.cx[r], o.cy[q], w);
         }
+}
+
+template <class F> LPFDM_INLINE inline void Simulation::each_part(double x0, double y0, double l, F&& f) const {
+    each_part(overlap_of(x0, y0, l), f);
 }
 
 LPFDM_DEF void Simulation::cell_centroid(std::size_t c, double& u, double& v) const {
@@ -3738,22 +3760,39 @@ inline void Simulation::smooth_stress(std::size_t k, const StrainIncrement& e) {
 // touched, the mass inside.
 inline void Simulation::smooth_map(Landing& t) {
     const bool flip = modes_.advect == Advect::Flip;
+    std::size_t kept = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const double x = p_.x[k], y = p_.y[k];
         p_.cell[k] = cell_holding(x, y);
         if (p_.cell[k] < 0) { ++t.departed; continue; }  // left the lattice
         const Group& g = groups_[p_.group[k]];
+        const detail::Overlap o = overlap_of(x, y, g.half);
         const double v = std::min(p_.vol[k], g.vol0);
-        if (flip && v > 0) {  // ADVECT FLIP: V sigma on V0 (flip_transfer), the centroids still weighted by v
-            const double r = g.vol0 / v;
-            smear_point(k, x, y, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], t);  // eq. 7, 8
-        } else {
-            smear_point(k, x, y, g.mass, v, p_.sxx[k], p_.syy[k], p_.sxy[k], t);  // eq. 7, 8
+        if (flip) {
+            overlap_[kept++] = o;  // point k's square, at its place once those that left are gone
+            if (v > 0) {  // ADVECT FLIP: V sigma on V0 (flip_transfer), the centroids still weighted by v
+                const double r = g.vol0 / v;
+                smear_point(o, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], t);  // eq. 7, 8
+                t.mass += g.mass;
+                continue;
+            }
         }
+        smear_point(o, g.mass, v, p_.sxx[k], p_.syy[k], p_.sxy[k], t);  // eq. 7, 8
         t.mass += g.mass;
     }
     if (t.departed) remove_departed();
     mass_in_ = t.mass;
+}
+
+// ADVECT FLIP's second eq. 7 and 8 (flip_second_half): smooth_map's, at the same places,
+// into sums cleared before (the same cells; no point leaves).
+inline void Simulation::smear_again() {
+    Landing t;
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const Group& g = groups_[p_.group[k]];
+        const double v = std::min(p_.vol[k], g.vol0), r = v > 0 ? g.vol0 / v : 1.0;
+        smear_point(overlap_[k], g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], t);  // eq. 7, 8
+    }
 }
 
 inline void Simulation::reference_points_smooth() {
@@ -3765,11 +3804,11 @@ inline void Simulation::reference_points_smooth() {
     if (modes_.advect == Advect::Flip) flip_second_half(flip_nodes(), {0, mx_, 0, my_});
 }
 
-// eq. 7 and 8 for point k at (x, y), MAPPING SMOOTH: its mass m and V sigma shared out
+// eq. 7 and 8 for a point whose square is o, MAPPING SMOOTH: its mass m and V sigma shared out
 // among the cells its square overlaps, and the moments of both about each cell's centre.
-inline void Simulation::smear_point(std::size_t k, double x, double y, double m, double v, double sxx, double syy, double sxy, Landing& t) {
+inline void Simulation::smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, Landing& t) {
     const double p = 0.5 * (sxx + syy);
-    each_part(x, y, groups_[p_.group[k]].half, [&](int ci, int cj, double px, double py, double w) {
+    each_part(o, [&](int ci, int cj, double px, double py, double w) {
         const std::size_t c = std::size_t(cell(ci, cj));
         t.cmin = std::min(t.cmin, int(c)); t.cmax = std::max(t.cmax, int(c));
         t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
@@ -3872,7 +3911,7 @@ inline void Simulation::smooth_node_force(int c, bool right, bool left, bool abo
 
 // f(n, w_np) for the four nodes of each cell point k's square overlaps.
 template <class F> void Simulation::flip_weights(std::size_t k, const F& f) const {
-    each_part(p_.x[k], p_.y[k], groups_[p_.group[k]].half, [&](int ci, int cj, double px, double py, double w) {
+    each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) {
         const int n = node(ci, cj);
         const double u = (px - ci * L_) * invL_, v = (py - cj * L_) * invL_;  // the part's centre in the cell
         f(std::size_t(n), w * (1 - u) * (1 - v));
@@ -3949,7 +3988,7 @@ inline void Simulation::flip_transfer(const Range& nodes) {
 // trace at the centroids of the sums just made), its stress and volume.
 inline void Simulation::flip_second_strain(std::size_t k) {
     StrainIncrement e;  // as smooth_move's
-    each_part(p_.x[k], p_.y[k], groups_[p_.group[k]].half, [&](int ci, int cj, double px, double py, double w) {
+    each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) {
         const StrainIncrement ep = strain_of_part(ci, cj, px, py);
         e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
     });
@@ -3966,8 +4005,7 @@ inline void Simulation::flip_second_half(const Range& nodes, const Range& cells)
     for (int j = cells.j0; j < cells.j1; ++j)
         for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_})
             std::fill(v->data() + cell(cells.i0, j), v->data() + cell(cells.i1 - 1, j) + 1, 0.0);
-    Landing t;
-    smooth_map(t);  // the points have not moved since the first: the same cells, none leaves
+    smear_again();  // eq. 7, 8 where the points are
 }
 
 // 3: eq. 13-14 on M_n: each node's change a_n and its own increment b_n + a_n, which the
@@ -3994,8 +4032,9 @@ inline void Simulation::flip_changes(const Range& nodes) {
 
 // Point k's change where it is, g = sum_n w_nk a_n.
 inline void Simulation::flip_point_change(std::size_t k, double& gx, double& gy) const {
-    gx = gy = 0;
-    flip_weights(k, [&](std::size_t n, double w) { gx += w * flip_ax_[n]; gy += w * flip_ay_[n]; });
+    double sx = 0, sy = 0;  // (not gx, gy: through a reference each term went to memory and back)
+    flip_weights(k, [&](std::size_t n, double w) { sx += w * flip_ax_[n]; sy += w * flip_ay_[n]; });
+    gx = sx; gy = sy;
 }
 
 // Point k takes its change (gx, gy): its increment d + g, its share of what the lattice
@@ -6396,6 +6435,7 @@ LPFDM_DEF void Simulation::resumed() {
     occupied_ = landed(t);
     // MAPPING SMOOTH: the sums made anew (the centroids the next step reads,
     // cell_centroid), and the box of every cell the points' squares touch.
+    if (modes_.advect == Advect::Flip && overlap_.size() < p_.size()) overlap_.resize(p_.size());
     if (modes_.mapping == Mapping::Smooth) map_points();
     strained_ = occupied_.grow(2, mx_, my_);
     live_nodes_ = integrated_ = {0, mx_ + 1, 0, my_ + 1};
