@@ -1188,7 +1188,7 @@ private:
     void nodal_kinetic(const Range& nodes);
     void smooth_node_force(int c, bool right, bool left, bool above, bool below, double& fx, double& fy) const;
     void hourglass_node_force(int c, bool right, bool left, bool above, bool below, double khg, double& fx, double& fy) const;
-    template <class F> void flip_weights(std::size_t k, const F& f) const;
+    template <class F> LPFDM_INLINE void flip_weights(std::size_t k, const F& f) const;
     void smooth_stress(std::size_t k, const StrainIncrement& e);
     // ADVECT FLIP's scratch: the nodes' masses by the points' weights, eq. 13's change of
     // each node and the points' change brought back (flip_sx_, flip_sy_ hold the walls'
@@ -3728,7 +3728,7 @@ inline void Simulation::smooth_move(std::size_t k) {
     const double x0 = p_.x[k], y0 = p_.y[k];
     StrainIncrement e;  // eq. 5 as the point sees it
     double dx = 0, dy = 0;
-    each_part(x0, y0, g.half, [&](int ci, int cj, double px, double py, double w) {
+    each_part(x0, y0, g.half, [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
         const StrainIncrement ep = strain_of_part(ci, cj, px, py);
         e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
         // This cell's motion (eq. 7a/7b or the MOTION rule) at the centre of its part.
@@ -3808,7 +3808,7 @@ inline void Simulation::reference_points_smooth() {
 // among the cells its square overlaps, and the moments of both about each cell's centre.
 inline void Simulation::smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, Landing& t) {
     const double p = 0.5 * (sxx + syy);
-    each_part(o, [&](int ci, int cj, double px, double py, double w) {
+    each_part(o, [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
         const std::size_t c = std::size_t(cell(ci, cj));
         t.cmin = std::min(t.cmin, int(c)); t.cmax = std::max(t.cmax, int(c));
         t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
@@ -3910,8 +3910,8 @@ inline void Simulation::smooth_node_force(int c, bool right, bool left, bool abo
 // account lost 1.8 % of the ground's work, the compliant base's 2 %.
 
 // f(n, w_np) for the four nodes of each cell point k's square overlaps.
-template <class F> void Simulation::flip_weights(std::size_t k, const F& f) const {
-    each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) {
+template <class F> LPFDM_INLINE inline void Simulation::flip_weights(std::size_t k, const F& f) const {
+    each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
         const int n = node(ci, cj);
         const double u = (px - ci * L_) * invL_, v = (py - cj * L_) * invL_;  // the part's centre in the cell
         f(std::size_t(n), w * (1 - u) * (1 - v));
@@ -3961,7 +3961,7 @@ inline void Simulation::flip_transfer(const Range& nodes) {
         for (auto* v : {&dux_, &duy_, &flip_mass_}) std::fill(v->data() + node(nodes.i0, j), v->data() + node(nodes.i1 - 1, j) + 1, 0.0);
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const double m = groups_[p_.group[k]].mass, ux = p_.flip_ux[k], uy = p_.flip_uy[k];
-        flip_weights(k, [&](std::size_t n, double w) {
+        flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE {
             dux_[n] += w * m * ux; duy_[n] += w * m * uy; flip_mass_[n] += w * m;
         });
     }
@@ -3988,7 +3988,7 @@ inline void Simulation::flip_transfer(const Range& nodes) {
 // trace at the centroids of the sums just made), its stress and volume.
 inline void Simulation::flip_second_strain(std::size_t k) {
     StrainIncrement e;  // as smooth_move's
-    each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) {
+    each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
         const StrainIncrement ep = strain_of_part(ci, cj, px, py);
         e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
     });
@@ -4033,7 +4033,7 @@ inline void Simulation::flip_changes(const Range& nodes) {
 // Point k's change where it is, g = sum_n w_nk a_n.
 inline void Simulation::flip_point_change(std::size_t k, double& gx, double& gy) const {
     double sx = 0, sy = 0;  // (not gx, gy: through a reference each term went to memory and back)
-    flip_weights(k, [&](std::size_t n, double w) { sx += w * flip_ax_[n]; sy += w * flip_ay_[n]; });
+    flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE { sx += w * flip_ax_[n]; sy += w * flip_ay_[n]; });
     gx = sx; gy = sy;
 }
 
@@ -4042,7 +4042,7 @@ inline void Simulation::flip_point_change(std::size_t k, double& gx, double& gy)
 inline double Simulation::flip_point_return(std::size_t k, double gx, double gy) {
     const double m = groups_[p_.group[k]].mass, ux = p_.flip_ux[k], uy = p_.flip_uy[k];
     p_.flip_ux[k] = ux + gx; p_.flip_uy[k] = uy + gy;
-    flip_weights(k, [&](std::size_t n, double w) { flip_sx_[n] += w * m * gx; flip_sy_[n] += w * m * gy; });
+    flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE { flip_sx_[n] += w * m * gx; flip_sy_[n] += w * m * gy; });
     return 0.5 * m * (ux * (ux + gx) + uy * (uy + gy));
 }
 
