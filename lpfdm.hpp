@@ -94,6 +94,7 @@
 #define LPFDM_HPP
 
 #include <algorithm>
+#include <atomic>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -604,6 +605,16 @@ struct Range {  // half-open index box
 };
 namespace detail {
 
+// A count that threads add to (Simulation's parked points), copied with its simulation.
+struct Tally {
+    std::atomic<long> n{0};
+    Tally() = default;
+    Tally(const Tally& o) : n(o.n.load()) {}
+    Tally& operator=(const Tally& o) { n = o.n.load(); return *this; }
+    void add() { n.fetch_add(1, std::memory_order_relaxed); }
+    long take() { return n.exchange(0); }
+};
+
 // MAPPING SMOOTH: a point's square across the cells (square_overlap along each axis): its
 // first cell (a, b), the fractions of the square in that cell and the next along x and y,
 // and the centres of those parts.
@@ -853,6 +864,10 @@ public:
     const std::vector<WallState>& walls() const { return walls_; }    // force and travel of each wall, deck order
     const std::vector<std::int32_t>& driven_nodes() const { return driven_nodes_; }  // the nodes the walls drove in the last step
     long step_count() const { return step_; }                         // steps taken
+    // Moves clamped since step 0: a point that its cell's fixed edge or a wall's face
+    // stopped (stop_at_edges), put back on its side of it. A boundary should hold by
+    // constraining the lattice; each use of this last guard is counted.
+    long parked() const { return parked_; }
     // The threaded point pass (advance_parted): steps it took, points it listed for the
     // serial add after it (landed in another thread's part of the cells), and steps it had to
     // map again (a thread's points landed in a later thread's part).
@@ -1297,7 +1312,7 @@ private:
     void support_work(std::size_t n, double b, double c, double f, double& w, double& h) const;
     void drive_embedded(WallState& ws, double ddx, double ddy, double& hw, Range& wall_nodes);
     bool empty_beyond(int i, int j, int di, int dj) const;
-    void hold_by_walls(double x0, double y0, double& x, double& y) const;
+    bool hold_by_walls(double x0, double y0, double& x, double& y) const;
     struct FixOwner { std::int16_t x, y; };
     std::vector<FixOwner> fix_owner_;  // per entry of fixed_nodes_
     std::vector<double> fix_rx_, fix_ry_;
@@ -1342,6 +1357,8 @@ private:
     void dynamics_begin();
     void absorb_increments();
     long step_ = 0;
+    long parked_ = 0;               // the points a face stopped in the steps before this one (parked())
+    mutable detail::Tally parking_;  // ... in this one (stop_at_edges)
     std::size_t departed_ = 0;
     double ke_ = 0, mass_in_ = 0, mass_out_ = 0, mass0_ = 0, rx_ = 0, ry_ = 0, max_du_ = 0;
     Range integrated_; // the nodes the last integrate() visited (unbalanced_ratio reads them)
@@ -2865,11 +2882,13 @@ inline void Simulation::stop_at_edges(int c, double x0, double y0, double& x, do
 // ... of cell (ci, cj) with fixed edges fe (fixed_edges_).
 LPFDM_INLINE inline void Simulation::stop_at_edges(int ci, int cj, std::uint8_t fe, double x0, double y0, double& x, double& y) const {
     const double xi = ci * L_, yj = cj * L_;
-    if ((fe & kEdgeBottom) && y < yj) y = edge_above(cj);
-    if ((fe & kEdgeTop) && y >= (cj + 1) * L_) y = edge_below(cj + 1);
-    if ((fe & kEdgeLeft) && x < xi) x = edge_above(ci);
-    if ((fe & kEdgeRight) && x >= (ci + 1) * L_) x = edge_below(ci + 1);
-    if (fe & kEdgeWall) hold_by_walls(x0, y0, x, y);
+    bool stopped = false;
+    if ((fe & kEdgeBottom) && y < yj) { y = edge_above(cj); stopped = true; }
+    if ((fe & kEdgeTop) && y >= (cj + 1) * L_) { y = edge_below(cj + 1); stopped = true; }
+    if ((fe & kEdgeLeft) && x < xi) { x = edge_above(ci); stopped = true; }
+    if ((fe & kEdgeRight) && x >= (ci + 1) * L_) { x = edge_below(ci + 1); stopped = true; }
+    if (fe & kEdgeWall) stopped |= hold_by_walls(x0, y0, x, y);
+    if (stopped) parking_.add();  // (parked())
 }
 
 // Fixed directions, then moving walls (paper section 3), imposed on the increments eq. 13
@@ -3020,8 +3039,9 @@ inline void Simulation::mark_wall_cells() {
 // reach one cell beyond its end nodes: every cell edge a node of the wall lies on (so a
 // wall that stops a node short of a fixed base, as it must, still holds the points of
 // the row beside the base).
-inline void Simulation::hold_by_walls(double x0, double y0, double& x, double& y) const {
+inline bool Simulation::hold_by_walls(double x0, double y0, double& x, double& y) const {
     const double gap = 1e-6 * L_;
+    const double x_in = x, y_in = y;
     for (std::size_t w = 0; w < walls_.size(); ++w) {
         const WallState& ws = walls_[w];
         const Box& b = walls_[w].face;
@@ -3043,6 +3063,7 @@ inline void Simulation::hold_by_walls(double x0, double y0, double& x, double& y
                 if (b.x1 == b.x0) break;
             }
     }
+    return x != x_in || y != y_in;  // (a point at NaN is stopped by nothing here)
 }
 
 // The side of a wall's line of nodes its material lies on (WallState::side_x, side_y), from
@@ -3367,6 +3388,7 @@ LPFDM_DEF void Simulation::step_reference() {
     reference_nodal_forces();  // eq. 8, virtual work transpose of eq. 5, gravity eq. 10
     reference_compensate();    // eq. 12
     reference_integrate();     // eq. 13-14, fixed nodes, moving walls
+    parked_ += parking_.take();
     ++step_;
     if (reorder_due()) reorder_points();  // storage only (REORDER), as step() does
 }
@@ -4923,6 +4945,7 @@ LPFDM_DEF void Simulation::step() {
     nodal_forces();    // virtual work transpose of eq. 5, gravity eq. 10
     compensate();      // eq. 12
     integrate();       // eq. 13-14, fixed nodes, moving walls
+    parked_ += parking_.take();
     ++step_;
     if (reorder_due()) reorder_points();  // storage only (REORDER)
 }
@@ -4943,6 +4966,7 @@ inline void Simulation::step_profiled() {
         }
         phase_s_[k] += std::chrono::duration<double>(clock::now() - t0).count();
     }
+    parked_ += parking_.take();
     ++step_;
     if (reorder_due()) {  // timed with the points' phase
         const auto t0 = clock::now();
@@ -6450,7 +6474,7 @@ LPFDM_DEF void Simulation::resumed() {
 }
 
 template <class S, class F> inline void Simulation::visit_state(S& s, F& f) {
-    f("step", s.step_); f("mass_in", s.mass_in_); f("mass_out", s.mass_out_); f("mass_initial", s.mass0_);
+    f("step", s.step_); f("parked", s.parked_); f("mass_in", s.mass_in_); f("mass_out", s.mass_out_); f("mass_initial", s.mass0_);
     f("ke", s.ke_); f("max_du", s.max_du_); f("rx", s.rx_); f("ry", s.ry_);
     f("du_x", s.dux_); f("du_y", s.duy_); f("node_mass", s.nmass_); f("cell_mass", s.cmass_);
     for (std::size_t w = 0; w < s.walls_.size(); ++w) {
@@ -8070,7 +8094,7 @@ LPFDM_DEF std::string history_columns(const Simulation& sim) {
     for (const auto& w : sim.scene().walls) h += fmt::format(" w{0}_fx w{0}_fy w{0}_dx w{0}_dy", w.id);
     h += " unbal rx ry";
     for (std::size_t a = 0; a < sim.scene().fixes.size(); ++a) h += fmt::format(" f{0}_rx f{0}_ry", a + 1);
-    h += " e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error";
+    h += " e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error parked";
     if (sim.dynamic()) h += " w_ground d_absorb ground_dx ground_dy";  // SHAKE, ABSORB
     for (std::size_t t = 0; t < sim.tracked().size(); ++t) h += fmt::format(" t{0}_x t{0}_y t{0}_ux t{0}_uy", t + 1);  // TRACK
     return h;
@@ -8117,6 +8141,7 @@ LPFDM_DEF void write_history_header(std::FILE* f, const Simulation& sim, const s
     fmt::print(f, "#   energy [J/m] since the start (Simulation::energy): e_kin kinetic (leapfrog), e_strain elastic, e_grav potential of the points;\n");
     fmt::print(f, "#   w_walls w_fixes w_gravity work done on the material; d_damping d_plastic dissipated;\n");
     fmt::print(f, "#   energy_error = (work in - stored - dissipated) / (energy in play), work in = w_walls + w_fixes{}\n", sim.dynamic() ? " + w_ground" : "");
+    fmt::print(f, "#   parked = points stopped on a fixed edge or a wall's face since step 0 (their moves clamped)\n");
     if (sim.dynamic())
         fmt::print(f, "#   w_ground work of the ground motion (SHAKE), d_absorb taken out by the dashpots (ABSORB); ground_dx ground_dy the ground's displacement [m]\n");
     fmt::print(f, "# {}\n", h);
@@ -8130,8 +8155,8 @@ LPFDM_DEF void write_history_row(std::FILE* f, const Simulation& sim) {
     fmt::format_to(std::back_inserter(b), " {:.6g} {:.9g} {:.9g}", sim.unbalanced_ratio(), sim.reaction_x(), sim.reaction_y());
     for (std::size_t a = 0; a < sim.scene().fixes.size(); ++a) fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g}", sim.fix_reaction_x(a), sim.fix_reaction_y(a));
     const Simulation::Energy e = sim.energy();
-    fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.6g}", e.kinetic, e.strain, e.gravity, e.w_walls,
-                   e.w_fixes, e.w_gravity, e.d_damping, e.d_plastic, e.error);
+    fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.6g} {}", e.kinetic, e.strain, e.gravity, e.w_walls,
+                   e.w_fixes, e.w_gravity, e.d_damping, e.d_plastic, e.error, sim.parked());
     if (sim.dynamic())
         fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g}", e.w_ground, e.d_absorb, sim.ground_displacement(0), sim.ground_displacement(1));
     for (const std::int32_t id : sim.tracked()) {  // TRACK: the point's place and displacement (nan once it left the lattice)
@@ -8365,7 +8390,7 @@ LPFDM_DEF void write_pvd(std::FILE* f, const std::vector<std::pair<std::string, 
 // The digest is state_digest's of the deck text and of the options that change the
 // scene: a state continues only the run it came from.
 inline constexpr char kStateMagic[] = "lpfdm state\n";
-inline constexpr std::uint32_t kStateVersion = 2;  // 2: ADVECT FLIP's point_flip_ux, point_flip_uy
+inline constexpr std::uint32_t kStateVersion = 3;  // 2: ADVECT FLIP's point_flip_ux, point_flip_uy; 3: parked
 namespace detail {
 inline std::uint64_t fnv1a(const void* data, std::size_t n, std::uint64_t h = 14695981039346656037ull) {
     const unsigned char* c = static_cast<const unsigned char*>(data);

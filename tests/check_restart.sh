@@ -167,7 +167,7 @@ cp "$good" "$tmp/corrupt.state"
 printf '\x55' | dd of="$tmp/corrupt.state" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
 cmp -s "$good" "$tmp/corrupt.state" && printf '\xaa' | dd of="$tmp/corrupt.state" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
 cp "$good" "$tmp/version.state"
-printf '\x03' | dd of="$tmp/version.state" bs=1 seek=12 conv=notrunc 2>/dev/null
+printf '\x04' | dd of="$tmp/version.state" bs=1 seek=12 conv=notrunc 2>/dev/null
 echo "x y sxx" >"$tmp/text.state"
 sed 's/^SEED 7/SEED 8/' "$tmp/r.deck" >"$tmp/other.deck"
 mkdir -p "$tmp/dir.state"
@@ -185,7 +185,7 @@ refused() {
 refused "truncated" "truncated" "$tmp/truncated.state" "$tmp/r.deck"
 refused "shorter than a header" "truncated" "$tmp/short.state" "$tmp/r.deck"
 refused "corrupt" "checksum" "$tmp/corrupt.state" "$tmp/r.deck"
-refused "other format version" "version 3" "$tmp/version.state" "$tmp/r.deck"
+refused "other format version" "version 4" "$tmp/version.state" "$tmp/r.deck"
 refused "not a state file" "not an lpfdm state file" "$tmp/text.state" "$tmp/r.deck"
 refused "a directory" "directory" "$tmp/dir.state" "$tmp/r.deck"
 refused "missing" "cannot open" "$tmp/none.state" "$tmp/r.deck"

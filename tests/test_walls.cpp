@@ -189,5 +189,34 @@ TEST_CASE("a SMOOTH wall and the smooth base's FIX Y share a node: at rest the t
         CHECK(sim.unbalanced_ratio() < (mapping == Mapping::Paper ? 1e-6 : kAtRest));
         CHECK(std::fabs(sim.energy().error) < 0.01);
         CHECK(sim.mass_outflow() == 0);
+        CHECK(sim.parked() == 0);  // the wall holds the material by its nodes: no point's move is clamped
     }
+}
+
+// The same sand with the wall's box starting 1 cm above the base (WALL 1 2 0.01 2 4): the
+// node under the wall is held in y by the base only, free in x, and the sand carries it
+// through the wall's face; the points that the lattice moves past the face are stopped on
+// it (hold_by_walls) and pack the cell. parked() counts those stops: none in the deck
+// above, thousands here, and more the longer it runs.
+TEST_CASE("parked: the points a wall's face stops are counted; a face with a free node under it stops them by the thousand") {
+    const std::string deck = "GRID 40 24 0.25\n"
+                             "MATERIAL 1 MOHR E=2E7 NU=0.3 RHO=2000 PHI=30 C=0\n"
+                             "CLUSTER 1 2 0 10 4\n"
+                             "FIX Y 0 0 10 0\n"
+                             "FIX X 10 0 10 6\n"
+                             "WALL 1 2 0.01 2 4 0 0 SMOOTH\n"
+                             "GRAVITY 0 -9.81\n"
+                             "DAMPING 0.8\n"
+                             "STEP 1E-3 3000\n";
+    Scene s;
+    REQUIRE(read_deck_text(deck, "free_node.deck", s).empty());
+    Simulation sim(s);
+    long at_half = 0;
+    for (long n = 1; n <= s.steps; ++n) {
+        sim.step();
+        if (n == s.steps / 2) at_half = sim.parked();
+    }
+    MESSAGE("a wall with a free node under it: " << at_half << " moves clamped by step " << s.steps / 2 << ", " << sim.parked() << " by step " << s.steps);
+    CHECK(at_half > 1000);
+    CHECK(sim.parked() > at_half);
 }
