@@ -35,11 +35,16 @@
 #                threads can run several times slower than one)
 #   BEFORE=4fdf066   the commit whose plain serial loop is built for the 400-step scenes;
 #                BEFORE= (empty) skips it
+#   BENCH_MODES="peer mohr-65k flow"  also the modes' table: each of those scenes with
+#                the paper's mapping, MAPPING SMOOTH, and MAPPING SMOOTH with ADVECT FLIP
+#                (a copy of the deck with the cards added), 1 and 2 threads, all runs
+#                interleaved, timed by --profile; flow over its first 400 steps (FLIP's
+#                whole run takes minutes). Default: none (BENCH_SCENES=none runs it alone)
 set -u
 cd "$(dirname "$0")/.."
 exe=${1:-./lpfdm}; runs=${2:-5}
 before_rev=${BEFORE-4fdf066}
-want=${BENCH_SCENES:-elastic-65k mohr-65k elastic-1M mohr-1M peer flow}
+want=${BENCH_SCENES:-elastic-65k mohr-65k elastic-1M mohr-1M peer flow}  # (none: no scene)
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 load_start=$(cut -d' ' -f1-3 /proc/loadavg)
 # name | deck | extra options | kind (short: the deck's steps as they are; whole: whole-run measures)
@@ -217,6 +222,7 @@ for sc in "${scenes[@]}"; do
   rows+=("| $name | $pts | $steps | $(med "$whole1") | $(med "$whole2") ($(ratio "$(med "$whole2")" "$(med "$whole1")")x) | $(med "$first1") / $(med "$first2") | $(med "$last1") / $(med "$last2") | $(med "$reffirst") / $(med "$reflast") (10 %) | $(ratio "$(med "$first1")" "$(med "$reffirst")") / $(ratio "$(med "$last1")" "$(med "$reflast")") | $befcell | - | $(med "$mem1") / $(med "$mem2") | $(med "$bpp") | $check |")
 done
 
+if [ ${#rows[@]} -gt 0 ]; then
 echo
 echo "Particle-steps/s, median of $runs runs, $($exe --version 2>/dev/null | head -1)$(git rev-parse -q --short HEAD >/dev/null 2>&1 && echo " (commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- lpfdm.hpp lpfdm.cpp 2>/dev/null || echo ' with changes'))")."
 echo "Whole-run scenes: first / last 10 % of the steps; the reference kernel (one thread) on those same steps, and the ratio of one thread to it on each."
@@ -225,5 +231,50 @@ echo
 echo "| scene | points | steps | 1 thread | 2 threads | first 10 %, 1 / 2 threads | last 10 %, 1 / 2 threads | reference kernel | 1 thread / reference | plain loop of ${before_rev:--} (ratio) | one at a time (ratio) | peak MiB, 1 / 2 threads | bytes per point | result |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 printf '%s\n' "${rows[@]}" | sed -E 's/e\+0?([0-9])/e\1/g'  # 4.12e+07 -> 4.12e7
+fi
+
+# The modes (BENCH_MODES): what the accurate cycle costs against the paper's, per
+# particle-step, on the same scene and build, their runs interleaved.
+mrows=()
+for name in ${BENCH_MODES:-}; do
+  case $name in
+  peer) deck=decks/bench_peer.deck; opts="" ;;
+  mohr-65k) deck=decks/bench_mohr.deck; opts="" ;;
+  flow) deck=decks/bench_flow.deck; opts="--steps 400" ;;
+  *) log "bench: no modes scene '$name' (peer, mohr-65k, flow)"; continue ;;
+  esac
+  steps=${opts#--steps }; [ -n "$opts" ] || steps=$(awk 'toupper($1) == "STEP" { print $3 }' "$deck")
+  log "== modes: $name ($deck $opts)"
+  for m in paper smooth flip; do
+    cards=""; [ $m = smooth ] && cards="MAPPING SMOOTH"; [ $m = flip ] && cards="MAPPING SMOOTH\nADVECT FLIP"
+    awk -v c="$cards" '/^[ \t]*[Ee][Nn][Dd]([ \t!]|$)/ && !done { if (c != "") print c; done = 1 } { print } END { if (!done && c != "") print c }' "$deck" >"$tmp/mode-$m.deck"
+    : >"$tmp/mode-$m-1"; : >"$tmp/mode-$m-2"
+  done
+  for r in $(seq "$runs"); do
+    for t in 1 2; do
+      for m in paper smooth flip; do
+        timed "$steps" $t "$tmp/mode-run" $opts "$tmp/mode-$m.deck" | cut -d' ' -f1 >>"$tmp/mode-$m-$t"
+      done
+    done
+  done
+  pts=$(sed -nE 's/^lpfdm: [0-9]+ steps, ([0-9]+) points.*/\1/p' "$tmp/mode-run/stdout")
+  cells="| $name | $pts | $steps |"
+  for m in paper smooth flip; do
+    one=$(stats <"$tmp/mode-$m-1"); two=$(stats <"$tmp/mode-$m-2")
+    log "   $(printf '%-6s' $m) 1 thread $one, 2 threads $two (median min max)"
+    eval "${m}1=\$(med \"\$one\")"; eval "${m}2=\$(med \"\$two\")"
+    if [ $m = paper ]; then cells="$cells $(med "$one") / $(med "$two") |"
+    else cells="$cells $(med "$one") / $(med "$two") ($(ratio "$paper1" "$(med "$one")") / $(ratio "$paper2" "$(med "$two")")) |"; fi
+  done
+  mrows+=("$cells")
+done
+if [ ${#mrows[@]} -gt 0 ]; then
+  echo
+  echo "Modes: particle-steps/s, 1 / 2 threads, median of $runs runs (in brackets the cost per particle-step against the paper's mapping, 1 / 2 threads):"
+  echo
+  echo "| scene | points | steps | MAPPING PAPER (default) | MAPPING SMOOTH | MAPPING SMOOTH, ADVECT FLIP |"
+  echo "|---|---|---|---|---|---|"
+  printf '%s\n' "${mrows[@]}" | sed -E 's/e\+0?([0-9])/e\1/g'
+fi
 echo
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load average before the runs $load_start, at the end $(cut -d' ' -f1-3 /proc/loadavg) (the benchmark's own runs count in it: 1 to 2)"
