@@ -212,7 +212,7 @@ TEST_CASE("MAPPING SMOOTH with ADVECT FLIP, walls, softening, points leaving, SH
         REQUIRE_MESSAGE(validate(s).empty(), deck);
         const bool column = std::string(deck) == "decks/quake_column_compliant.deck";  // (2 560 points: one thread)
         if (!column) REQUIRE(count_points(s) > 4096);  // the threaded passes' threshold (Simulation::serial)
-        compare_kernels(std::string(deck) + " MAPPING SMOOTH ADVECT FLIP, made finer", s, std::max(24L, steps_for(s)));
+        compare_kernels(std::string(deck) + " MAPPING SMOOTH ADVECT FLIP, twice as fine", s, steps_for(s));
     }
 }
 
