@@ -531,16 +531,13 @@ struct Points {
     std::vector<double> carry_dx, carry_dy;
     std::vector<std::int32_t> carry_from;
     // ADVECT FLIP: the point's own increment in x and y over the last step [m] (its
-    // velocity times dt), state; and with threads each point's change in a step
-    // (Simulation::flip_return), scratch.
+    // velocity times dt), state.
     std::vector<double> flip_ux, flip_uy;
-    std::vector<double> flip_gx, flip_gy;
 
     std::size_t size() const { return x.size(); }
     // Which scenes hold an array: every one, with a Mohr-Coulomb material, with scatter,
-    // with more than one thread, with ADVECT POINTS and threads, with ADVECT FLIP, with
-    // ADVECT FLIP and threads.
-    enum Use : std::uint8_t { kAlways, kPlastic, kScatter, kThreads, kCarry, kFlip, kFlipThreads };
+    // with more than one thread, with ADVECT POINTS and threads, with ADVECT FLIP.
+    enum Use : std::uint8_t { kAlways, kPlastic, kScatter, kThreads, kCarry, kFlip };
     // f(name, array, use, state) for every array above, in this order; state: part of a
     // point's state (not scratch).
     template <class F> void each_array(F&& f) { visit(*this, f); }
@@ -557,7 +554,6 @@ private:
         f("listed", p.listed, kThreads, false);
         f("carry_dx", p.carry_dx, kCarry, false); f("carry_dy", p.carry_dy, kCarry, false); f("carry_from", p.carry_from, kCarry, false);
         f("flip_ux", p.flip_ux, kFlip, true); f("flip_uy", p.flip_uy, kFlip, true);
-        f("flip_gx", p.flip_gx, kFlipThreads, false); f("flip_gy", p.flip_gy, kFlipThreads, false);
     }
 };
 
@@ -1200,6 +1196,7 @@ private:
     Range flip_integrate(const Range& nodes, const Range& now);
     Range flip_nodes() const;
     template <class F> void each_point(const F& f);
+    void zero_rows(const Range& r, int stride, std::initializer_list<std::vector<double>*> arrays);
     void nodal_kinetic(const Range& nodes);
     void smooth_node_force(int c, bool right, bool left, bool above, bool below, double& fx, double& fy) const;
     void hourglass_node_force(int c, bool right, bool left, bool above, bool below, double khg, double& fx, double& fy) const;
@@ -1207,9 +1204,10 @@ private:
     void smooth_stress(std::size_t k, const StrainIncrement& e);
     // ADVECT FLIP's scratch: the nodes' masses by the points' weights, eq. 13's change of
     // each node and the points' change brought back (flip_sx_, flip_sy_ hold the walls'
-    // last increments in flip_transfer before that, flip_fx0_, flip_fy0_ the fixed
-    // nodes'); the points' kinetic energy (leapfrog).
-    std::vector<double> flip_mass_, flip_ax_, flip_ay_, flip_sx_, flip_sy_, flip_fx0_, flip_fy0_;
+    // and the fixed nodes' last increments in flip_transfer before that); the points'
+    // kinetic energy (leapfrog).
+    std::vector<double> flip_mass_, flip_ax_, flip_ay_, flip_sx_, flip_sy_;
+    std::vector<double> flip_gx_, flip_gy_;  // each point's change in a step (flip_return), scratch
     double flip_kinetic_ = 0;
     // The node masses eq. 13 moves with: eq. 10's, or with ADVECT FLIP the transfer's M_n
     // (flip_changes). The fixed directions and the walls read the same masses, and the same
@@ -2362,7 +2360,6 @@ inline bool uses(const Scene& s, Points::Use u, bool threads) {
     case Points::kThreads: return threads;
     case Points::kCarry: return threads && s.advect == Advect::Points;
     case Points::kFlip: return s.advect == Advect::Flip;
-    case Points::kFlipThreads: return threads && s.advect == Advect::Flip;
     default: return true;
     }
 }
@@ -2451,7 +2448,7 @@ inline void Simulation::setup() {
     const std::size_t nodes = std::size_t(mx_ + 1) * (my_ + 1), cells = std::size_t(mx_) * my_;
     for (auto* v : {&dux_, &duy_, &fx_, &fy_, &nmass_, &nmass_prev_, &dux_old_, &duy_old_}) v->assign(nodes, 0.0);
     if (modes_.advect == Advect::Flip)
-        for (auto* v : {&flip_mass_, &flip_ax_, &flip_ay_, &flip_sx_, &flip_sy_, &flip_fx0_, &flip_fy0_}) v->assign(nodes, 0.0);
+        for (auto* v : {&flip_mass_, &flip_ax_, &flip_ay_, &flip_sx_, &flip_sy_}) v->assign(nodes, 0.0);
     fixed_.assign(nodes, 0);
     driven_.assign(nodes, 0);
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) v->assign(cells, 0.0);
@@ -2522,7 +2519,10 @@ inline void Simulation::setup() {
         fix_owner_.push_back({ox, oy});
     }
     create_points();
-    if (modes_.advect == Advect::Flip) overlap_.assign(p_.size(), {});
+    if (modes_.advect == Advect::Flip) {  // the step's scratch: the points never grow in number
+        overlap_.assign(p_.size(), {});
+        flip_gx_.assign(p_.size(), 0.0); flip_gy_.assign(p_.size(), 0.0);
+    }
     setup_dynamics();
     for (std::size_t w = 0; w < walls_.size(); ++w) contact_side(walls_[w], sc_.walls[w]);
     for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
@@ -3790,17 +3790,10 @@ inline void Simulation::smooth_map(Landing& t) {
         if (p_.cell[k] < 0) { ++t.departed; continue; }  // left the lattice
         const Group& g = groups_[p_.group[k]];
         const detail::Overlap o = overlap_of(x, y, g.half);
+        if (flip) overlap_[kept++] = o;  // point k's square, at its place once those that left are gone
         const double v = std::min(p_.vol[k], g.vol0);
-        if (flip) {
-            overlap_[kept++] = o;  // point k's square, at its place once those that left are gone
-            if (v > 0) {  // ADVECT FLIP: V sigma on V0 (flip_transfer), the centroids still weighted by v
-                const double r = g.vol0 / v;
-                smear_point(o, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], t);  // eq. 7, 8
-                t.mass += g.mass;
-                continue;
-            }
-        }
-        smear_point(o, g.mass, v, p_.sxx[k], p_.syy[k], p_.sxy[k], t);  // eq. 7, 8
+        const double r = flip && v > 0 ? g.vol0 / v : 1.0;  // ADVECT FLIP: V sigma on V0 (flip_transfer), the centroids still weighted by v
+        smear_point(o, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], t);  // eq. 7, 8 (r * s is s when r is 1)
         t.mass += g.mass;
     }
     if (t.departed) remove_departed();
@@ -3952,6 +3945,13 @@ template <class F> LPFDM_INLINE inline void Simulation::flip_weights(std::size_t
 // where each point's result is its own (each_point); its sums take their terms in point
 // order, one thread.
 
+// Zeros in the box r of each array, rows of `stride` (mx_ + 1 for nodes, mx_ for cells).
+inline void Simulation::zero_rows(const Range& r, int stride, std::initializer_list<std::vector<double>*> arrays) {
+    if (r.empty()) return;
+    for (int j = r.j0; j < r.j1; ++j)
+        for (auto* v : arrays) std::fill(v->data() + std::size_t(j) * std::size_t(stride) + std::size_t(r.i0), v->data() + std::size_t(j) * std::size_t(stride) + std::size_t(r.i1), 0.0);
+}
+
 // f(k) for every point k, where f writes point k's own values only: by threads in the
 // fast kernel's threaded point pass (serial(): not in the reference cycle, one thread, 4
 // 096 points or fewer, a user's model), in point order otherwise; the same numbers.
@@ -3977,16 +3977,14 @@ inline Range Simulation::flip_nodes() const {
 
 // 2: b_n and M_n from the points' increments where they are now.
 inline void Simulation::flip_transfer(const Range& nodes) {
-    for (const std::int32_t u : driven_nodes_) {  // the walls' increments of the last step
-        flip_sx_[std::size_t(u)] = dux_[std::size_t(u)];
-        flip_sy_[std::size_t(u)] = duy_[std::size_t(u)];
-    }
-    for (const std::int32_t u : fixed_nodes_) {  // the fixed nodes' (0, or the ground's under SHAKE)
-        flip_fx0_[std::size_t(u)] = dux_[std::size_t(u)];
-        flip_fy0_[std::size_t(u)] = duy_[std::size_t(u)];
-    }
-    for (int j = nodes.j0; j < nodes.j1; ++j)
-        for (auto* v : {&dux_, &duy_, &flip_mass_}) std::fill(v->data() + node(nodes.i0, j), v->data() + node(nodes.i1 - 1, j) + 1, 0.0);
+    // The supports' increments of the last step: the walls', and the fixed nodes' (0, or
+    // the ground's under SHAKE); a node both holds has one increment.
+    for (const auto* list : {&driven_nodes_, &fixed_nodes_})
+        for (const std::int32_t u : *list) {
+            flip_sx_[std::size_t(u)] = dux_[std::size_t(u)];
+            flip_sy_[std::size_t(u)] = duy_[std::size_t(u)];
+        }
+    zero_rows(nodes, mx_ + 1, {&dux_, &duy_, &flip_mass_});
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const double m = groups_[p_.group[k]].mass, ux = p_.flip_ux[k], uy = p_.flip_uy[k];
         flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE {
@@ -4003,8 +4001,8 @@ inline void Simulation::flip_transfer(const Range& nodes) {
     // node a wall drove in the last step. (A node a wall takes for the first time starts
     // from the points' increment, and the points take the change to the wall's: an impact.)
     for (const std::int32_t u : fixed_nodes_) {
-        if (fixed_[std::size_t(u)] & kFixX) dux_[std::size_t(u)] = flip_fx0_[std::size_t(u)];
-        if (fixed_[std::size_t(u)] & kFixY) duy_[std::size_t(u)] = flip_fy0_[std::size_t(u)];
+        if (fixed_[std::size_t(u)] & kFixX) dux_[std::size_t(u)] = flip_sx_[std::size_t(u)];
+        if (fixed_[std::size_t(u)] & kFixY) duy_[std::size_t(u)] = flip_sy_[std::size_t(u)];
     }
     for (const std::int32_t u : driven_nodes_) {
         if (driven_[std::size_t(u)] & kFixX) dux_[std::size_t(u)] = flip_sx_[std::size_t(u)];
@@ -4030,9 +4028,7 @@ inline void Simulation::flip_second_half(const Range& nodes, const Range& cells)
     flip_transfer(nodes);
     centroid_traces(cells);
     each_point([&](std::size_t k) { flip_second_strain(k); });
-    for (int j = cells.j0; j < cells.j1; ++j)
-        for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_})
-            std::fill(v->data() + cell(cells.i0, j), v->data() + cell(cells.i1 - 1, j) + 1, 0.0);
+    zero_rows(cells, mx_, {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_});
     smear_again();  // eq. 7, 8 where the points are
 }
 
@@ -4078,8 +4074,8 @@ inline double Simulation::flip_point_return(std::size_t k, double gx, double gy)
 // the change that brings it to the support's increment, d - b_n; the points take the
 // change where they are, d_p += g_p = sum_n w_np a_n; the lattice moves by what they will
 // bring back, c_n = b_n + sum_p w_np m_p g_p / M_n, the held directions at the support's
-// increment again; and the points' kinetic energy, summed in point order. With threads the
-// changes are found first, each point on its own, and kept (Points::flip_gx).
+// increment again; and the points' kinetic energy, summed in point order. The changes are
+// found first, each point on its own (by threads in the fast kernel), and kept (flip_gx_).
 inline void Simulation::flip_return(const Range& nodes) {
     const double dt2 = sc_.dt_s * sc_.dt_s;
     for (int j = nodes.j0; j < nodes.j1; ++j)
@@ -4089,20 +4085,10 @@ inline void Simulation::flip_return(const Range& nodes) {
             if ((held & kFixX) && flip_mass_[n] > 0) flip_ax_[n] = dux_[n] - dux_old_[n];
             if ((held & kFixY) && flip_mass_[n] > 0) flip_ay_[n] = duy_[n] - duy_old_[n];
         }
-    for (int j = nodes.j0; j < nodes.j1; ++j)
-        for (auto* v : {&flip_sx_, &flip_sy_}) std::fill(v->data() + node(nodes.i0, j), v->data() + node(nodes.i1 - 1, j) + 1, 0.0);
-    double kinetic = 0;
-    if (!serial() && p_.flip_gx.size() >= p_.size()) {
-        double *gx = p_.flip_gx.data(), *gy = p_.flip_gy.data();
-        each_point([&](std::size_t k) { flip_point_change(k, gx[k], gy[k]); });
-        for (std::size_t k = 0; k < p_.size(); ++k) kinetic += flip_point_return(k, gx[k], gy[k]);
-    } else {
-        for (std::size_t k = 0; k < p_.size(); ++k) {
-            double gx, gy;
-            flip_point_change(k, gx, gy);
-            kinetic += flip_point_return(k, gx, gy);
-        }
-    }
+    zero_rows(nodes, mx_ + 1, {&flip_sx_, &flip_sy_});
+    double *gx = flip_gx_.data(), *gy = flip_gy_.data(), kinetic = 0;
+    each_point([&](std::size_t k) { flip_point_change(k, gx[k], gy[k]); });
+    for (std::size_t k = 0; k < p_.size(); ++k) kinetic += flip_point_return(k, gx[k], gy[k]);
     flip_kinetic_ = kinetic / dt2;
     for (int j = nodes.j0; j < nodes.j1; ++j)
         for (int i = nodes.i0; i < nodes.i1; ++i) {
@@ -6474,7 +6460,10 @@ LPFDM_DEF void Simulation::resumed() {
     occupied_ = landed(t);
     // MAPPING SMOOTH: the sums made anew (the centroids the next step reads,
     // cell_centroid), and the box of every cell the points' squares touch.
-    if (modes_.advect == Advect::Flip && overlap_.size() < p_.size()) overlap_.resize(p_.size());
+    if (modes_.advect == Advect::Flip && overlap_.size() < p_.size()) {  // (the step's scratch, as at set-up)
+        overlap_.resize(p_.size());
+        flip_gx_.resize(p_.size()); flip_gy_.resize(p_.size());
+    }
     if (modes_.mapping == Mapping::Smooth) map_points();
     strained_ = occupied_.grow(2, mx_, my_);
     live_nodes_ = integrated_ = {0, mx_ + 1, 0, my_ + 1};
