@@ -2158,6 +2158,26 @@ inline void node_span(double a, double b, double L, int n, int& lo, int& hi) {
     lo = int(std::clamp(std::ceil((a - tol) / L), 0.0, double(n + 1)));
     hi = int(std::clamp(std::floor((b + tol) / L), -1.0, double(n)));
 }
+// The nodes a wall drives, i0..i1 x j0..j1: those in its box (node_span); a row or column
+// of them (the box one line of nodes thick) reaches along its length to both nodes of
+// every cell edge its segment covers, its ends rounded outward. Its face then holds by
+// the nodes it drives: written from 1 cm above a smooth base, a column stopped at the
+// node above the base, that node was free across the wall's line, the sand carried it
+// through the face and the points stopped on the face packed one cell (74 points by 20 s,
+// the backfill beside the wall fallen from 3.94 m to 2.0 m). An end node a FIX or an
+// earlier wall holds in a direction keeps that (validate checks the written boxes only).
+inline void wall_span(const Box& b, double L, int mx, int my, int& i0, int& i1, int& j0, int& j1) {
+    node_span(b.x0, b.x1, L, mx, i0, i1);
+    node_span(b.y0, b.y1, L, my, j0, j1);
+    if (i1 < i0 || j1 < j0) return;
+    const double tol = 1e-3 * L;
+    auto outward = [&](double a, double c, int n, int& lo, int& hi) {
+        lo = int(std::clamp(std::floor((a + tol) / L), 0.0, double(n)));
+        hi = int(std::clamp(std::ceil((c - tol) / L), 0.0, double(n)));
+    };
+    if (i0 == i1 && b.y1 > b.y0) outward(b.y0, b.y1, my, j0, j1);
+    else if (j0 == j1 && b.x1 > b.x0) outward(b.x0, b.x1, mx, i0, i1);
+}
 
 // The most vertices a CLUSTER POLYGON may have: its check for a crossing takes n^2 / 2 steps.
 inline constexpr std::size_t kMaxPolygonVertices = 10000;
@@ -2491,7 +2511,7 @@ inline void Simulation::setup() {
     for (const auto& w : sc_.walls) {
         WallState ws;
         int i0, i1, j0, j1;
-        node_range(w.box, i0, i1, j0, j1);
+        detail::wall_span(w.box, L_, mx_, my_, i0, i1, j0, j1);
         for (int j = j0; j <= j1; ++j)
             for (int i = i0; i <= i1; ++i) { ws.base_i.push_back(i); ws.base_j.push_back(j); }
         driven_nodes_.reserve(driven_nodes_.capacity() + 4 * ws.base_i.size());  // up to four lines each (impose_supports)
@@ -2839,9 +2859,9 @@ LPFDM_INLINE inline void Simulation::gather_mean(int n1, double& umx, double& um
 //   between two lines of nodes both are driven (the cell between moves with the wall): a
 //   node behind the face left free, with the little mass of the points beside the face
 //   and no material beyond it, let sand flow through a retaining wall moved away from
-//   it. No point crosses a wall's face (Simulation::hold_by_walls; faces reach one cell
-//   beyond the end nodes, so a wall ending a node above a fixed base still holds the row
-//   beside the base). SMOOTH walls (a row or a column of nodes) drive across their line
+//   it. A row or column of nodes reaches along its length to the nodes of every cell edge
+//   its segment covers (detail::wall_span), and no point crosses a wall's face
+//   (Simulation::hold_by_walls, a guard: the nodes hold it). SMOOTH walls (a row or a column of nodes) drive across their line
 //   only. A row or column of nodes with material on one side only (as the points were
 //   made, WallState::side_x, side_y: those within a cell of it, or if none is that near,
 //   all along it; far on both sides, the side it is driven towards; with none along it,
@@ -3036,10 +3056,12 @@ inline void Simulation::mark_wall_cells() {
 // A wall's faces are impermeable: a point that was on one side of a face before the step
 // (the face at the wall's travel dx0, dy0) and would end on it or beyond it (the face at
 // dx, dy) stops a millionth of a cell short of it, on its own side. The faces are the
-// edges of the wall's box (one segment for a line of nodes), moved with its travel, and
-// reach one cell beyond its end nodes: every cell edge a node of the wall lies on (so a
-// wall that stops a node short of a fixed base, as it must, still holds the points of
-// the row beside the base).
+// edges of the box of the nodes the wall drives (detail::wall_span; one segment for a
+// line of nodes), moved with its travel. The nodes hold the face: the lattice beside it
+// cannot carry a point across, and a stop here is a last guard, counted (parked()). (The
+// faces once reached a cell beyond the end nodes, to hold the row beside a base the wall
+// stopped a node short of; the free node there let the lattice carry the material into
+// the face, and the points stopped on it packed the cell.)
 inline bool Simulation::hold_by_walls(double x0, double y0, double& x, double& y) const {
     const double gap = 1e-6 * L_;
     const double x_in = x, y_in = y;
@@ -3048,7 +3070,7 @@ inline bool Simulation::hold_by_walls(double x0, double y0, double& x, double& y
         const Box& b = walls_[w].face;
         // Faces across y (at y0 and y1 of the box; none for a column of nodes), spanning the
         // box's x range now.
-        if (b.x1 > b.x0 && x >= b.x0 - L_ + ws.dx && x <= b.x1 + L_ + ws.dx)
+        if (b.x1 > b.x0 && x >= b.x0 + ws.dx && x <= b.x1 + ws.dx)
             for (const double yf : {b.y0, b.y1}) {
                 const double before = y0 - (yf + ws.dy0), after = y - (yf + ws.dy);
                 if (before < 0 && after >= 0) y = yf + ws.dy - gap;
@@ -3056,7 +3078,7 @@ inline bool Simulation::hold_by_walls(double x0, double y0, double& x, double& y
                 if (b.y1 == b.y0) break;
             }
         // Faces across x (at x0 and x1; none for a row of nodes), spanning the box's y range now.
-        if (b.y1 > b.y0 && y >= b.y0 - L_ + ws.dy && y <= b.y1 + L_ + ws.dy)
+        if (b.y1 > b.y0 && y >= b.y0 + ws.dy && y <= b.y1 + ws.dy)
             for (const double xf : {b.x0, b.x1}) {
                 const double before = x0 - (xf + ws.dx0), after = x - (xf + ws.dx);
                 if (before < 0 && after >= 0) x = xf + ws.dx - gap;
@@ -6915,8 +6937,7 @@ namespace detail {
 inline int wall_dirs(const Scene& s, const Wall& w) {
     if (!w.smooth) return kFixX | kFixY;
     int i0, i1, j0, j1;
-    node_span(w.box.x0, w.box.x1, s.cell_m, s.mx, i0, i1);
-    node_span(w.box.y0, w.box.y1, s.cell_m, s.my, j0, j1);
+    wall_span(w.box, s.cell_m, s.mx, s.my, i0, i1, j0, j1);
     return i1 == i0 ? int(kFixX) : int(kFixY);
 }
 // Constraints combine: a wall may share nodes with a FIX or an earlier wall where they set
@@ -7022,8 +7043,7 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
         else if (n == 0) err(w.pos, "the WALL box holds no node");
         if (w.smooth && n > 0) {
             int i0, i1, j0, j1;
-            detail::node_span(w.box.x0, w.box.x1, s.cell_m, s.mx, i0, i1);
-            detail::node_span(w.box.y0, w.box.y1, s.cell_m, s.my, j0, j1);
+            detail::wall_span(w.box, s.cell_m, s.mx, s.my, i0, i1, j0, j1);
             if ((i1 > i0) == (j1 > j0)) err(w.pos, "a SMOOTH wall is one line of nodes, a row or a column (it is driven across that line)");
         }
         if (!unread.step && std::isfinite(w.vx) && std::isfinite(w.vy) && s.dt_s > 0 && std::hypot(w.vx, w.vy) * s.dt_s > 0.1 * s.cell_m) {
@@ -7108,15 +7128,15 @@ inline void opening_warnings(const Scene& s, Diagnostics& d) {
             for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = int(ci);
         });
     std::vector<std::uint8_t> held(std::size_t(mx + 1) * std::size_t(my + 1), 0);
-    auto hold = [&](const Box& b, int dirs) {
+    auto hold = [&](const Box& b, int dirs, bool wall) {
         int i0, i1, j0, j1;
-        node_span(b.x0, b.x1, s.cell_m, mx, i0, i1);
-        node_span(b.y0, b.y1, s.cell_m, my, j0, j1);
+        if (wall) wall_span(b, s.cell_m, mx, my, i0, i1, j0, j1);
+        else { node_span(b.x0, b.x1, s.cell_m, mx, i0, i1); node_span(b.y0, b.y1, s.cell_m, my, j0, j1); }
         for (int j = std::max(j0, 0); j <= std::min(j1, my); ++j)
             for (int i = std::max(i0, 0); i <= std::min(i1, mx); ++i) held[std::size_t(j) * std::size_t(mx + 1) + std::size_t(i)] |= std::uint8_t(dirs);
     };
-    for (const Fix& f : s.fixes) hold(f.box, f.dirs);
-    for (const Wall& w : s.walls) hold(w.box, wall_dirs(s, w));  // a SMOOTH wall holds across its line only
+    for (const Fix& f : s.fixes) hold(f.box, f.dirs, false);
+    for (const Wall& w : s.walls) hold(w.box, wall_dirs(s, w), true);  // a SMOOTH wall holds across its line only
     struct Edge { int bit; const char* name; bool down; };  // down: gravity points out through it
     const Edge edges[] = {{kBottom, "BOTTOM", s.gravity_y < 0}, {kTop, "TOP", s.gravity_y > 0}, {kLeft, "LEFT", s.gravity_x < 0}, {kRight, "RIGHT", s.gravity_x > 0}};
     for (const Edge& e : edges) {

@@ -299,6 +299,12 @@ TEST_CASE("a flowing block against fixed edges, a wall and the lattice's edge: t
     Scene r;
     REQUIRE(read_deck_text(row, "row.deck", r).empty());
     compare_kernels("row.deck", r, 200);
+    // Each move the side clamps is counted (parked(); the history's parked column, which
+    // compare_kernels compares in every kernel): the three that cross it, at least.
+    Simulation rs(r);
+    for (int n = 0; n < 200; ++n) rs.step();
+    MESSAGE("row.deck: " << rs.parked() << " moves clamped by the side in 200 steps");
+    CHECK(rs.parked() >= 3);
 }
 
 TEST_CASE("a user constitutive model (eq. 6's signature) runs the same in every kernel") {
