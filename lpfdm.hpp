@@ -864,6 +864,12 @@ public:
     // stopped (stop_at_edges), put back on its side of it. A boundary should hold by
     // constraining the lattice; each use of this last guard is counted.
     long parked() const { return parked_; }
+    // The most volume one cell's points hold over the cell's area: the largest of eq. 8's
+    // sums of the points' V (with MAPPING SMOOTH, of their squares' parts in the cell),
+    // as mapped in the last step, over L^2. Points packing into a cell without being
+    // compressed (a cell that swallows them) drive it up; material made at one volume a
+    // cell and moved as a continuum keeps it near 1.
+    double packing() const;
     // The threaded point pass (advance_parted): steps it took, points it listed for the
     // serial add after it (landed in another thread's part of the cells), and steps it had to
     // map again (a thread's points landed in a later thread's part).
@@ -3347,6 +3353,12 @@ LPFDM_DEF Simulation::Energy Simulation::energy() const {
 // the mean gross force of the nodes with mass and a free direction, after the last step. Taken when asked, from the forces and masses the step
 // left (integrate() changes neither): two square roots per node that a step without a
 // history row does not pay. Rows are summed in row order, as a step would.
+LPFDM_DEF double Simulation::packing() const {
+    double most = 0;
+    for (const double v : cvol_) most = std::max(most, v);
+    return most / (L_ * L_);
+}
+
 LPFDM_DEF double Simulation::unbalanced_ratio() const {
     const Range nr = integrated_;
     const double g = std::hypot(sc_.gravity_x, sc_.gravity_y), gx = sc_.gravity_x, gy = sc_.gravity_y;
@@ -7175,7 +7187,7 @@ inline void opening_warnings(const Scene& s, Diagnostics& d) {
             ++count;
         }
         if (count == 0) continue;
-        const char* what = across_y ? "columns" : "rows";
+        const char* what = across_y ? (count == 1 ? "column" : "columns") : (count == 1 ? "row" : "rows");
         const char* axis = across_y ? "x" : "y";
         char b[320];
         std::snprintf(b, sizeof b,
@@ -8116,7 +8128,7 @@ LPFDM_DEF std::string history_columns(const Simulation& sim) {
     for (const auto& w : sim.scene().walls) h += fmt::format(" w{0}_fx w{0}_fy w{0}_dx w{0}_dy", w.id);
     h += " unbal rx ry";
     for (std::size_t a = 0; a < sim.scene().fixes.size(); ++a) h += fmt::format(" f{0}_rx f{0}_ry", a + 1);
-    h += " e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error parked";
+    h += " e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error parked packed";
     if (sim.dynamic()) h += " w_ground d_absorb ground_dx ground_dy";  // SHAKE, ABSORB
     for (std::size_t t = 0; t < sim.tracked().size(); ++t) h += fmt::format(" t{0}_x t{0}_y t{0}_ux t{0}_uy", t + 1);  // TRACK
     return h;
@@ -8164,6 +8176,7 @@ LPFDM_DEF void write_history_header(std::FILE* f, const Simulation& sim, const s
     fmt::print(f, "#   w_walls w_fixes w_gravity work done on the material; d_damping d_plastic dissipated;\n");
     fmt::print(f, "#   energy_error = (work in - stored - dissipated) / (energy in play), work in = w_walls + w_fixes{}\n", sim.dynamic() ? " + w_ground" : "");
     fmt::print(f, "#   parked = points stopped on a fixed edge or a wall's face since step 0 (their moves clamped)\n");
+    fmt::print(f, "#   packed = the most volume one cell's points hold over the cell's area (eq. 8's sum of V / L^2, the step's largest)\n");
     if (sim.dynamic())
         fmt::print(f, "#   w_ground work of the ground motion (SHAKE), d_absorb taken out by the dashpots (ABSORB); ground_dx ground_dy the ground's displacement [m]\n");
     fmt::print(f, "# {}\n", h);
@@ -8177,8 +8190,8 @@ LPFDM_DEF void write_history_row(std::FILE* f, const Simulation& sim) {
     fmt::format_to(std::back_inserter(b), " {:.6g} {:.9g} {:.9g}", sim.unbalanced_ratio(), sim.reaction_x(), sim.reaction_y());
     for (std::size_t a = 0; a < sim.scene().fixes.size(); ++a) fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g}", sim.fix_reaction_x(a), sim.fix_reaction_y(a));
     const Simulation::Energy e = sim.energy();
-    fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.6g} {}", e.kinetic, e.strain, e.gravity, e.w_walls,
-                   e.w_fixes, e.w_gravity, e.d_damping, e.d_plastic, e.error, sim.parked());
+    fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.6g} {} {:.6g}", e.kinetic, e.strain, e.gravity, e.w_walls,
+                   e.w_fixes, e.w_gravity, e.d_damping, e.d_plastic, e.error, sim.parked(), sim.packing());
     if (sim.dynamic())
         fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g} {:.9g}", e.w_ground, e.d_absorb, sim.ground_displacement(0), sim.ground_displacement(1));
     for (const std::int32_t id : sim.tracked()) {  // TRACK: the point's place and displacement (nan once it left the lattice)

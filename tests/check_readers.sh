@@ -48,7 +48,7 @@ pts=$tmp/out/p.txt hist=$tmp/out/h.txt
 first=$(head -n 1 "$pts")
 [ "$first" = "x y sxx syy sxy szz ep yielded mat id ux uy" ] && pass || fail "point table: first line" "'$first'"
 first=$(head -n 1 "$hist")
-[ "$first" = "step time ke mass_in mass_out w1_fx w1_fy w1_dx w1_dy unbal rx ry f1_rx f1_ry e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error parked" ] && pass || fail "history: first line" "'$first'"
+[ "$first" = "step time ke mass_in mass_out w1_fx w1_fy w1_dx w1_dy unbal rx ry f1_rx f1_ry e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error parked packed" ] && pass || fail "history: first line" "'$first'"
 for want in "^# lpfdm [0-9.]+ point table$" "^# deck: " "^# units: " "^# columns: x y sxx syy sxy szz " "^# step 0 time 0$"; do
     grep -q -E "$want" "$pts" && pass || fail "point table header" "no line matching '$want'"
 done

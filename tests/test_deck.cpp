@@ -1796,7 +1796,7 @@ TEST_CASE("deck warning: material over an opening in its support falls out of th
     w = lpfdm::warnings(read_ok(wall + "FIX Y 3 0 8 0\n"));
     INFO(listing(w));
     REQUIRE(w.size() == 1);
-    CHECK(has(w[0].message, "BOTTOM edge under gravity: 1 columns of cells (the first 2 to 2, x = 2 to 3 m)"));
+    CHECK(has(w[0].message, "BOTTOM edge under gravity: 1 column of cells (the first 2 to 2, x = 2 to 3 m)"));
     CHECK(lpfdm::warnings(read_ok(wall + "FIX Y 2 0 8 0\n")).empty());
     // OUTFLOW's own errors
     CHECK_ONE_ERROR(plus("OUTFLOW SIDEWAYS"), 5, 9, "edge");

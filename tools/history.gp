@@ -29,7 +29,7 @@ if (!exists("yscale")) yscale = 1
 # per TRACK: t<n>_x _y _ux _uy in m).
 tail2(n) = strlen(n) > 2 ? n[strlen(n) - 1:strlen(n)] : ''
 unit(n) = (n eq 'time') ? 's' : (n eq 'ke') ? 'J/m' : (n eq 'mass_in' || n eq 'mass_out') ? 'kg/m' : \
-          (n eq 'rx' || n eq 'ry') ? 'N/m' : (n eq 'step' || n eq 'unbal') ? '-' : \
+          (n eq 'rx' || n eq 'ry') ? 'N/m' : (n eq 'step' || n eq 'unbal' || n eq 'parked' || n eq 'packed') ? '-' : \
           (n[1:1] eq 'w' && (tail2(n) eq 'fx' || tail2(n) eq 'fy')) ? 'N/m' : \
           (n[1:1] eq 'w' && (tail2(n) eq 'dx' || tail2(n) eq 'dy')) ? 'm' : \
           (n[1:1] eq 't' && strstrt(n, '_') > 2 && (tail2(n) eq 'ux' || tail2(n) eq 'uy' || tail2(n) eq '_x' || tail2(n) eq '_y')) ? 'm' : '?'
