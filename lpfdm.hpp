@@ -2164,17 +2164,19 @@ inline void node_span(double a, double b, double L, int n, int& lo, int& hi) {
     lo = int(std::clamp(std::ceil((a - tol) / L), 0.0, double(n + 1)));
     hi = int(std::clamp(std::floor((b + tol) / L), -1.0, double(n)));
 }
-// The nodes a wall drives, i0..i1 x j0..j1: those in its box (node_span); a row or column
-// of them (the box one line of nodes thick) reaches along its length to both nodes of
-// every cell edge its segment covers, its ends rounded outward. Its face then holds by
-// the nodes it drives: written from 1 cm above a smooth base, a column stopped at the
-// node above the base, that node was free across the wall's line, the sand carried it
-// through the face and the points stopped on the face packed one cell (74 points by 20 s,
-// the backfill beside the wall fallen from 3.94 m to 2.0 m). An end node a FIX or an
-// earlier wall holds in a direction keeps that (validate checks the written boxes only).
-inline void wall_span(const Box& b, double L, int mx, int my, int& i0, int& i1, int& j0, int& j1) {
+// The nodes in box b, i0..i1 x j0..j1 (node_span on each axis; empty where i1 < i0 or j1 < j0).
+inline void box_nodes(const Box& b, double L, int mx, int my, int& i0, int& i1, int& j0, int& j1) {
     node_span(b.x0, b.x1, L, mx, i0, i1);
     node_span(b.y0, b.y1, L, my, j0, j1);
+}
+// The nodes a wall drives: those in its box; a row or column of them (the box one line of
+// nodes thick) reaches along its length to both nodes of every cell edge its segment
+// covers, its ends rounded outward, so that the nodes hold its whole face (written from
+// 1 cm above a smooth base, a column that stopped at the node above let the sand carry
+// the base node through the face; Simulation::hold_by_walls). An end node a FIX or an
+// earlier wall holds in a direction keeps that (validate checks the boxes as written).
+inline void wall_span(const Box& b, double L, int mx, int my, int& i0, int& i1, int& j0, int& j1) {
+    box_nodes(b, L, mx, my, i0, i1, j0, j1);
     if (i1 < i0 || j1 < j0) return;
     const double tol = 1e-3 * L;
     auto outward = [&](double a, double c, int n, int& lo, int& hi) {
@@ -2491,13 +2493,9 @@ inline void Simulation::setup() {
         carried_.assign(cells, Carried{});
     for (const auto& m : sc_.materials) consts_.push_back(constants_of(m));
 
-    auto node_range = [&](const Box& b, int& i0, int& i1, int& j0, int& j1) {
-        detail::node_span(b.x0, b.x1, L_, mx_, i0, i1);
-        detail::node_span(b.y0, b.y1, L_, my_, j0, j1);
-    };
     for (const auto& f : sc_.fixes) {
         int i0, i1, j0, j1;
-        node_range(f.box, i0, i1, j0, j1);
+        detail::box_nodes(f.box, L_, mx_, my_, i0, i1, j0, j1);
         for (int j = j0; j <= j1; ++j)
             for (int i = i0; i <= i1; ++i) fixed_[node(i, j)] |= std::uint8_t(f.dirs);
     }
@@ -2537,7 +2535,7 @@ inline void Simulation::setup() {
         std::int16_t ox = -1, oy = -1;
         for (std::size_t f = 0; f < sc_.fixes.size(); ++f) {
             int i0, i1, j0, j1;
-            node_range(sc_.fixes[f].box, i0, i1, j0, j1);
+            detail::box_nodes(sc_.fixes[f].box, L_, mx_, my_, i0, i1, j0, j1);
             if (i < i0 || i > i1 || j < j0 || j > j1) continue;
             if (ox < 0 && (sc_.fixes[f].dirs & kFixX)) ox = std::int16_t(f);
             if (oy < 0 && (sc_.fixes[f].dirs & kFixY)) oy = std::int16_t(f);
@@ -2865,10 +2863,10 @@ LPFDM_INLINE inline void Simulation::gather_mean(int n1, double& umx, double& um
 //   between two lines of nodes both are driven (the cell between moves with the wall): a
 //   node behind the face left free, with the little mass of the points beside the face
 //   and no material beyond it, let sand flow through a retaining wall moved away from
-//   it. A row or column of nodes reaches along its length to the nodes of every cell edge
-//   its segment covers (detail::wall_span), and no point crosses a wall's face
-//   (Simulation::hold_by_walls, a guard: the nodes hold it). SMOOTH walls (a row or a column of nodes) drive across their line
-//   only. A row or column of nodes with material on one side only (as the points were
+//   it. A row or column of nodes reaches along its length to the nodes of every cell
+//   edge its segment covers (detail::wall_span), and no point crosses a wall's face
+//   (Simulation::hold_by_walls, a guard: the nodes hold it). SMOOTH walls (a row or a
+//   column of nodes) drive across their line only. A row or column of nodes with material on one side only (as the points were
 //   made, WallState::side_x, side_y: those within a cell of it, or if none is that near,
 //   all along it; far on both sides, the side it is driven towards; with none along it,
 //   the inner side of the lattice's edge) is a contact: a node whose own increment
@@ -3324,6 +3322,12 @@ inline void Simulation::start_energy() {
     es_.potential0 = v;
 }
 
+LPFDM_DEF double Simulation::packing() const {
+    double most = 0;
+    for (const double v : cvol_) most = std::max(most, v);
+    return most / (L_ * L_);
+}
+
 LPFDM_DEF Simulation::Energy Simulation::energy() const {
     double strain = 0, potential = 0, plastic = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) {
@@ -3353,12 +3357,6 @@ LPFDM_DEF Simulation::Energy Simulation::energy() const {
 // the mean gross force of the nodes with mass and a free direction, after the last step. Taken when asked, from the forces and masses the step
 // left (integrate() changes neither): two square roots per node that a step without a
 // history row does not pay. Rows are summed in row order, as a step would.
-LPFDM_DEF double Simulation::packing() const {
-    double most = 0;
-    for (const double v : cvol_) most = std::max(most, v);
-    return most / (L_ * L_);
-}
-
 LPFDM_DEF double Simulation::unbalanced_ratio() const {
     const Range nr = integrated_;
     const double g = std::hypot(sc_.gravity_x, sc_.gravity_y), gx = sc_.gravity_x, gy = sc_.gravity_y;
@@ -6961,8 +6959,7 @@ inline std::string wall_conflict(const Scene& s, std::size_t a) {
     const int wd = wall_dirs(s, w);
     auto clash = [&](const Box& o, int od, const std::string& other) -> std::string {
         int i0, i1, j0, j1;
-        node_span(std::max(w.box.x0, o.x0), std::min(w.box.x1, o.x1), s.cell_m, s.mx, i0, i1);
-        node_span(std::max(w.box.y0, o.y0), std::min(w.box.y1, o.y1), s.cell_m, s.my, j0, j1);
+        box_nodes({std::max(w.box.x0, o.x0), std::max(w.box.y0, o.y0), std::min(w.box.x1, o.x1), std::min(w.box.y1, o.y1)}, s.cell_m, s.mx, s.my, i0, i1, j0, j1);
         if (!(wd & od) || i1 < i0 || j1 < j0) return "";
         const char* d = (wd & od) == (kFixX | kFixY) ? "x and y" : (wd & od) == kFixX ? "x" : "y";
         auto span = [&](int a0, int a1) { return shortest(a0 * s.cell_m) + (a1 > a0 ? " to " + shortest(a1 * s.cell_m) : std::string()); };
@@ -7031,8 +7028,7 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
     auto node_count = [&](const Box& b) {
         if (b.x0 > b.x1 || b.y0 > b.y1) return -1L;
         int i0, i1, j0, j1;
-        detail::node_span(b.x0, b.x1, s.cell_m, s.mx, i0, i1);
-        detail::node_span(b.y0, b.y1, s.cell_m, s.my, j0, j1);
+        detail::box_nodes(b, s.cell_m, s.mx, s.my, i0, i1, j0, j1);
         return (i1 < i0 || j1 < j0) ? 0L : (i1 - i0 + 1L) * (j1 - j0 + 1L);
     };
     for (std::size_t a = 0; a < s.fixes.size(); ++a) {
@@ -7140,15 +7136,19 @@ inline void opening_warnings(const Scene& s, Diagnostics& d) {
             for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = int(ci);
         });
     std::vector<std::uint8_t> held(std::size_t(mx + 1) * std::size_t(my + 1), 0);
-    auto hold = [&](const Box& b, int dirs, bool wall) {
-        int i0, i1, j0, j1;
-        if (wall) wall_span(b, s.cell_m, mx, my, i0, i1, j0, j1);
-        else { node_span(b.x0, b.x1, s.cell_m, mx, i0, i1); node_span(b.y0, b.y1, s.cell_m, my, j0, j1); }
+    auto hold = [&](int i0, int i1, int j0, int j1, int dirs) {
         for (int j = std::max(j0, 0); j <= std::min(j1, my); ++j)
             for (int i = std::max(i0, 0); i <= std::min(i1, mx); ++i) held[std::size_t(j) * std::size_t(mx + 1) + std::size_t(i)] |= std::uint8_t(dirs);
     };
-    for (const Fix& f : s.fixes) hold(f.box, f.dirs, false);
-    for (const Wall& w : s.walls) hold(w.box, wall_dirs(s, w), true);  // a SMOOTH wall holds across its line only
+    int i0, i1, j0, j1;
+    for (const Fix& f : s.fixes) {
+        box_nodes(f.box, s.cell_m, mx, my, i0, i1, j0, j1);
+        hold(i0, i1, j0, j1, f.dirs);
+    }
+    for (const Wall& w : s.walls) {
+        wall_span(w.box, s.cell_m, mx, my, i0, i1, j0, j1);
+        hold(i0, i1, j0, j1, wall_dirs(s, w));  // a SMOOTH wall holds across its line only
+    }
     struct Edge { int bit; const char* name; bool down; };  // down: gravity points out through it
     const Edge edges[] = {{kBottom, "BOTTOM", s.gravity_y < 0}, {kTop, "TOP", s.gravity_y > 0}, {kLeft, "LEFT", s.gravity_x < 0}, {kRight, "RIGHT", s.gravity_x > 0}};
     for (const Edge& e : edges) {
