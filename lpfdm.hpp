@@ -995,19 +995,25 @@ public:
 private:
     Simulation(const Scene& scene, Kernel kernel, int);  // (the public constructor's, with the implementation's mark)
     // MAPPING SMOOTH: the strain increments of the part of a point's square in cell (i, j)
-    // whose centre is (x, y) (bilinear_gradient there, its trace taken at the centroid of
-    // the cell's material, cell_centroid: centroid_trace_, made once a step by
-    // centroid_traces for every cell holding material).
-    LPFDM_INLINE StrainIncrement strain_of_part(int i, int j, double x, double y) const;
+    // whose centre is (x, y), the cell's nodes' increments ux, uy (gather_nodes)
+    // (bilinear_gradient there, its trace taken at the centroid of the cell's material,
+    // cell_centroid: centroid_trace_, made once a step by centroid_traces for every cell
+    // holding material).
+    LPFDM_INLINE StrainIncrement strain_of_part(int i, int j, const double ux[4], const double uy[4], double x, double y) const;
     // MAPPING SMOOTH: f(i, j, x, y, w) for each part of the square of half-width l about
     // (x0, y0) (square_overlap along each axis): the cell (i, j) it lies in, the part's
     // centre (x, y) and its share w > 0 of the square, in row order.
     template <class F> LPFDM_INLINE void each_part(double x0, double y0, double l, F&& f) const;
     template <class F> LPFDM_INLINE void each_part(const detail::Overlap& o, F&& f) const;
     detail::Overlap overlap_of(double x0, double y0, double l) const;
-    // ADVECT FLIP: each point's square as the map left it (smooth_map), read by the rest of
-    // the step (the points do not move again in it); scratch.
+    // MAPPING SMOOTH: each point's square as the map left it (smooth_map), read by the rest
+    // of the step (FLIP's transfer; the points do not move again in it) and by the next
+    // step's first pass (smooth_move), where the points still are. overlaps_known_: false
+    // once the points' storage changed order (reorder_points): the next pass finds them
+    // again (known_overlaps).
     std::vector<detail::Overlap> overlap_;
+    bool overlaps_known_ = false;
+    void known_overlaps();
     void centroid_traces(const Range& cells);
     void cell_centroid(std::size_t c, double& u, double& v) const;  // from the centre, in cells
     // MAPPING SMOOTH: cell c's moments (shx, shy) made ready for the nodal forces, after
@@ -2543,10 +2549,8 @@ inline void Simulation::setup() {
         fix_owner_.push_back({ox, oy});
     }
     create_points();
-    if (modes_.advect == Advect::Flip) {  // the step's scratch: the points never grow in number
-        overlap_.assign(p_.size(), {});
-        flip_gx_.assign(p_.size(), 0.0); flip_gy_.assign(p_.size(), 0.0);
-    }
+    if (modes_.mapping == Mapping::Smooth) overlap_.assign(p_.size(), {});  // the step's scratch: the points never grow in number
+    if (modes_.advect == Advect::Flip) { flip_gx_.assign(p_.size(), 0.0); flip_gy_.assign(p_.size(), 0.0); }
     setup_dynamics();
     for (std::size_t w = 0; w < walls_.size(); ++w) contact_side(walls_[w], sc_.walls[w]);
     for (const Group& g : groups_) group_consts_.push_back(&consts_[std::size_t(g.mat_index)]);
@@ -2774,6 +2778,7 @@ inline void Simulation::reorder_points() {
     const std::int32_t* cell = p_.cell.data();
     const std::int32_t* id = p_.id.data();
     parts_known_ = false;  // advance_parted's chunks were ranges of the old order
+    overlaps_known_ = false;  // and overlap_ is in the old order
     // Already in order, by cell and by id within each cell (no point has changed cell since
     // the last sort: a scene at rest, or one that has not yet moved): the new order would
     // be the old one, and nothing is moved (most sorts of a quiet scene).
@@ -3747,9 +3752,7 @@ LPFDM_DEF void Simulation::smooth_moment(std::size_t c) {
 // the cell's material (B-bar, see the head of this section); its rotation follows from them (eq. 5f),
 // its motion is the weighted sum of each cell's eq. 7a/7b (or MOTION rule) at the centre
 // of its part, and eq. 7, 8 share its mass and V sigma out by the weights at its new place.
-inline StrainIncrement Simulation::strain_of_part(int i, int j, double x, double y) const {
-    const int n1 = node(i, j), n2 = n1 + 1, n3 = n1 + mx_ + 1, n4 = n3 + 1;
-    const double ux[4] = {dux_[n1], dux_[n2], dux_[n3], dux_[n4]}, uy[4] = {duy_[n1], duy_[n2], duy_[n3], duy_[n4]};
+inline StrainIncrement Simulation::strain_of_part(int i, int j, const double ux[4], const double uy[4], double x, double y) const {
     StrainIncrement e = bilinear_gradient(ux, uy, (x - i * L_) * invL_, (y - j * L_) * invL_, invL_);
     const double half_change = 0.5 * (centroid_trace_[std::size_t(cell(i, j))] - (e.xx + e.yy));
     e.xx += half_change; e.yy += half_change;
@@ -3779,17 +3782,22 @@ LPFDM_DEF void Simulation::centroid_traces(const Range& cells) {
 // of the sums the last step left (the points where they are now), and writes point k
 // only: the fast kernel runs it on the points by threads.
 inline void Simulation::smooth_move(std::size_t k) {
-    const Group& g = groups_[p_.group[k]];
     const double x0 = p_.x[k], y0 = p_.y[k];
+    const bool bilinear = modes_.motion == Motion::Bilinear;
     StrainIncrement e;  // eq. 5 as the point sees it
     double dx = 0, dy = 0;
-    each_part(x0, y0, g.half, [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
-        const StrainIncrement ep = strain_of_part(ci, cj, px, py);
+    each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
+        double ux[4], uy[4];
+        gather_nodes(node(ci, cj), ux, uy);
+        const StrainIncrement ep = strain_of_part(ci, cj, ux, uy, px, py);
         e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
         // This cell's motion (eq. 7a/7b or the MOTION rule) at the centre of its part.
-        const CellStrain& ce = strain_[std::size_t(cell(ci, cj))];
         double x = 0, y = 0, ddx = 0, ddy = 0;
-        move_with_cell(ci, cj, {ce.xx, ce.yy, ce.xy, ce.yx}, px, py, x, y, ddx, ddy);
+        if (bilinear) move_point_bilinear(px, py, ci * L_, cj * L_, invL_, ux, uy, x, y, ddx, ddy);  // move_with_cell's, with the nodes at hand
+        else {
+            const CellStrain& ce = strain_[std::size_t(cell(ci, cj))];
+            move_with_cell(ci, cj, {ce.xx, ce.yy, ce.xy, ce.yx}, px, py, x, y, ddx, ddy);
+        }
         dx += w * (x - px); dy += w * (y - py);
     });
     if (modes_.advect == Advect::Flip) { e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5; }  // the first half (flip_second_half)
@@ -3797,6 +3805,13 @@ inline void Simulation::smooth_move(std::size_t k) {
     double x = x0 + dx, y = y0 + dy;
     stop_at_edges(p_.cell[k], x0, y0, x, y);  // as in reference_points
     p_.x[k] = x; p_.y[k] = y;
+}
+
+// Each point's square where it is (overlap_), unless the map left them so.
+inline void Simulation::known_overlaps() {
+    if (overlaps_known_) return;
+    each_point([&](std::size_t k) { overlap_[k] = overlap_of(p_.x[k], p_.y[k], groups_[p_.group[k]].half); });
+    overlaps_known_ = true;
 }
 
 // Point k's stress and volume by the strain increment e: its rotation (eq. 5f), the
@@ -3822,7 +3837,7 @@ inline void Simulation::smooth_map(Landing& t) {
         if (p_.cell[k] < 0) { ++t.departed; continue; }  // left the lattice
         const Group& g = groups_[p_.group[k]];
         const detail::Overlap o = overlap_of(x, y, g.half);
-        if (flip) overlap_[kept++] = o;  // point k's square, at its place once those that left are gone
+        overlap_[kept++] = o;  // point k's square, at its place once those that left are gone
         const double v = std::min(p_.vol[k], g.vol0);
         const double r = flip && v > 0 ? g.vol0 / v : 1.0;  // ADVECT FLIP: V sigma on V0 (flip_transfer), the centroids still weighted by v
         smear_point(o, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], t);  // eq. 7, 8 (r * s is s when r is 1)
@@ -3830,6 +3845,7 @@ inline void Simulation::smooth_map(Landing& t) {
     }
     if (t.departed) remove_departed();
     mass_in_ = t.mass;
+    overlaps_known_ = true;
 }
 
 // ADVECT FLIP's second eq. 7 and 8 (flip_second_half): smooth_map's, at the same places,
@@ -3845,6 +3861,7 @@ inline void Simulation::smear_again() {
 
 inline void Simulation::reference_points_smooth() {
     centroid_traces(Range{0, mx_, 0, my_});
+    known_overlaps();
     for (std::size_t k = 0; k < p_.size(); ++k) smooth_move(k);
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
     Landing t;
@@ -3877,6 +3894,7 @@ inline void Simulation::smear_point(const detail::Overlap& o, double m, double v
 // those cells.
 inline void Simulation::smooth_point_pass() {
     centroid_traces(strained_);  // the cells around those holding material (cell_strains)
+    known_overlaps();
     each_point([&](std::size_t k) { smooth_move(k); });
     clear_cells();
     Landing t;
@@ -4047,7 +4065,9 @@ inline void Simulation::flip_transfer(const Range& nodes) {
 inline void Simulation::flip_second_strain(std::size_t k) {
     StrainIncrement e;  // as smooth_move's
     each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
-        const StrainIncrement ep = strain_of_part(ci, cj, px, py);
+        double ux[4], uy[4];
+        gather_nodes(node(ci, cj), ux, uy);
+        const StrainIncrement ep = strain_of_part(ci, cj, ux, uy, px, py);
         e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
     });
     e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5;
@@ -6492,10 +6512,8 @@ LPFDM_DEF void Simulation::resumed() {
     occupied_ = landed(t);
     // MAPPING SMOOTH: the sums made anew (the centroids the next step reads,
     // cell_centroid), and the box of every cell the points' squares touch.
-    if (modes_.advect == Advect::Flip && overlap_.size() < p_.size()) {  // (the step's scratch, as at set-up)
-        overlap_.resize(p_.size());
-        flip_gx_.resize(p_.size()); flip_gy_.resize(p_.size());
-    }
+    if (modes_.mapping == Mapping::Smooth && overlap_.size() < p_.size()) overlap_.resize(p_.size());  // (the step's scratch, as at set-up)
+    if (modes_.advect == Advect::Flip && flip_gx_.size() < p_.size()) { flip_gx_.resize(p_.size()); flip_gy_.resize(p_.size()); }
     if (modes_.mapping == Mapping::Smooth) map_points();
     strained_ = occupied_.grow(2, mx_, my_);
     live_nodes_ = integrated_ = {0, mx_ + 1, 0, my_ + 1};
