@@ -638,6 +638,7 @@ struct ConsultArrays {
     const double *c0, *n_phi, *sqrt_n_phi;  // each point's own strength (scatter), or null
     std::uint8_t* yielded;
     double *plastic_shear, *plastic_work;
+    bool at_vol0;  // the plastic work on V0 (ADVECT FLIP), not on min(V, V0): Simulation::energy_volume
 };
 #endif
 // The ground's motion under one SHAKE card, step by step (Simulation::ground_step, and the
@@ -1050,8 +1051,9 @@ private:
         }
     };
     void smooth_map(Landing& t);
-    void smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, Landing& t);
-    void smear_again();
+    void smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, int j0, int j1, Landing& t);
+    void smear_points(Landing& t);
+    std::vector<long> row_points_;  // smear_points' share of rows between threads
     // A thread's share of the threaded point pass (advance_parted): the cells own_lo ..
     // own_hi-1 take its chunk's sums directly; a point landing in any other cell is listed
     // in p_.listed[list_at ..] (listed of them). The defaults: every cell (one thread).
@@ -1107,6 +1109,10 @@ private:
     detail::ConsultArrays consult_arrays(const PointArrays& a);
     template <bool Own> void consult_one(const MaterialConstants& mc, long r, Stress s, const PointArrays& a);
     template <bool Own> __attribute__((target("avx2"))) void consult_lanes(const MaterialConstants& mc, long q, long qend, const PointArrays& a);
+    // The Mohr-Coulomb points of b0 .. b1-1, holding their elastic trials, by spans of one
+    // material (consult_lanes); the number consulted. Of the arrays a, or of the points.
+    long consult_points(const PointArrays& a, long b0, long b1);
+    long consult_points(long b0, long b1);
 #endif
     // Row j of a lattice phase: f(j, std::false_type), or f(j, std::true_type) built for
     // AVX2 (f inlined into row_wide) when the AVX2 version is on, so that f may work
@@ -1191,7 +1197,8 @@ private:
     void move_with_cell(int ci, int cj, const StrainIncrement& e, double x0, double y0, double& x, double& y, double& dx, double& dy) const;
     void stop_at_edges(int c, double x0, double y0, double& x, double& y) const;
     LPFDM_INLINE void stop_at_edges(int ci, int cj, std::uint8_t fe, double x0, double y0, double& x, double& y) const;
-    void smooth_move(std::size_t k);
+    template <bool Trial> void smooth_move(std::size_t k);
+    template <class F> void each_point_consulted(const F& f);
     void smooth_point_pass();
     void reference_nodal_forces();
     void reference_compensate();
@@ -1200,7 +1207,7 @@ private:
     // on a box of nodes (cells) that holds every node (cell) with mass or an increment.
     void flip_transfer(const Range& nodes);
     void flip_second_half(const Range& nodes, const Range& cells);
-    void flip_second_strain(std::size_t k);
+    template <bool Trial> void flip_second_strain(std::size_t k);
     void flip_changes(const Range& nodes);
     void flip_point_change(std::size_t k, double& gx, double& gy) const;
     double flip_point_return(std::size_t k, double gx, double gy);
@@ -1213,7 +1220,7 @@ private:
     void smooth_node_force(int c, bool right, bool left, bool above, bool below, double& fx, double& fy) const;
     void hourglass_node_force(int c, bool right, bool left, bool above, bool below, double khg, double& fx, double& fy) const;
     template <class F> LPFDM_INLINE void flip_weights(std::size_t k, const F& f) const;
-    void smooth_stress(std::size_t k, const StrainIncrement& e);
+    template <bool Trial> void smooth_stress(std::size_t k, const StrainIncrement& e);
     // ADVECT FLIP's scratch: the nodes' masses by the points' weights, eq. 13's change of
     // each node and the points' change brought back (flip_sx_, flip_sy_ hold the walls'
     // and the fixed nodes' last increments in flip_transfer before that); the points'
@@ -2549,7 +2556,10 @@ inline void Simulation::setup() {
         fix_owner_.push_back({ox, oy});
     }
     create_points();
-    if (modes_.mapping == Mapping::Smooth) overlap_.assign(p_.size(), {});  // the step's scratch: the points never grow in number
+    if (modes_.mapping == Mapping::Smooth) {  // the step's scratch: the points never grow in number
+        overlap_.assign(p_.size(), {});
+        row_points_.assign(std::size_t(my_) + 1, 0);
+    }
     if (modes_.advect == Advect::Flip) { flip_gx_.assign(p_.size(), 0.0); flip_gy_.assign(p_.size(), 0.0); }
     setup_dynamics();
     for (std::size_t w = 0; w < walls_.size(); ++w) contact_side(walls_[w], sc_.walls[w]);
@@ -3781,7 +3791,7 @@ LPFDM_DEF void Simulation::centroid_traces(const Range& cells) {
 // It reads the nodes' increments, the cells' strains (the motion rule) and the centroids
 // of the sums the last step left (the points where they are now), and writes point k
 // only: the fast kernel runs it on the points by threads.
-inline void Simulation::smooth_move(std::size_t k) {
+template <bool Trial> inline void Simulation::smooth_move(std::size_t k) {
     const double x0 = p_.x[k], y0 = p_.y[k];
     const bool bilinear = modes_.motion == Motion::Bilinear;
     StrainIncrement e;  // eq. 5 as the point sees it
@@ -3801,7 +3811,7 @@ inline void Simulation::smooth_move(std::size_t k) {
         dx += w * (x - px); dy += w * (y - py);
     });
     if (modes_.advect == Advect::Flip) { e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5; }  // the first half (flip_second_half)
-    smooth_stress(k, e);
+    smooth_stress<Trial>(k, e);
     double x = x0 + dx, y = y0 + dy;
     stop_at_edges(p_.cell[k], x0, y0, x, y);  // as in reference_points
     p_.x[k] = x; p_.y[k] = y;
@@ -3815,54 +3825,121 @@ inline void Simulation::known_overlaps() {
 }
 
 // Point k's stress and volume by the strain increment e: its rotation (eq. 5f), the
-// volume change and eq. 6.
-inline void Simulation::smooth_stress(std::size_t k, const StrainIncrement& e) {
+// volume change and eq. 6. Trial: a Mohr-Coulomb point keeps consult_model's elastic
+// trial, consulted afterwards with its block (each_point_consulted).
+template <bool Trial> inline void Simulation::smooth_stress(std::size_t k, const StrainIncrement& e) {
     double rc, rs;
     jaumann_rotation(e.theta(), rc, rs);  // eq. 5f
     p_.vol[k] *= 1 + e.xx + e.yy;
     Stress s{p_.sxx[k], p_.syy[k], p_.sxy[k], p_.szz[k]};
-    consult_model(k, *group_consts_[p_.group[k]], e, rc, rs, s);  // eq. 6
+    const MaterialConstants& mc = *group_consts_[p_.group[k]];
+    if (Trial && mc.model == Model::MohrCoulomb) elastic_trial(s.xx, s.yy, s.xy, s.zz, elastic_change(mc, e), rc, rs);
+    else consult_model(k, mc, e, rc, rs, s);  // eq. 6
     p_.sxx[k] = s.xx; p_.syy[k] = s.yy; p_.sxy[k] = s.xy; p_.szz[k] = s.zz;
+}
+
+// f(k, trial) for every point k, where f writes point k's own values only and runs
+// smooth_stress<trial>: as each_point with trial false; in the fast kernel with AVX2 and a
+// Mohr-Coulomb material (no user's model), by blocks of kConsultBlock points, each
+// block's Mohr-Coulomb points consulted after its trials four at a time (consult_points,
+// the AVX2 loop's consult): the same numbers.
+template <class F> inline void Simulation::each_point_consulted(const F& f) {
+#if LPFDM_WIDE
+    if (wide_ && mohr_groups_ && no_user_groups_) {
+        const long n = long(p_.size()), blocks = (n + kConsultBlock - 1) / kConsultBlock;
+        auto block = [&](long b) {
+            const long b0 = b * kConsultBlock, b1 = std::min(n, b0 + kConsultBlock);
+            for (long k = b0; k < b1; ++k) f(std::size_t(k), std::true_type{});
+            consult_points(b0, b1);
+        };
+#if defined(_OPENMP)
+        if (!serial()) {
+            LPFDM_OMP(omp parallel for schedule(static) num_threads(team_))
+            for (long b = 0; b < blocks; ++b) block(b);
+            return;
+        }
+#endif
+        for (long b = 0; b < blocks; ++b) block(b);
+        return;
+    }
+#endif
+    each_point([&](std::size_t k) { f(k, std::false_type{}); });
 }
 
 // MAPPING SMOOTH's eq. 7 and 8 for every point where it now is, in point order, into
 // sums cleared before; a point that left the lattice leaves the cycle. t: the cells
 // touched, the mass inside.
 inline void Simulation::smooth_map(Landing& t) {
-    const bool flip = modes_.advect == Advect::Flip;
-    std::size_t kept = 0;
-    for (std::size_t k = 0; k < p_.size(); ++k) {
+    // Each point's cell and square where it is now (each point its own: by threads). A
+    // point that left, or is not finite (remove_departed keeps it for the guard), has no parts.
+    each_point([&](std::size_t k) {
         const double x = p_.x[k], y = p_.y[k];
         p_.cell[k] = cell_holding(x, y);
-        if (p_.cell[k] < 0) { ++t.departed; continue; }  // left the lattice
-        const Group& g = groups_[p_.group[k]];
-        const detail::Overlap o = overlap_of(x, y, g.half);
-        overlap_[kept++] = o;  // point k's square, at its place once those that left are gone
-        const double v = std::min(p_.vol[k], g.vol0);
-        const double r = flip && v > 0 ? g.vol0 / v : 1.0;  // ADVECT FLIP: V sigma on V0 (flip_transfer), the centroids still weighted by v
-        smear_point(o, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], t);  // eq. 7, 8 (r * s is s when r is 1)
-        t.mass += g.mass;
+        overlap_[k] = p_.cell[k] >= 0 ? overlap_of(x, y, groups_[p_.group[k]].half) : detail::Overlap{};
+    });
+    for (std::size_t k = 0; k < p_.size(); ++k) {  // the mass inside, in point order
+        if (p_.cell[k] < 0) ++t.departed;
+        else t.mass += groups_[p_.group[k]].mass;
     }
-    if (t.departed) remove_departed();
+    if (t.departed) {  // the squares kept as remove_departed keeps the points
+        std::size_t w = 0;
+        for (std::size_t k = 0; k < p_.size(); ++k)
+            if (p_.cell[k] >= 0 || !(std::isfinite(p_.x[k]) && std::isfinite(p_.y[k]))) overlap_[w++] = overlap_[k];
+        remove_departed();
+    }
     mass_in_ = t.mass;
     overlaps_known_ = true;
+    smear_points(t);  // eq. 7, 8
 }
 
-// ADVECT FLIP's second eq. 7 and 8 (flip_second_half): smooth_map's, at the same places,
-// into sums cleared before (the same cells; no point leaves).
-inline void Simulation::smear_again() {
-    Landing t;
-    for (std::size_t k = 0; k < p_.size(); ++k) {
-        const Group& g = groups_[p_.group[k]];
-        const double v = std::min(p_.vol[k], g.vol0), r = v > 0 ? g.vol0 / v : 1.0;
-        smear_point(overlap_[k], g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], t);  // eq. 7, 8
+// eq. 7 and 8 for every point whose square overlap_ holds (smear_point), in point order,
+// into sums cleared before; t: the cells touched. ADVECT FLIP: V sigma on V0
+// (flip_transfer), the centroids still weighted by V. The fast kernel's threads share the
+// rows of cells out, each adding every point's parts in its own rows in point order: each
+// cell takes the terms it takes on one thread, in the same order.
+inline void Simulation::smear_points(Landing& t) {
+    const bool flip = modes_.advect == Advect::Flip;
+    auto rows = [&](int j0, int j1, Landing& u) {
+        for (std::size_t k = 0; k < p_.size(); ++k) {
+            const detail::Overlap& o = overlap_[k];
+            if (o.b >= j1 || o.b + 1 < j0) continue;  // its square's rows are b and b + 1
+            const Group& g = groups_[p_.group[k]];
+            const double v = std::min(p_.vol[k], g.vol0);
+            const double r = flip && v > 0 ? g.vol0 / v : 1.0;  // (r * s is s when r is 1)
+            smear_point(o, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], j0, j1, u);
+        }
+    };
+#if defined(_OPENMP)
+    if (!serial()) {
+        // Rows by points: row_points_[j], the points whose squares start below row j.
+        std::fill(row_points_.begin(), row_points_.end(), 0);
+        for (std::size_t k = 0; k < p_.size(); ++k) ++row_points_[std::size_t(overlap_[k].b) + 1];
+        for (std::size_t j = 1; j < row_points_.size(); ++j) row_points_[j] += row_points_[j - 1];
+        const long n = long(p_.size());
+        LPFDM_OMP(omp parallel num_threads(team_))
+        {
+            const int nt = omp_get_num_threads(), id = omp_get_thread_num();
+            auto band = [&](int u) {  // the first row of thread u's band
+                if (u >= nt) return my_;
+                int j = 0;
+                while (j < my_ && row_points_[std::size_t(j)] < n * u / nt) ++j;
+                return j;
+            };
+            Landing u;
+            rows(band(id), band(id + 1), u);
+            LPFDM_OMP(omp critical)
+            t.merge(u);
+        }
+        return;
     }
+#endif
+    rows(0, my_, t);
 }
 
 inline void Simulation::reference_points_smooth() {
     centroid_traces(Range{0, mx_, 0, my_});
     known_overlaps();
-    for (std::size_t k = 0; k < p_.size(); ++k) smooth_move(k);
+    for (std::size_t k = 0; k < p_.size(); ++k) smooth_move<false>(k);
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_}) std::fill(v->begin(), v->end(), 0.0);
     Landing t;
     smooth_map(t);
@@ -3870,10 +3947,12 @@ inline void Simulation::reference_points_smooth() {
 }
 
 // eq. 7 and 8 for a point whose square is o, MAPPING SMOOTH: its mass m and V sigma shared out
-// among the cells its square overlaps, and the moments of both about each cell's centre.
-inline void Simulation::smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, Landing& t) {
+// among the cells its square overlaps, and the moments of both about each cell's centre;
+// the parts in rows j0 .. j1-1 only (smear_points' threads).
+inline void Simulation::smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, int j0, int j1, Landing& t) {
     const double p = 0.5 * (sxx + syy);
     each_part(o, [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
+        if (cj < j0 || cj >= j1) return;
         const std::size_t c = std::size_t(cell(ci, cj));
         t.cmin = std::min(t.cmin, int(c)); t.cmax = std::max(t.cmax, int(c));
         t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
@@ -3895,7 +3974,7 @@ inline void Simulation::smear_point(const detail::Overlap& o, double m, double v
 inline void Simulation::smooth_point_pass() {
     centroid_traces(strained_);  // the cells around those holding material (cell_strains)
     known_overlaps();
-    each_point([&](std::size_t k) { smooth_move(k); });
+    each_point_consulted([&](std::size_t k, auto trial) { smooth_move<decltype(trial)::value>(k); });
     clear_cells();
     Landing t;
     smooth_map(t);
@@ -4062,7 +4141,7 @@ inline void Simulation::flip_transfer(const Range& nodes) {
 
 // Point k's second half of strain from b where it is now (with MAPPING SMOOTH's B-bar
 // trace at the centroids of the sums just made), its stress and volume.
-inline void Simulation::flip_second_strain(std::size_t k) {
+template <bool Trial> inline void Simulation::flip_second_strain(std::size_t k) {
     StrainIncrement e;  // as smooth_move's
     each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
         double ux[4], uy[4];
@@ -4071,7 +4150,7 @@ inline void Simulation::flip_second_strain(std::size_t k) {
         e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
     });
     e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5;
-    smooth_stress(k, e);
+    smooth_stress<Trial>(k, e);
 }
 
 // 2: the transfer, then each point's second half of strain (flip_second_strain); then
@@ -4079,9 +4158,10 @@ inline void Simulation::flip_second_strain(std::size_t k) {
 inline void Simulation::flip_second_half(const Range& nodes, const Range& cells) {
     flip_transfer(nodes);
     centroid_traces(cells);
-    each_point([&](std::size_t k) { flip_second_strain(k); });
+    each_point_consulted([&](std::size_t k, auto trial) { flip_second_strain<decltype(trial)::value>(k); });
     zero_rows(cells, mx_, {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_});
-    smear_again();  // eq. 7, 8 where the points are
+    Landing t;
+    smear_points(t);  // eq. 7, 8 where the points are
 }
 
 // 3: eq. 13-14 on M_n: each node's change a_n and its own increment b_n + a_n, which the
@@ -4886,7 +4966,7 @@ LPFDM_LANE inline long consult(const MaterialConstants& mc, long q, const long q
         lane_mask(lanes, m);
         V gamma, pw, vol;
         load(pshear + r, gamma); load(pwork + r, pw); load(pvol + r, vol);
-        const V vk = v0 < vol ? v0 : vol;  // std::min(vol, vol0)
+        const V vk = a.at_vol0 ? v0 : v0 < vol ? v0 : vol;  // energy_volume: V0, or std::min(vol, vol0)
         gamma = m ? gamma + d_gamma : gamma;
         pw = m ? pw + vk * work : pw;
         store(pshear + r, gamma); store(pwork + r, pw);
@@ -5086,7 +5166,7 @@ LPFDM_INLINE inline void Simulation::gather_mean(const detail::v4i& n1, detail::
 }
 
 inline detail::ConsultArrays Simulation::consult_arrays(const PointArrays& a) {
-    return {a.sxx, a.syy, a.sxy, a.szz, a.vol, a.group, p_.c0.data(), p_.n_phi.data(), p_.sqrt_n_phi.data(), p_.yielded.data(), p_.plastic_shear.data(), p_.plastic_work.data()};
+    return {a.sxx, a.syy, a.sxy, a.szz, a.vol, a.group, p_.c0.data(), p_.n_phi.data(), p_.sqrt_n_phi.data(), p_.yielded.data(), p_.plastic_shear.data(), p_.plastic_work.data(), modes_.advect == Advect::Flip};
 }
 
 template <bool Own> inline void Simulation::consult_one(const MaterialConstants& mc, long r, Stress s, const PointArrays& a) {
@@ -5828,24 +5908,28 @@ LPFDM_INLINE inline void Simulation::mohr_blocks(Loop& lp, const long k0, const 
     }
 }
 
-// The Mohr-Coulomb points of b0 .. b1-1, holding their elastic trials, by spans of one
-// material (consult_lanes); timed when profiling (two clock reads a block of about 256
-// points).
-LPFDM_INLINE inline void Simulation::consult_timed(Loop& lp, const long b0, const long b1) {
-    auto consult_block = [&]() LPFDM_INLINE {
-        const PointArrays arrays{lp.psxx, lp.psyy, lp.psxy, lp.pszz, lp.pvol, lp.pgroup};
-        for (long q = b0; q < b1;) {  // spans of points of one material
-            const MaterialConstants& mc = *group_consts_[std::size_t(lp.pgroup[q])];
-            long qend = lp.single ? b1 : q + 1;
-            while (qend < b1 && group_consts_[std::size_t(lp.pgroup[qend])] == &mc) ++qend;
-            if (mc.model == Model::MohrCoulomb) {
-                if (modes_.scatter) consult_lanes<true>(mc, q, qend, arrays);  // scatter: each point's own strength
-                else consult_lanes<false>(mc, q, qend, arrays);
-                lp.consulted += qend - q;
-            }
-            q = qend;
+inline long Simulation::consult_points(const PointArrays& a, const long b0, const long b1) {
+    long consulted = 0;
+    for (long q = b0; q < b1;) {  // spans of points of one material
+        const MaterialConstants& mc = *group_consts_[std::size_t(a.group[q])];
+        long qend = groups_.size() == 1 ? b1 : q + 1;
+        while (qend < b1 && group_consts_[std::size_t(a.group[qend])] == &mc) ++qend;
+        if (mc.model == Model::MohrCoulomb) {
+            if (modes_.scatter) consult_lanes<true>(mc, q, qend, a);  // scatter: each point's own strength
+            else consult_lanes<false>(mc, q, qend, a);
+            consulted += qend - q;
         }
-    };
+        q = qend;
+    }
+    return consulted;
+}
+inline long Simulation::consult_points(const long b0, const long b1) {
+    return consult_points(PointArrays{p_.sxx.data(), p_.syy.data(), p_.sxy.data(), p_.szz.data(), p_.vol.data(), p_.group.data()}, b0, b1);
+}
+
+// consult_points, timed when profiling (two clock reads a block of about 256 points).
+LPFDM_INLINE inline void Simulation::consult_timed(Loop& lp, const long b0, const long b1) {
+    auto consult_block = [&]() LPFDM_INLINE { lp.consulted += consult_points(PointArrays{lp.psxx, lp.psyy, lp.psxy, lp.pszz, lp.pvol, lp.pgroup}, b0, b1); };
     if (profiling_) {
         const auto c0 = std::chrono::steady_clock::now();
         lp.consulted = 0;
