@@ -995,12 +995,12 @@ public:
 
 private:
     Simulation(const Scene& scene, Kernel kernel, int);  // (the public constructor's, with the implementation's mark)
-    // MAPPING SMOOTH: the strain increments of the part of a point's square in cell (i, j)
-    // whose centre is (x, y), the cell's nodes' increments ux, uy (gather_nodes)
-    // (bilinear_gradient there, its trace taken at the centroid of the cell's material,
-    // cell_centroid: centroid_trace_, made once a step by centroid_traces for every cell
-    // holding material).
-    LPFDM_INLINE StrainIncrement strain_of_part(int i, int j, const double ux[4], const double uy[4], double x, double y) const;
+    // MAPPING SMOOTH: the strain increments of a point whose square is o, the mean over the
+    // square of the gradient of the lattice's increment field, its trace taken at the
+    // centroids of the cells' material (centroid_trace_, made once a step by
+    // centroid_traces for every cell holding material); with motion, (dx, dy) the mean
+    // increment over the square (MOTION BILINEAR).
+    LPFDM_INLINE StrainIncrement smooth_strain(const detail::Overlap& o, bool motion, double& dx, double& dy) const;
     // MAPPING SMOOTH: f(i, j, x, y, w) for each part of the square of half-width l about
     // (x0, y0) (square_overlap along each axis): the cell (i, j) it lies in, the part's
     // centre (x, y) and its share w > 0 of the square, in row order.
@@ -1053,7 +1053,8 @@ private:
     void smooth_map(Landing& t);
     void smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, int j0, int j1, Landing& t);
     void smear_points(Landing& t);
-    std::vector<long> row_points_;  // smear_points' share of rows between threads
+    std::vector<long> row_points_;  // by_rows' share of rows between threads
+    template <class F> void by_rows(int n, const F& f);
     // A thread's share of the threaded point pass (advance_parted): the cells own_lo ..
     // own_hi-1 take its chunk's sums directly; a point landing in any other cell is listed
     // in p_.listed[list_at ..] (listed of them). The defaults: every cell (one thread).
@@ -1219,7 +1220,7 @@ private:
     void nodal_kinetic(const Range& nodes);
     void smooth_node_force(int c, bool right, bool left, bool above, bool below, double& fx, double& fy) const;
     void hourglass_node_force(int c, bool right, bool left, bool above, bool below, double khg, double& fx, double& fy) const;
-    template <class F> LPFDM_INLINE void flip_weights(std::size_t k, const F& f) const;
+    template <class F> LPFDM_INLINE void flip_weights(std::size_t k, const F& f, int j0 = 0, int j1 = std::numeric_limits<int>::max()) const;
     template <bool Trial> void smooth_stress(std::size_t k, const StrainIncrement& e);
     // ADVECT FLIP's scratch: the nodes' masses by the points' weights, eq. 13's change of
     // each node and the points' change brought back (flip_sx_, flip_sy_ hold the walls'
@@ -1627,7 +1628,9 @@ LPFDM_INLINE inline void move_point_bilinear(const T& x0, const T& y0, double xi
 // out and the rest scaled to 1. Mirror-symmetric: the same numbers, mirrored, for L m - x.
 inline void square_overlap(double x, double l, double L, int m, int& a, double w[2], double c[2]) {
     const double lo = x - l, hi = x + l;
-    a = int(std::floor(lo / L));
+    const double t = lo / L;
+    a = int(t);
+    a -= t < a;  // floor(t): int() truncates towards zero (a library call fewer: std::floor is one without SSE4.1)
     const double edge = (a + 1) * L;  // between the two cells
     if (hi <= edge) { w[0] = 1; w[1] = 0; c[0] = x; c[1] = 0; }
     else {
@@ -1637,6 +1640,19 @@ inline void square_overlap(double x, double l, double L, int m, int& a, double w
     if (a < 0) { a = 0; w[0] = 1; w[1] = 0; c[0] = 0.5 * (0 + hi); }  // the part left of the lattice
     if (a >= m - 1 && w[1] > 0) { a = m - 1; w[0] = 1; w[1] = 0; c[0] = 0.5 * (lo + m * L); }  // right of it
 }
+
+namespace detail {
+// MAPPING SMOOTH along one axis: a square whose parts lie in cells a and a + 1 (fractions
+// w, centres c: square_overlap) weighs node a + n by S[n], the mean over the square of the
+// node's linear shape function (GIMP's weight): the sum over the parts of w times the
+// shape function at the part's centre. S[2] is 0 where the square lies in cell a alone.
+inline void axis_shape(int a, const double w[2], const double c[2], double L, double invL, double S[3]) {
+    const double u0 = (c[0] - a * L) * invL, u1 = (c[1] - (a + 1) * L) * invL;  // the parts' centres in their cells
+    S[0] = w[0] * (1 - u0);
+    S[1] = w[0] * u0 + w[1] * (1 - u1);
+    S[2] = w[1] * u1;
+}
+}  // namespace detail
 
 // eq. 8: the factor that turns a cell's sum V sigma into the stress the nodal forces
 // use, already divided by 2L (b = +-1/2L): 1/L^2 (the paper) times L^2, or 1 / sum V
@@ -3762,14 +3778,46 @@ LPFDM_DEF void Simulation::smooth_moment(std::size_t c) {
 // the cell's material (B-bar, see the head of this section); its rotation follows from them (eq. 5f),
 // its motion is the weighted sum of each cell's eq. 7a/7b (or MOTION rule) at the centre
 // of its part, and eq. 7, 8 share its mass and V sigma out by the weights at its new place.
-inline StrainIncrement Simulation::strain_of_part(int i, int j, const double ux[4], const double uy[4], double x, double y) const {
-    StrainIncrement e = bilinear_gradient(ux, uy, (x - i * L_) * invL_, (y - j * L_) * invL_, invL_);
-    const double half_change = 0.5 * (centroid_trace_[std::size_t(cell(i, j))] - (e.xx + e.yy));
+//
+// The sums over the parts are taken one axis at a time (GIMP's weights): the field is
+// bilinear in each cell, so the mean over a square of a node's shape function is the
+// product of two means along the axes (detail::axis_shape), and the mean of a gradient
+// across an axis is the parts' fractions times the differences of the nodes (one cell's
+// difference over L is its field's gradient across it). Nine nodes, not four for each of
+// up to four parts; a rigid translation gives differences of exactly zero.
+inline StrainIncrement Simulation::smooth_strain(const detail::Overlap& o, bool motion, double& dx, double& dy) const {
+    double sx[3], sy[3];
+    detail::axis_shape(o.a, o.wx, o.cx, L_, invL_, sx);
+    detail::axis_shape(o.b, o.wy, o.cy, L_, invL_, sy);
+    // Nodes a .. a + 2 of rows b .. b + 2 (past the lattice's edge a node of weight 0: the
+    // square lies in cell a alone, and a node inside is read in its place).
+    const int i0 = o.a, i1 = o.a + 1, i2 = std::min(o.a + 2, mx_);
+    double xs[3], xd[3], ys[3], yd[3];  // along each row: the mean of ux, uy over the square's x, and their differences
+    for (int m = 0; m < 3; ++m) {
+        const int n = std::min(o.b + m, my_) * (mx_ + 1);
+        const double u0 = dux_[std::size_t(n + i0)], u1 = dux_[std::size_t(n + i1)], u2 = dux_[std::size_t(n + i2)];
+        const double v0 = duy_[std::size_t(n + i0)], v1 = duy_[std::size_t(n + i1)], v2 = duy_[std::size_t(n + i2)];
+        xs[m] = sx[0] * u0 + sx[1] * u1 + sx[2] * u2;
+        ys[m] = sx[0] * v0 + sx[1] * v1 + sx[2] * v2;
+        xd[m] = (o.wx[0] * (u1 - u0) + o.wx[1] * (u2 - u1)) * invL_;
+        yd[m] = (o.wx[0] * (v1 - v0) + o.wx[1] * (v2 - v1)) * invL_;
+    }
+    auto mean = [&](const double f[3]) { return sy[0] * f[0] + sy[1] * f[1] + sy[2] * f[2]; };
+    auto across = [&](const double f[3]) { return (o.wy[0] * (f[1] - f[0]) + o.wy[1] * (f[2] - f[1])) * invL_; };
+    StrainIncrement e;
+    e.xx = mean(xd);    // eq. 5a's d(ux)/dx
+    e.yy = across(ys);  // eq. 5b's d(uy)/dy
+    e.xy = across(xs);  // eq. 5c's d(ux)/dy
+    e.yx = mean(yd);    // eq. 5d's d(uy)/dx
+    if (motion) { dx = mean(xs); dy = mean(ys); }
+    double trace = 0;  // B-bar: the parts' mean of the traces at their cells' centroids
+    each_part(o, [&](int ci, int cj, double, double, double w) LPFDM_INLINE { trace += w * centroid_trace_[std::size_t(cell(ci, cj))]; });
+    const double half_change = 0.5 * (trace - (e.xx + e.yy));
     e.xx += half_change; e.yy += half_change;
     return e;
 }
 
-// MAPPING SMOOTH, the B-bar part of strain_of_part: for each cell of `cells` that holds
+// MAPPING SMOOTH, the B-bar part of smooth_strain: for each cell of `cells` that holds
 // material, the trace of the gradient of its bilinear increment field at the centroid of
 // that material (cell_centroid), the same for every part of a square in it. The points'
 // parts all lie in cells holding material: their own squares put it there.
@@ -3793,23 +3841,17 @@ LPFDM_DEF void Simulation::centroid_traces(const Range& cells) {
 // only: the fast kernel runs it on the points by threads.
 template <bool Trial> inline void Simulation::smooth_move(std::size_t k) {
     const double x0 = p_.x[k], y0 = p_.y[k];
+    const detail::Overlap& o = overlap_[k];
     const bool bilinear = modes_.motion == Motion::Bilinear;
-    StrainIncrement e;  // eq. 5 as the point sees it
     double dx = 0, dy = 0;
-    each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
-        double ux[4], uy[4];
-        gather_nodes(node(ci, cj), ux, uy);
-        const StrainIncrement ep = strain_of_part(ci, cj, ux, uy, px, py);
-        e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
-        // This cell's motion (eq. 7a/7b or the MOTION rule) at the centre of its part.
-        double x = 0, y = 0, ddx = 0, ddy = 0;
-        if (bilinear) move_point_bilinear(px, py, ci * L_, cj * L_, invL_, ux, uy, x, y, ddx, ddy);  // move_with_cell's, with the nodes at hand
-        else {
+    StrainIncrement e = smooth_strain(o, bilinear, dx, dy);  // eq. 5 as the point sees it
+    if (!bilinear)  // each part moves by its cell's rule (eq. 7a/7b or MOTION CENTRE) at its centre
+        each_part(o, [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
             const CellStrain& ce = strain_[std::size_t(cell(ci, cj))];
+            double x = 0, y = 0, ddx = 0, ddy = 0;
             move_with_cell(ci, cj, {ce.xx, ce.yy, ce.xy, ce.yx}, px, py, x, y, ddx, ddy);
-        }
-        dx += w * (x - px); dy += w * (y - py);
-    });
+            dx += w * (x - px); dy += w * (y - py);
+        });
     if (modes_.advect == Advect::Flip) { e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5; }  // the first half (flip_second_half)
     smooth_stress<Trial>(k, e);
     double x = x0 + dx, y = y0 + dy;
@@ -3889,6 +3931,11 @@ inline void Simulation::smooth_map(Landing& t) {
     }
     mass_in_ = t.mass;
     overlaps_known_ = true;
+    if (!serial()) {  // by_rows' bands: row_points_[j], the points whose squares start below row j
+        std::fill(row_points_.begin(), row_points_.end(), 0);
+        for (std::size_t k = 0; k < p_.size(); ++k) ++row_points_[std::size_t(overlap_[k].b) + 1];
+        for (std::size_t j = 1; j < row_points_.size(); ++j) row_points_[j] += row_points_[j - 1];
+    }
     smear_points(t);  // eq. 7, 8
 }
 
@@ -3909,31 +3956,38 @@ inline void Simulation::smear_points(Landing& t) {
             smear_point(o, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], j0, j1, u);
         }
     };
+    by_rows(my_, [&](int j0, int j1) {
+        Landing u;
+        rows(j0, j1, u);
+        LPFDM_OMP(omp critical)
+        t.merge(u);
+    });
+}
+
+// f(j0, j1) for bands of the rows 0 .. n-1 (of cells or nodes) that together hold them
+// all: in the fast kernel's threaded point pass, a band a thread, the bands splitting
+// the points evenly by the first row of their squares (row_points_, smooth_map); one band
+// otherwise. f adds every point's terms in its rows, in point order, so every cell or
+// node takes the terms it takes on one thread, in the same order.
+template <class F> inline void Simulation::by_rows(int n, const F& f) {
 #if defined(_OPENMP)
     if (!serial()) {
-        // Rows by points: row_points_[j], the points whose squares start below row j.
-        std::fill(row_points_.begin(), row_points_.end(), 0);
-        for (std::size_t k = 0; k < p_.size(); ++k) ++row_points_[std::size_t(overlap_[k].b) + 1];
-        for (std::size_t j = 1; j < row_points_.size(); ++j) row_points_[j] += row_points_[j - 1];
-        const long n = long(p_.size());
+        const long points = long(p_.size());
         LPFDM_OMP(omp parallel num_threads(team_))
         {
             const int nt = omp_get_num_threads(), id = omp_get_thread_num();
             auto band = [&](int u) {  // the first row of thread u's band
-                if (u >= nt) return my_;
+                if (u >= nt) return n;
                 int j = 0;
-                while (j < my_ && row_points_[std::size_t(j)] < n * u / nt) ++j;
+                while (j < n && row_points_[std::size_t(std::min(j, my_))] < points * u / nt) ++j;
                 return j;
             };
-            Landing u;
-            rows(band(id), band(id + 1), u);
-            LPFDM_OMP(omp critical)
-            t.merge(u);
+            f(band(id), band(id + 1));
         }
         return;
     }
 #endif
-    rows(0, my_, t);
+    f(0, n);
 }
 
 inline void Simulation::reference_points_smooth() {
@@ -4055,16 +4109,24 @@ inline void Simulation::smooth_node_force(int c, bool right, bool left, bool abo
 // which falls as L^2 (not with dt: it is the weights): the shaken column 1.8 % at 20
 // cells over H and 0.45 % at 40, the compliant base 0.63 % and 0.13 % (test_quake.cpp).
 
-// f(n, w_np) for the four nodes of each cell point k's square overlaps.
-template <class F> LPFDM_INLINE inline void Simulation::flip_weights(std::size_t k, const F& f) const {
-    each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
-        const int n = node(ci, cj);
-        const double u = (px - ci * L_) * invL_, v = (py - cj * L_) * invL_;  // the part's centre in the cell
-        f(std::size_t(n), w * (1 - u) * (1 - v));
-        f(std::size_t(n + 1), w * u * (1 - v));
-        f(std::size_t(n + mx_ + 1), w * (1 - u) * v);
-        f(std::size_t(n + mx_ + 2), w * u * v);
-    });
+// f(n, w_np) for the nodes a .. a + 2 of rows b .. b + 2 of point k's square, in row
+// order: the product of the two axes' means of the shape functions over the square
+// (axis_shape, as smooth_strain's motion). Past the lattice's edge a node has weight 0,
+// and the node inside is visited in its place (with 0: no branch on where a square lies).
+// (Rows j0 .. j1-1 only: by_rows' bands.)
+template <class F> LPFDM_INLINE inline void Simulation::flip_weights(std::size_t k, const F& f, int j0, int j1) const {
+    const detail::Overlap& o = overlap_[k];
+    double sx[3], sy[3];
+    detail::axis_shape(o.a, o.wx, o.cx, L_, invL_, sx);
+    detail::axis_shape(o.b, o.wy, o.cy, L_, invL_, sy);
+    const int i2 = std::min(o.a + 2, mx_) - o.a, rows[3] = {o.b, o.b + 1, std::min(o.b + 2, my_)};
+    for (int j = 0; j < 3; ++j) {
+        if (rows[j] < j0 || rows[j] >= j1) continue;
+        const std::size_t n = std::size_t(node(o.a, rows[j]));
+        f(n, sx[0] * sy[j]);
+        f(n + 1, sx[1] * sy[j]);
+        f(n + std::size_t(i2), sx[2] * sy[j]);
+    }
 }
 
 // FLIP's loops over nodes visit a box `nodes` that holds every node with mass or an
@@ -4114,12 +4176,14 @@ inline void Simulation::flip_transfer(const Range& nodes) {
             flip_sy_[std::size_t(u)] = duy_[std::size_t(u)];
         }
     zero_rows(nodes, mx_ + 1, {&dux_, &duy_, &flip_mass_});
-    for (std::size_t k = 0; k < p_.size(); ++k) {
-        const double m = groups_[p_.group[k]].mass, ux = p_.flip_ux[k], uy = p_.flip_uy[k];
-        flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE {
-            dux_[n] += w * m * ux; duy_[n] += w * m * uy; flip_mass_[n] += w * m;
-        });
-    }
+    by_rows(my_ + 1, [&](int j0, int j1) {
+        for (std::size_t k = 0; k < p_.size(); ++k) {
+            const double m = groups_[p_.group[k]].mass, ux = p_.flip_ux[k], uy = p_.flip_uy[k];
+            flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE {
+                dux_[n] += w * m * ux; duy_[n] += w * m * uy; flip_mass_[n] += w * m;
+            }, j0, j1);
+        }
+    });
     for (int j = nodes.j0; j < nodes.j1; ++j)
         for (int i = nodes.i0; i < nodes.i1; ++i) {
             const std::size_t n = std::size_t(node(i, j));
@@ -4142,13 +4206,8 @@ inline void Simulation::flip_transfer(const Range& nodes) {
 // Point k's second half of strain from b where it is now (with MAPPING SMOOTH's B-bar
 // trace at the centroids of the sums just made), its stress and volume.
 template <bool Trial> inline void Simulation::flip_second_strain(std::size_t k) {
-    StrainIncrement e;  // as smooth_move's
-    each_part(overlap_[k], [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
-        double ux[4], uy[4];
-        gather_nodes(node(ci, cj), ux, uy);
-        const StrainIncrement ep = strain_of_part(ci, cj, ux, uy, px, py);
-        e.xx += w * ep.xx; e.yy += w * ep.yy; e.xy += w * ep.xy; e.yx += w * ep.yx;
-    });
+    double dx, dy;
+    StrainIncrement e = smooth_strain(overlap_[k], false, dx, dy);  // as smooth_move's
     e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5;
     smooth_stress<Trial>(k, e);
 }
@@ -4198,7 +4257,6 @@ inline void Simulation::flip_point_change(std::size_t k, double& gx, double& gy)
 inline double Simulation::flip_point_return(std::size_t k, double gx, double gy) {
     const double m = groups_[p_.group[k]].mass, ux = p_.flip_ux[k], uy = p_.flip_uy[k];
     p_.flip_ux[k] = ux + gx; p_.flip_uy[k] = uy + gy;
-    flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE { flip_sx_[n] += w * m * gx; flip_sy_[n] += w * m * gy; });
     return 0.5 * m * (ux * (ux + gx) + uy * (uy + gy));
 }
 
@@ -4220,6 +4278,12 @@ inline void Simulation::flip_return(const Range& nodes) {
     zero_rows(nodes, mx_ + 1, {&flip_sx_, &flip_sy_});
     double *gx = flip_gx_.data(), *gy = flip_gy_.data(), kinetic = 0;
     each_point([&](std::size_t k) { flip_point_change(k, gx[k], gy[k]); });
+    by_rows(my_ + 1, [&](int j0, int j1) {  // the points' shares of what the lattice gets back
+        for (std::size_t k = 0; k < p_.size(); ++k) {
+            const double m = groups_[p_.group[k]].mass;
+            flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE { flip_sx_[n] += w * m * gx[k]; flip_sy_[n] += w * m * gy[k]; }, j0, j1);
+        }
+    });
     for (std::size_t k = 0; k < p_.size(); ++k) kinetic += flip_point_return(k, gx[k], gy[k]);
     flip_kinetic_ = kinetic / dt2;
     for (int j = nodes.j0; j < nodes.j1; ++j)
