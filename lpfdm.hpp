@@ -2477,7 +2477,7 @@ LPFDM_DEF Modes modes_of(const Scene& s, Kernel asked) {
     m.kernel = asked;
     // The AVX2 point loop follows the default modes only (choose_point_loop).
     if (m.kernel == Kernel::Fast)
-        m.points_why = m.mapping == Mapping::Smooth ? "MAPPING SMOOTH has no AVX2 point loop"
+        m.points_why = m.mapping == Mapping::Smooth ? "MAPPING SMOOTH: AVX2 for the Mohr-Coulomb consult only"
                        : m.advect == Advect::Points ? "ADVECT POINTS has no AVX2 point loop"
                        : m.motion == Motion::Paper  ? "MOTION PAPER has no AVX2 point loop"
                        : m.motion == Motion::Bilinear ? "MOTION BILINEAR has no AVX2 point loop" : "";

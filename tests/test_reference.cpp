@@ -232,7 +232,7 @@ TEST_CASE("modes: what a scene switches on, and which kernel runs it, and why") 
     CHECK(std::string(d.points_why).empty());  // the AVX2 point loop runs the default modes
     CHECK(!d.shake);
     s.mapping = Mapping::Smooth;
-    CHECK(std::string(modes_of(s, Kernel::Fast).points_why) == "MAPPING SMOOTH has no AVX2 point loop");
+    CHECK(std::string(modes_of(s, Kernel::Fast).points_why) == "MAPPING SMOOTH: AVX2 for the Mohr-Coulomb consult only");
     CHECK(std::string(modes_of(s, Kernel::Reference).points_why).empty());
     s.hourglass = 0.05;
     CHECK(modes_of(s, Kernel::Scalar).motion == Motion::Bilinear);  // SMOOTH's default rule
@@ -242,7 +242,7 @@ TEST_CASE("modes: what a scene switches on, and which kernel runs it, and why") 
         CHECK(modes_of(s, k).kernel == k);
         CHECK(Simulation(s, k).kernel() == k);
     }
-    CHECK(std::string(modes_of(s, Kernel::Fast).points_why) == "MAPPING SMOOTH has no AVX2 point loop");
+    CHECK(std::string(modes_of(s, Kernel::Fast).points_why) == "MAPPING SMOOTH: AVX2 for the Mohr-Coulomb consult only");
     Scene m;  // MOTION PAPER, and a user's model: named too
     REQUIRE(read_deck("decks/verify_collapse.deck", m).empty());
     m.motion = Motion::Paper;

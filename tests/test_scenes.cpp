@@ -207,7 +207,11 @@ MirrorDefect mirror_run(const Scene& s) {
 // and, after a change of the return's round-off, at 1.9 % of the largest stress (0.2 % at
 // the median point), while points a cell apart differ by 2.8 % at the median (1.2-5 % in
 // the compression, the cut and the footing with either mapping). The others keep it to
-// round-off. MAPPING SMOOTH's slot discharge mixes the points it sends through
+// round-off, but MAPPING SMOOTH's collapse: its defect is round-off through the first
+// half of the run (3e-10 of a cell at step 4000 of 8000) and then grows as points at the
+// yield limit flow apart: two versions of the same arithmetic in another order, whose
+// defects agreed to a factor 2 up to step 6000 (2e-7 and 4e-7 of a cell), ended at 3e-5
+// and 5e-3 of a cell. MAPPING SMOOTH's slot discharge mixes the points it sends through
 // the slot (each point's share changes with every neighbour's position): there only the
 // history (the outflow) is compared, and at the end one point in a thousand may have left
 // through the slot in one image and not yet in the other (with REORDER's default sort
@@ -231,7 +235,20 @@ TEST_CASE("every verification deck and its mirror image give mirror-image result
                          << " of the largest (neighbours differ by " << d.scatter << "), histories " << d.global << "; unmatched points " << d.unmatched);
             if (mixing) CHECK(double(d.unmatched) <= 1e-3 * count_points(s));
             else CHECK(d.unmatched == 0);
-            if (c.yields_damped || (smooth && std::string(c.deck) == "decks/verify_collapse.deck")) {
+            if (smooth && std::string(c.deck) == "decks/verify_collapse.deck") {
+                // Symmetric to round-off through its first half, then the flow's yielding
+                // amplifies the round-off: the end's defect is a matter of luck, so that of
+                // the first half is the symmetry test, and the end only bounded far below a cell.
+                Scene half = s;
+                half.steps = s.steps / 2;
+                const MirrorDefect h = mirror_run(half);
+                MESSAGE(name << " at half its steps: mirror defect: position " << h.position << " L, stress " << h.stress << " of the largest");
+                CHECK(h.position < 1e-8);
+                CHECK(h.stress < 1e-7);
+                CHECK(d.position < 1e-2);
+                CHECK(d.stress < d.scatter);
+                CHECK(d.global < 1e-2);
+            } else if (c.yields_damped) {
                 CHECK(d.position < 1e-3);
                 CHECK(d.stress < d.scatter);
                 CHECK(d.global < 1e-2);
