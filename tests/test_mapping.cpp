@@ -55,6 +55,39 @@ TEST_CASE("square_overlap: fractions that sum to one, change continuously across
     CHECK(w[0] == 1.0);
 }
 
+// MAPPING SMOOTH takes a point's strain and motion one axis at a time (smooth_strain): each
+// node's weight is the mean over the square of its linear shape function (axis_shape),
+// which must be the sum over the square's parts of their fractions times the shape
+// function at each part's centre (GIMP's weight), sum to one, and reproduce a linear
+// field exactly: the mean of x over the square is its centre.
+TEST_CASE("axis_shape: GIMP's weights of a square's nodes, by quadrature, summing to one, reproducing x") {
+    const double L = 0.25;
+    const int m = 8;
+    for (const double l : {L / 4, L / 6, L / 2}) {  // PPC 2, 3, 1
+        for (int s = 0; s <= 400; ++s) {
+            const double x = 0.001 + s * (m * L - 0.002) / 400;
+            int a = 0;
+            double w[2], c[2], S[3];
+            square_overlap(x, l, L, m, a, w, c);
+            detail::axis_shape(a, w, c, L, 1 / L, S);
+            // The mean over the square (its part inside the lattice) of node a + n's hat
+            // function, by the midpoint rule on 4000 slices (the hats are linear between
+            // nodes: the rule is exact but at the one slice holding a node, 1e-7 at most).
+            const double lo = std::max(0.0, x - l), hi = std::min(m * L, x + l);
+            double q[3] = {0, 0, 0};
+            const int slices = 4000;
+            for (int k = 0; k < slices; ++k) {
+                const double y = lo + (k + 0.5) * (hi - lo) / slices;
+                for (int n = 0; n < 3; ++n) q[n] += std::max(0.0, 1 - std::fabs(y / L - (a + n))) / slices;
+            }
+            for (int n = 0; n < 3; ++n) CHECK(std::fabs(S[n] - q[n]) <= 1e-6);
+            CHECK(S[0] + S[1] + S[2] == approx(1.0).epsilon(1e-14));
+            // A square cut by the lattice's edge is the part inside: its centre is that part's.
+            CHECK((S[0] * a + S[1] * (a + 1) + S[2] * (a + 2)) * L == approx(0.5 * (lo + hi)).epsilon(1e-13));
+        }
+    }
+}
+
 namespace {
 
 // A point's mass in cell 0 of a 2 x 1 lattice, the point (PPC 1: the whole cell's square)
