@@ -48,7 +48,7 @@
 //
 // THE PAPER'S EQUATIONS, AND THE FUNCTION THAT COMPUTES EACH
 //   eq. 5a-5d  cell strain increments from nodal increments     cell_strain (MAPPING SMOOTH:
-//                                                               bilinear_gradient, strain_of_part)
+//                                                               smooth_strain, axis_shape)
 //   eq. 5e-5f  shear strain, rotation; the Jaumann rotation     StrainIncrement::gamma, theta,
 //                                                               jaumann_rotation, rotate_stress
 //   eq. 6      a point's stress: the model, once a step          Simulation::consult_model
@@ -1018,7 +1018,7 @@ private:
     void centroid_traces(const Range& cells);
     void cell_centroid(std::size_t c, double& u, double& v) const;  // from the centre, in cells
     // MAPPING SMOOTH: cell c's moments (shx, shy) made ready for the nodal forces, after
-    // eq. 8 scaled its sums V sigma: the transpose of strain_of_part's variation across the
+    // eq. 8 scaled its sums V sigma: the transpose of smooth_strain's variation across the
     // cell, times 2L (the forces divide by L, the sums were divided by 2L).
     void smooth_moment(std::size_t c);
     template <class S, class F> static void visit_state(S& s, F& f);
