@@ -1001,10 +1001,9 @@ private:
     // centroid_traces for every cell holding material); with motion, (dx, dy) the mean
     // increment over the square (MOTION BILINEAR).
     LPFDM_INLINE StrainIncrement smooth_strain(const detail::Overlap& o, bool motion, double& dx, double& dy) const;
-    // MAPPING SMOOTH: f(i, j, x, y, w) for each part of the square of half-width l about
-    // (x0, y0) (square_overlap along each axis): the cell (i, j) it lies in, the part's
-    // centre (x, y) and its share w > 0 of the square, in row order.
-    template <class F> LPFDM_INLINE void each_part(double x0, double y0, double l, F&& f) const;
+    // MAPPING SMOOTH: f(i, j, x, y, w) for each part of the square o (overlap_of: the square
+    // of half-width l about (x0, y0), square_overlap along each axis): the cell (i, j) it
+    // lies in, the part's centre (x, y) and its share w > 0 of the square, in row order.
     template <class F> LPFDM_INLINE void each_part(const detail::Overlap& o, F&& f) const;
     detail::Overlap overlap_of(double x0, double y0, double l) const;
     // MAPPING SMOOTH: each point's square as the map left it (smooth_map), read by the rest
@@ -3751,10 +3750,6 @@ template <class F> LPFDM_INLINE inline void Simulation::each_part(const detail::
             if (!(w > 0)) continue;
             f(o.a + r, o.b + q, o.cx[r], o.cy[q], w);
         }
-}
-
-template <class F> LPFDM_INLINE inline void Simulation::each_part(double x0, double y0, double l, F&& f) const {
-    each_part(overlap_of(x0, y0, l), f);
 }
 
 LPFDM_DEF void Simulation::cell_centroid(std::size_t c, double& u, double& v) const {
