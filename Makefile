@@ -25,7 +25,7 @@ help:
 	@echo "make demo     build and run the collapsing cliff, draw $(OUT)/cliff.png and $(OUT)/cliff.gif"
 	@echo "make test     unit tests (-O2 and ASan+UBSan) and deck tests"
 	@echo "make quake    build and run the cliff brought down by an earthquake, draw $(OUT)/quake_cliff.png and $(OUT)/quake_cliff.gif"
-	@echo "make figures  run the paper's three scenes and a slope's factor of safety (its failure mechanism), draw them into $(OUT)/"
+	@echo "make figures  run the paper's three scenes, a slope's factor of safety (its failure mechanism) and a consolidation, draw them into $(OUT)/"
 	@echo "make verify   the unit tests tagged [verify], then the verification ladder (both mappings, and ADVECT FLIP, for column, PSC, footing): out/verify.tsv, work-precision and convergence plots"
 	@echo "make fuzz     fuzz the deck reader with libFuzzer (FUZZ_SECONDS, default 1800)"
 	@echo "make bench    particle-steps/s on the benchmark scenes (two of them whole runs), 1 and 2 threads, against the reference kernel"
@@ -147,6 +147,7 @@ figures: lpfdm | picture-deps
 	./lpfdm -q -o $(OUT) decks/cliff.deck
 	./lpfdm -q -o $(OUT) decks/trapdoor.deck
 	./lpfdm -q --fos -o $(OUT)/slope decks/slope.deck
+	./lpfdm -q -o $(OUT) decks/consolidation.deck
 	gnuplot -e "in='$(OUT)/psc_history.txt'; out='$(OUT)/psc_curve.png'; wall=1; width=0.1; height=0.2; c=9800; phi=28.648; title='Plane-strain compression (Fig. 4): Table 1 soil, scatter and softening'" tools/psc_curve.gp
 	gnuplot -e "in='$(OUT)/psc_points.txt'; out='$(OUT)/psc_specimen.png'; L=0.01; mat=1; epmax=0.2; title='Plane-strain compression (Fig. 4)'" tools/specimen.gp
 	gnuplot -e "in='$(OUT)/psc_points.txt'; out='$(OUT)/psc.gif'; title='Plane-strain compression'; epmax=0.05" tools/animate.gp 2>/dev/null
@@ -155,6 +156,7 @@ figures: lpfdm | picture-deps
 	gnuplot -e "in='$(OUT)/trapdoor_points.txt'; out='$(OUT)/trapdoor.png'; title='Trapdoor (Fig. 6)'; frame=-1; size='900,800'" tools/snapshot.gp
 	gnuplot -e "in='$(OUT)/trapdoor_points.txt'; out='$(OUT)/trapdoor.gif'; title='Trapdoor'; delay=25" tools/animate.gp 2>/dev/null
 	gnuplot -e "in='$(OUT)/slope/fails/slope_points.txt'; out='$(OUT)/slope_mechanism.png'; title='Slope 2:1 (Griffiths and Lane, ex. 1): the first trial that failed'; frame=-1; color='u'" tools/snapshot.gp
+	gnuplot -e "in='$(OUT)/consolidation_points.txt'; out='$(OUT)/consolidation.png'; title='Terzaghi consolidation (consolidation.deck, 10 cells over H): pore pressure against depth'" tools/consolidation.gp
 	@echo "figures in $(OUT)/"
 
 clean:

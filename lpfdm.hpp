@@ -202,6 +202,9 @@ struct Material {
     double tension = -1;                         // tension limit [Pa]; < 0: the apex c/tan(phi)
     double soften = 0;                           // fraction of c lost at first yield
     double scatter = 0;                          // coefficient of variation of c and phi
+    // Saturated (WATER): porosity n (0: dry) and hydraulic conductivity k [m/s]; RHO is then
+    // the saturated density and E, NU, PHI, C, PSI are drained (effective-stress) values.
+    double porosity = 0, perm = 0;
     Pos pos;                                     // of the card, for messages
 
     static Material elastic(int id, double E, double nu, double rho) {
@@ -272,6 +275,31 @@ struct Shake {
     bool compliant = false, baseline = false;
     Pos pos;
 };
+// WATER: the pore water of the saturated materials (POROSITY > 0). Its bulk modulus KW
+// [Pa] and density RHOW [kg/m^3]; TABLE: a phreatic level y [m] below which the pore
+// pressure starts hydrostatic, rho_w |g_y| (TABLE - y) (no TABLE: it starts at 0);
+// UNDRAINED: no flow, the pore pressure changes with the volume only.
+struct Water {
+    bool on = false;
+    double kw = 2.2e9, rhow = 1000;
+    double table = -std::numeric_limits<double>::infinity();  // -inf: no TABLE
+    bool undrained = false;
+    Pos pos;
+};
+// DRAIN x0 y0 x1 y1: every cell edge whose two nodes lie in the box holds the hydrostatic
+// pore pressure (0 without TABLE); water leaves or enters there freely.
+struct Drain {
+    Box box;
+    Pos pos;
+};
+// LOAD x0 y0 x1 y1 TX= TY=: a traction [Pa] on the nodes of a line (a degenerate box),
+// each node its share of the line's length, carried by the material point nearest it.
+struct Load {
+    Box box;
+    double tx = 0, ty = 0;
+    Pos pos;
+};
+
 // Edges of the lattice (ABSORB).
 enum : int { kBottom = 1, kTop = 2, kLeft = 4, kRight = 8 };
 
@@ -348,6 +376,9 @@ struct Scene {
     long steps = 0;
     std::vector<Output> outputs;
     std::vector<Track> tracks;
+    Water water;                        // WATER (water.on: the card is given)
+    std::vector<Drain> drains;
+    std::vector<Load> loads;
     Pos grid_pos, step_pos, damping_pos, end_pos, advect_pos;
 
     const Material* material(int id) const {
@@ -403,6 +434,8 @@ inline const DeckKey kDeckKeys[] = {
     {"MATERIAL",  "TENSION", "tension limit, Pa (default: the apex c / tan phi)", "TENSION", true, false, true, 0, kHuge, false, true, false, "", -1, kMohr, LPFDM_AT(materials, tension)},
     {"MATERIAL",  "SOFTEN",  "fraction of c lost at first yield", "SOFTEN", true, false, true, 0,    1,          false, false, false, "",         0,   kMohr, LPFDM_AT(materials, soften)},
     {"MATERIAL",  "SCATTER", "coefficient of variation of c and phi", "SCATTER", true, false, true, 0, 0.5,      false, false, false, "",         0,   kMohr, LPFDM_AT(materials, scatter)},
+    {"MATERIAL",  "POROSITY", "porosity (saturated: needs WATER)", "POROSITY", true, false, true, 0, 1,          true,  true,  false, "",         0,   kBoth, LPFDM_AT(materials, porosity)},
+    {"MATERIAL",  "PERM",    "hydraulic conductivity, m/s", "PERM",      true,  false, true,  0,      kHuge,      false, true,  false, "",         0,   kBoth, LPFDM_AT(materials, perm)},
     {"CLUSTER",   "MAT",     "material id",         "material id",       false, true,  true,  1,      65535,      false, false, true,  "",         0,   0, LPFDM_AT(clusters, mat)},
     {"CLUSTER",   "X0",      "x0",                  "x0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(clusters, box.x0)},
     {"CLUSTER",   "Y0",      "y0",                  "y0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(clusters, box.y0)},
@@ -432,6 +465,19 @@ inline const DeckKey kDeckKeys[] = {
     {"SHAKE",     "START",   "START (model time of the record's time 0, s)", "START", true, false, true, 0, kHuge, false, true,  false, "",         0,   0, LPFDM_AT(shakes, start)},
     {"SHAKE",     "DAMPING", "DAMPING (local damping alpha from START on)", "SHAKE DAMPING", true, false, true, 0, 1, false, true, false, "",     -1,   0, LPFDM_AT(shakes, damping)},
     {"OUTPUT",    "EVERY",   "EVERY n",             "EVERY n",           true,  false, true,  1,      1e9,        false, false, true,  "",         0,   0, LPFDM_AT(outputs, every)},
+    {"WATER",     "KW",      "the water's bulk modulus, Pa", "KW",       true,  false, true,  0,      kHuge,      true,  true,  false, "",       2.2e9, 0, LPFDM_OF(water.kw)},
+    {"WATER",     "RHOW",    "the water's density, kg/m^3", "RHOW",      true,  false, true,  0,      kHuge,      true,  true,  false, "",       1000,  0, LPFDM_OF(water.rhow)},
+    {"WATER",     "TABLE",   "phreatic level y, m", "TABLE",             true,  false, true,  -kHuge, kHuge,      true,  true,  false, "",       -kHuge, 0, LPFDM_OF(water.table)},
+    {"DRAIN",     "X0",      "x0",                  "x0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(drains, box.x0)},
+    {"DRAIN",     "Y0",      "y0",                  "y0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(drains, box.y0)},
+    {"DRAIN",     "X1",      "x1",                  "x1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(drains, box.x1)},
+    {"DRAIN",     "Y1",      "y1",                  "y1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(drains, box.y1)},
+    {"LOAD",      "X0",      "x0",                  "x0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(loads, box.x0)},
+    {"LOAD",      "Y0",      "y0",                  "y0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(loads, box.y0)},
+    {"LOAD",      "X1",      "x1",                  "x1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(loads, box.x1)},
+    {"LOAD",      "Y1",      "y1",                  "y1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(loads, box.y1)},
+    {"LOAD",      "TX",      "traction in x, Pa",   "TX",                true,  false, true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(loads, tx)},
+    {"LOAD",      "TY",      "traction in y, Pa",   "TY",                true,  false, true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(loads, ty)},
     {"TRACK",     "X",       "x (m)",               "the tracked x",     false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(tracks, x)},
     {"TRACK",     "Y",       "y (m)",               "the tracked y",     false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(tracks, y)},
 };
@@ -456,6 +502,9 @@ inline const DeckCard kDeckCards[] = {
     {"SHAKE", "X|Y FILE=motion.txt", "[COMPLIANT] [BASELINE]", "ground acceleration history (time s, m/s^2): fixed nodes move with the ground, or COMPLIANT: it enters through an absorbing base"},
     {"ABSORB", "BOTTOM|TOP|LEFT|RIGHT ...", "", "viscous dashpots rho c_p (normal) and rho c_s (shear) on those edges of the lattice: outgoing waves leave"},
     {"OUTFLOW", "BOTTOM|TOP|LEFT|RIGHT ...", "", "material is meant to leave the lattice through those edges (an opening under it draws no warning)"},
+    {"WATER", "", "[UNDRAINED]", "pore water in the materials with POROSITY: the models see effective stress, the lattice total stress; Darcy flow between cells (UNDRAINED: none)"},
+    {"DRAIN", "", "", "cell edges whose two nodes lie in the box hold the hydrostatic pore pressure: water leaves or enters there"},
+    {"LOAD", "", "", "a traction [Pa] on the nodes of a line, each its share of the line's length, carried by the material point nearest each node"},
     {"GRAVITY", "", "", "gravity [m/s^2]"},
     {"DAMPING", "", "", "local non-viscous damping, eq. 13-14"},
     {"HOURGLASS", "", "", "viscous control of the checkerboard mode eq. 5 cannot see (0: off)"},
@@ -533,11 +582,18 @@ struct Points {
     // ADVECT FLIP: the point's own increment in x and y over the last step [m] (its
     // velocity times dt), state.
     std::vector<double> flip_ux, flip_uy;
+    // WATER: the pore pressure p [Pa, compression positive] of a saturated point (0 for a
+    // dry one), and its volume when p last took its volume change (Simulation::water_pass).
+    std::vector<double> pw, wvol;
+    // LOAD: the force [N/m] a point carries for the LOAD cards (0 for most points), and
+    // across which axis its line lies (1: a row of nodes, its normal y; 2: a column).
+    std::vector<double> load_x, load_y;
+    std::vector<std::uint8_t> load_axis;
 
     std::size_t size() const { return x.size(); }
     // Which scenes hold an array: every one, with a Mohr-Coulomb material, with scatter,
     // with more than one thread, with ADVECT POINTS and threads, with ADVECT FLIP.
-    enum Use : std::uint8_t { kAlways, kPlastic, kScatter, kThreads, kCarry, kFlip };
+    enum Use : std::uint8_t { kAlways, kPlastic, kScatter, kThreads, kCarry, kFlip, kWater, kLoad };
     // f(name, array, use, state) for every array above, in this order; state: part of a
     // point's state (not scratch).
     template <class F> void each_array(F&& f) { visit(*this, f); }
@@ -554,6 +610,8 @@ private:
         f("listed", p.listed, kThreads, false);
         f("carry_dx", p.carry_dx, kCarry, false); f("carry_dy", p.carry_dy, kCarry, false); f("carry_from", p.carry_from, kCarry, false);
         f("flip_ux", p.flip_ux, kFlip, true); f("flip_uy", p.flip_uy, kFlip, true);
+        f("pw", p.pw, kWater, true); f("wvol", p.wvol, kWater, true);
+        f("load_x", p.load_x, kLoad, true); f("load_y", p.load_y, kLoad, true); f("load_axis", p.load_axis, kLoad, true);
     }
 };
 
@@ -700,6 +758,8 @@ struct Modes {
     bool user = false;                 // a material has a user's model (Simulation::set_user_model)
     bool plastic = false;              // a Mohr-Coulomb material (or a user model): plastic shear and work
     bool scatter = false;              // SCATTER: each point its own strength
+    bool water = false;                // WATER: pore pressure on the saturated points (water_pass)
+    bool loads = false;                // LOAD cards: forces carried by points (load_forces)
     Kernel kernel = Kernel::Fast;      // the kernel that runs it (every kernel runs every mode)
     // Why the fast kernel takes the points one at a time where it has AVX2 (its lattice
     // phases keep their lanes), and why its point pass runs on one thread ("": it does not).
@@ -871,6 +931,13 @@ public:
     // compressed (a cell that swallows them) drive it up; material made at one volume a
     // cell and moved as a continuum keeps it near 1.
     double packing() const;
+    // WATER: the largest excess pore pressure over the points, p - rho_w |g_y| (TABLE - y)
+    // at the point's place now [Pa] (0 without water), and the water that left through the
+    // drains since step 0 [m^3/m] (entered: negative).
+    double excess_pressure() const;
+    double drained() const { return drained_; }
+    bool water() const { return modes_.water; }
+    bool loaded() const { return modes_.loads; }
     // The threaded point pass (advance_parted): steps it took, points it listed for the
     // serial add after it (landed in another thread's part of the cells), and steps it had to
     // map again (a thread's points landed in a later thread's part).
@@ -912,6 +979,7 @@ public:
     struct Energy {
         double kinetic = 0, strain = 0, gravity = 0, w_walls = 0, w_fixes = 0, w_gravity = 0, d_damping = 0, d_plastic = 0, error = 0;
         double w_ground = 0, d_absorb = 0;
+        double w_loads = 0, d_water = 0;  // LOAD's work; WATER: the stored water energy the flow and drains took out
     };
     Energy energy() const;
     double reaction_x() const { return rx_; }                         // sum of fixed-node reactions [N/m]
@@ -1283,6 +1351,27 @@ private:
     std::vector<Span> cols_, rows_;
     // cells
     std::vector<double> cmass_, cvol_, svxx_, svyy_, svxy_;
+    // WATER and LOAD (water_pass, load_forces): per group Kw / n (0: dry), k / gamma_w and n;
+    // per cell the water points' sums (sum V, sum V p n / Kw, sum V k / gamma_w, the storage
+    // sum V n / Kw) and the step's net inflow; per cell its drained edges (kEdge*); per node
+    // the step's LOAD force and whether it has one (load_nodes_ lists those nodes).
+    struct GroupWater { double kwn = 0, mobility = 0, n = 0; };
+    std::vector<GroupWater> group_water_;
+    std::vector<double> wv_, wp_, wk_, wc_, wd_;
+    std::vector<std::uint8_t> drain_edges_;
+    double gamma_w_ = 0;
+    double drained_ = 0;            // water that left through the drains [m^3/m] (entered: negative)
+    double d_water_ = 0;            // the stored water energy the flow and the drains took out [J/m]
+    double w_loads_ = 0, h_loads_ = 0;  // LOAD's work, trapezoidal like the walls'
+    std::vector<double> load_fx_, load_fy_;
+    std::vector<std::uint8_t> load_mark_;
+    std::vector<std::int32_t> load_nodes_;
+    double hydrostatic(const Material& m, double x, double y) const;
+    void setup_water();
+    void water_pass();
+    void water_flow();
+    void load_forces();
+    void load_work();
     // Strain increments of eq. 5a-5d and the rotation of eq. 5f per cell, one record per
     // cell: the point loop reads all six together (six arrays were six memory streams).
     struct CellStrain { double xx = 0, yy = 0, xy = 0, yx = 0, rc = 1, rs = 0; };
@@ -2416,6 +2505,8 @@ inline bool uses(const Scene& s, Points::Use u, bool threads) {
     case Points::kThreads: return threads;
     case Points::kCarry: return threads && s.advect == Advect::Points;
     case Points::kFlip: return s.advect == Advect::Flip;
+    case Points::kWater: return s.water.on;
+    case Points::kLoad: return !s.loads.empty();
     default: return true;
     }
 }
@@ -2469,6 +2560,8 @@ LPFDM_DEF Modes modes_of(const Scene& s, Kernel asked) {
     m.hourglass = s.hourglass > 0;
     m.dynamic = !s.shakes.empty() || s.absorb != 0;
     m.shake = !s.shakes.empty();
+    m.water = s.water.on;
+    m.loads = !s.loads.empty();
     for (const auto& mat : s.materials) {
         m.plastic |= mat.model == Model::MohrCoulomb;
         m.scatter |= mat.scatter > 0;
@@ -2571,6 +2664,7 @@ inline void Simulation::setup() {
         fix_owner_.push_back({ox, oy});
     }
     create_points();
+    setup_water();
     if (modes_.mapping == Mapping::Smooth) {  // the step's scratch: the points never grow in number
         overlap_.assign(p_.size(), {});
         row_points_.assign(std::size_t(my_) + 1, 0);
@@ -2639,6 +2733,7 @@ inline void Simulation::create_points() {
     }
 
     const bool plastic = uses(sc_, Points::kPlastic, false), scatter = uses(sc_, Points::kScatter, false), flip = uses(sc_, Points::kFlip, false);
+    const bool water = uses(sc_, Points::kWater, false), loaded = uses(sc_, Points::kLoad, false);
     p_.each_array([&](const char*, auto& v, Points::Use u, bool state) { if (state && uses(sc_, u, false)) v.reserve(npoints); });
 
     Random rng(sc_.seed);
@@ -2662,6 +2757,8 @@ inline void Simulation::create_points() {
                     p_.group.push_back(g);
                     if (plastic) { p_.plastic_shear.push_back(0.0); p_.yielded.push_back(0); p_.plastic_work.push_back(0.0); }
                     if (flip) { p_.flip_ux.push_back(0.0); p_.flip_uy.push_back(0.0); }  // at rest
+                    if (water) { p_.pw.push_back(hydrostatic(mat, p_.x.back(), p_.y.back())); p_.wvol.push_back(p_.vol.back()); }
+                    if (loaded) { p_.load_x.push_back(0.0); p_.load_y.push_back(0.0); p_.load_axis.push_back(0); }
                     if (!scatter) continue;
                     if (mat.scatter > 0) {
                         const double cc = rng.truncated_normal(mat.c, mat.scatter * mat.c, 0, std::numeric_limits<double>::infinity(), false);
@@ -3246,7 +3343,10 @@ inline void Simulation::keep_increments(const Range& nodes) {
 
 inline double Simulation::strain_energy(std::size_t k) const {
     const Stress s{p_.sxx[k], p_.syy[k], p_.sxy[k], p_.szz[k]};
-    return 0.5 * energy_volume(k) * compliance_product(*group_consts_[p_.group[k]], s, s);
+    const double e = 0.5 * energy_volume(k) * compliance_product(*group_consts_[p_.group[k]], s, s);
+    if (!modes_.water) return e;
+    const double kwn = group_water_[p_.group[k]].kwn;  // WATER: the pore water's, V p^2 n / (2 Kw)
+    return kwn > 0 ? e + 0.5 * energy_volume(k) * p_.pw[k] * p_.pw[k] / kwn : e;
 }
 
 inline double Simulation::energy_volume(std::size_t k, double vol) const {
@@ -3358,6 +3458,16 @@ LPFDM_DEF double Simulation::packing() const {
     return most / (L_ * L_);
 }
 
+LPFDM_DEF double Simulation::excess_pressure() const {
+    if (!modes_.water) return 0;
+    double most = -std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        if (group_water_[p_.group[k]].kwn == 0) continue;
+        most = std::max(most, p_.pw[k] - hydrostatic(sc_.materials[std::size_t(groups_[p_.group[k]].mat_index)], p_.x[k], p_.y[k]));
+    }
+    return std::isfinite(most) ? most : 0.0;
+}
+
 LPFDM_DEF Simulation::Energy Simulation::energy() const {
     double strain = 0, potential = 0, plastic = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) {
@@ -3377,9 +3487,12 @@ LPFDM_DEF Simulation::Energy Simulation::energy() const {
     e.w_ground = es_.w_ground - es_.h_ground - es_.h_input;
     e.d_absorb = es_.d_absorb - es_.h_absorb;
     e.w_fixes += es_.w_held - es_.h_held;  // the reactions an absorbing edge took over at START
-    const double in = e.w_walls + e.w_fixes + e.w_ground;
-    const double scale = std::max({std::fabs(in), e.kinetic + std::fabs(e.strain) + std::fabs(e.gravity), es_.peak_kinetic, e.d_damping + e.d_plastic + e.d_absorb});
-    e.error = scale > 0 ? (in - e.kinetic - e.strain - e.gravity - e.d_damping - e.d_plastic - e.d_absorb) / scale : 0.0;
+    e.w_loads = w_loads_ - h_loads_;
+    e.d_water = d_water_;
+    const double in = e.w_walls + e.w_fixes + e.w_ground + e.w_loads;
+    const double out = e.d_damping + e.d_plastic + e.d_absorb + e.d_water;
+    const double scale = std::max({std::fabs(in), e.kinetic + std::fabs(e.strain) + std::fabs(e.gravity), es_.peak_kinetic, std::fabs(out)});
+    e.error = scale > 0 ? (in - e.kinetic - e.strain - e.gravity - out) / scale : 0.0;
     return e;
 }
 
@@ -3409,6 +3522,243 @@ LPFDM_DEF double Simulation::unbalanced_ratio() const {
         fgross += row_gross;
     }
     return counted && fgross > 0 ? fmax / (fgross / counted) : 0.0;
+}
+
+// ======================================================================================
+// PORE WATER AND LOADS (WATER, DRAIN, LOAD)
+//
+// A saturated point (its material has POROSITY n > 0) carries its pore pressure p
+// (compression positive) beside its stress. The stress it carries, and its model sees, is
+// the effective stress; the lattice feels the total stress sigma' - p I (tension
+// positive): eq. 8's sums take -V p on their diagonal. Each step, after the points' phase
+// and before the nodal forces, both kernels call water_pass:
+// 1. Undrained: dp = -(Kw / n) d_eps_vol, d_eps_vol = V / V_before - 1, the point's own
+//    volume change (eq. 6's d_eps_xx + d_eps_yy, to rounding).
+// 2. Darcy flow between cells (not UNDRAINED), explicit, on the cells as FLAC's is on its
+//    zones. A cell's water points pool their water: its potential Phi = sum s (p - rho_w
+//    g . x) / C over its water points, s = V n / Kw, C = sum s its storage (every point
+//    in it then takes Phi back, p = Phi + rho_w g . x: the cell is the flow's resolution,
+//    and water at rest in it stays hydrostatic), its conductivity k = sum V k / sum V.
+//    Across an edge between two such cells the volume
+//    (k_ab / gamma_w)(Phi_a - Phi_b) dt flows (k_ab their harmonic mean); across a drained
+//    edge (DRAIN) (2 k_a / gamma_w)(Phi_a - Phi_drain) dt leaves, from half a cell away,
+//    Phi_drain the hydrostatic pore pressure's potential at the edge. Edges to cells
+//    without water (free surfaces, empty cells, the lattice's edges) are impermeable
+//    unless drained. A cell's net inflow dW makes its potential Phi + dW / C: the water's
+//    volume sum V n p / Kw changes by the drains' flow only, to rounding.
+//    Alone, the flow's update is stable while dt lambda <= 2 for the largest eigenvalue
+//    lambda of C^-1 T; coupled with the lattice it is not: a pressure mode that the update
+//    overshoots (1 - dt lambda < 0) drives the skeleton, whose volume change drives it
+//    back (a column 20 cells high grew without bound at 0.58 of the first bound; a model
+//    of one mode, u'' = -a u - p, p taking c du then the factor 1 - f, is unstable for
+//    every f > 1 whatever a and c). So dt lambda <= 1, which dt sum_edges T / C <= 1/2 in
+//    every cell assures (Gershgorin): the deck's dt is refused above the limit of a full
+//    cell with four open edges, n L^2 gamma_w / (8 Kw k), or with DRAIN cards of one that
+//    also has a drained edge (2 k more), n L^2 gamma_w / (12 Kw k) (validate); an edge's
+//    T is capped at min(C_a, C_b) / (8 dt), which binds only in cells holding less than a
+//    full cell and in cells with more drained edges, keeping them stable and the exchange
+//    conservative (such a cell drains more slowly than Darcy's law says).
+//    gamma_w = rho_w |g| (rho_w 9.81 without gravity).
+// 3. The total stress: -V p (V as eq. 8 takes it) added to the cell's sums of sigma_xx, sigma_yy.
+// The mechanical step sees the water's stiffness, Kw / n added to K (stable_dt).
+// LOAD: each node of a LOAD line takes the traction times its share of the line's length;
+// the material point nearest the node at step 0 carries that force, and gives it each
+// step to the four nodes of its cell by the bilinear weights of its position: the load
+// follows the material's surface as it moves. Its work is booked like a wall's.
+// The energy account counts the water's stored energy V n p^2 / (2 Kw) with the strain
+// energy, and what the flow and the drains took out of it as d_water.
+// ======================================================================================
+
+inline double Simulation::hydrostatic(const Material& m, double, double y) const {
+    const Water& w = sc_.water;
+    if (!w.on || m.porosity <= 0 || !(w.table > -std::numeric_limits<double>::infinity())) return 0;
+    return std::max(0.0, -w.rhow * sc_.gravity_y * (w.table - y));
+}
+
+inline void Simulation::setup_water() {
+    if (modes_.water) {
+        const double g = std::hypot(sc_.gravity_x, sc_.gravity_y);
+        gamma_w_ = sc_.water.rhow * (g > 0 ? g : 9.81);
+        for (const Group& gr : groups_) {
+            const Material& m = sc_.materials[std::size_t(gr.mat_index)];
+            GroupWater w;
+            if (m.porosity > 0) { w.n = m.porosity; w.kwn = sc_.water.kw / m.porosity; w.mobility = m.perm / gamma_w_; }
+            group_water_.push_back(w);
+        }
+        const std::size_t cells = std::size_t(mx_) * std::size_t(my_);
+        for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_}) v->assign(cells, 0.0);
+        drain_edges_.assign(cells, 0);
+        std::vector<std::uint8_t> drained(std::size_t(mx_ + 1) * std::size_t(my_ + 1), 0);
+        for (const Drain& d : sc_.drains) {
+            int i0, i1, j0, j1;
+            detail::box_nodes(d.box, L_, mx_, my_, i0, i1, j0, j1);
+            for (int j = j0; j <= j1; ++j)
+                for (int i = i0; i <= i1; ++i) drained[std::size_t(node(i, j))] = 1;
+        }
+        for (int j = 0; j < my_; ++j)
+            for (int i = 0; i < mx_; ++i) {
+                const std::size_t n1 = std::size_t(node(i, j)), n2 = n1 + 1, n3 = n1 + std::size_t(mx_) + 1, n4 = n3 + 1;
+                drain_edges_[std::size_t(cell(i, j))] = std::uint8_t((drained[n1] && drained[n2] ? kEdgeBottom : 0) | (drained[n3] && drained[n4] ? kEdgeTop : 0) |
+                                                                     (drained[n1] && drained[n3] ? kEdgeLeft : 0) | (drained[n2] && drained[n4] ? kEdgeRight : 0));
+            }
+    }
+    if (modes_.loads) {
+        const std::size_t nodes = std::size_t(mx_ + 1) * std::size_t(my_ + 1);
+        load_fx_.assign(nodes, 0.0); load_fy_.assign(nodes, 0.0); load_mark_.assign(nodes, 0);
+        load_nodes_.reserve(4 * nodes < 4 * p_.size() ? 4 * nodes : 4 * p_.size());
+        for (const Load& ld : sc_.loads) {
+            int i0, i1, j0, j1;
+            detail::box_nodes(ld.box, L_, mx_, my_, i0, i1, j0, j1);
+            for (int j = j0; j <= j1; ++j)
+                for (int i = i0; i <= i1; ++i) {
+                    // the node's share of the line: half of each line segment beside it
+                    const double share = 0.5 * L_ * ((i > i0) + (i < i1) + (j > j0) + (j < j1));
+                    const double nx = i * L_, ny = j * L_;
+                    double d2 = std::numeric_limits<double>::infinity();
+                    for (std::size_t k = 0; k < p_.size(); ++k) {
+                        const double dx = p_.x[k] - nx, dy = p_.y[k] - ny;
+                        d2 = std::min(d2, dx * dx + dy * dy);
+                    }
+                    // the nearest points share it (two or four equally near on a regular layout)
+                    const double tie = d2 + 1e-9 * L_ * L_;
+                    int near = 0;
+                    for (std::size_t k = 0; k < p_.size(); ++k) {
+                        const double dx = p_.x[k] - nx, dy = p_.y[k] - ny;
+                        near += dx * dx + dy * dy <= tie;
+                    }
+                    for (std::size_t k = 0; k < p_.size(); ++k) {
+                        const double dx = p_.x[k] - nx, dy = p_.y[k] - ny;
+                        if (dx * dx + dy * dy > tie) continue;
+                        p_.load_x[k] += ld.tx * share / near;
+                        p_.load_y[k] += ld.ty * share / near;
+                        p_.load_axis[k] = j0 == j1 ? 1 : 2;
+                    }
+                }
+        }
+        std::size_t loaded = 0;
+        for (std::size_t k = 0; k < p_.size(); ++k) loaded += p_.load_x[k] != 0 || p_.load_y[k] != 0;
+        load_nodes_.reserve(4 * loaded);
+    }
+}
+
+inline void Simulation::water_pass() {
+    if (!modes_.water) return;
+    // 1. the undrained response to each point's volume change
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const double kwn = group_water_[p_.group[k]].kwn;
+        if (kwn == 0) continue;
+        const double v = p_.vol[k];
+        p_.pw[k] -= kwn * (v / p_.wvol[k] - 1);
+        p_.wvol[k] = v;
+    }
+    if (!sc_.water.undrained) water_flow();  // 2.
+    // 3. the total stress into eq. 8's sums
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const int c = p_.cell[k];
+        if (c < 0 || group_water_[p_.group[k]].kwn == 0) continue;
+        const double vp = std::min(p_.vol[k], groups_[p_.group[k]].vol0) * p_.pw[k];
+        svxx_[std::size_t(c)] -= vp;
+        svyy_[std::size_t(c)] -= vp;
+    }
+}
+
+inline void Simulation::water_flow() {
+    for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_}) std::fill(v->begin(), v->end(), 0.0);
+    const double dt = sc_.dt_s, rw = sc_.water.rhow, gx = sc_.gravity_x, gy = sc_.gravity_y;
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const GroupWater& w = group_water_[p_.group[k]];
+        const int c = p_.cell[k];
+        if (c < 0 || w.kwn == 0) continue;
+        const double v = p_.vol[k], s = v / w.kwn;
+        wv_[std::size_t(c)] += v;
+        wp_[std::size_t(c)] += s * (p_.pw[k] - rw * (gx * p_.x[k] + gy * p_.y[k]));  // the point's potential
+        wk_[std::size_t(c)] += v * w.mobility;
+        wc_[std::size_t(c)] += s;
+    }
+    auto phi = [&](std::size_t c, int, int) { return wp_[c] / wc_[c]; };
+    const Water& w = sc_.water;
+    const bool table = w.table > -std::numeric_limits<double>::infinity();
+    auto phi_edge = [&](double x, double y) { return (table ? std::max(0.0, -rw * gy * (w.table - y)) : 0.0) - rw * (gx * x + gy * y); };
+    for (int j = 0; j < my_; ++j)
+        for (int i = 0; i < mx_; ++i) {
+            const std::size_t c = std::size_t(cell(i, j));
+            if (wc_[c] == 0) continue;
+            const double pa = phi(c, i, j), ka = wk_[c] / wv_[c];
+            auto exchange = [&](std::size_t b, int bi, int bj) {
+                if (wc_[b] == 0) return;
+                const double kb = wk_[b] / wv_[b];
+                const double t = std::min(ka + kb > 0 ? 2 * ka * kb / (ka + kb) : 0.0, std::min(wc_[c], wc_[b]) / (8 * dt));
+                const double q = t * (pa - phi(b, bi, bj)) * dt;
+                wd_[c] -= q;
+                wd_[b] += q;
+            };
+            if (i + 1 < mx_) exchange(c + 1, i + 1, j);
+            if (j + 1 < my_) exchange(c + std::size_t(mx_), i, j + 1);
+            const std::uint8_t e = drain_edges_[c];
+            if (!e) continue;
+            const double t = std::min(2 * ka, wc_[c] / (8 * dt));
+            auto drain = [&](double x, double y) {
+                const double q = t * (pa - phi_edge(x, y)) * dt;
+                wd_[c] -= q;
+                drained_ += q;
+            };
+            if (e & kEdgeBottom) drain((i + 0.5) * L_, j * L_);
+            if (e & kEdgeTop) drain((i + 0.5) * L_, (j + 1) * L_);
+            if (e & kEdgeLeft) drain(i * L_, (j + 0.5) * L_);
+            if (e & kEdgeRight) drain((i + 1) * L_, (j + 0.5) * L_);
+        }
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const GroupWater& gw = group_water_[p_.group[k]];
+        const int c = p_.cell[k];
+        if (c < 0 || gw.kwn == 0) continue;
+        const std::size_t cc = std::size_t(c);
+        const double p0 = p_.pw[k], p1 = (wp_[cc] + wd_[cc]) / wc_[cc] + rw * (gx * p_.x[k] + gy * p_.y[k]);
+        d_water_ -= 0.5 * energy_volume(k) * (p1 * p1 - p0 * p0) / gw.kwn;
+        p_.pw[k] = p1;
+    }
+}
+
+// LOAD: each loaded point's force to the nodes of its cell: along its line by the linear
+// weights of its position, across it all to the nearer line of nodes (a point a quarter
+// cell inside gives the force back to the nodes it was taken from at step 0; the load
+// moves to the next line of nodes when the surface has moved half a cell). After the
+// nodal forces; load_work books its work after the step.
+inline void Simulation::load_forces() {
+    if (!modes_.loads) return;
+    load_nodes_.clear();
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const double fx = p_.load_x[k], fy = p_.load_y[k];
+        const int c = p_.cell[k];
+        if ((fx == 0 && fy == 0) || c < 0) continue;
+        const int i = c % mx_, j = c / mx_;
+        double u = p_.x[k] * invL_ - i, v = p_.y[k] * invL_ - j;
+        if (p_.load_axis[k] == 1) v = v < 0.5 ? 0.0 : 1.0;
+        else u = u < 0.5 ? 0.0 : 1.0;
+        const int n1 = node(i, j);
+        const int at[4] = {n1, n1 + 1, n1 + mx_ + 1, n1 + mx_ + 2};
+        const double w[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
+        for (int a = 0; a < 4; ++a) {
+            const std::size_t n = std::size_t(at[a]);
+            fx_[n] += w[a] * fx; fy_[n] += w[a] * fy;
+            load_fx_[n] += w[a] * fx; load_fy_[n] += w[a] * fy;
+            if (!load_mark_[n]) { load_mark_[n] = 1; load_nodes_.push_back(std::int32_t(n)); }
+        }
+    }
+}
+
+inline void Simulation::load_work() {
+    if (!modes_.loads) return;
+    double w = 0, h = 0;
+    for (const std::int32_t m : load_nodes_) {
+        const std::size_t n = std::size_t(m);
+        const double bx = dux_old_[n], by = duy_old_[n], cx = dux_[n], cy = duy_[n];
+        w += 0.5 * (load_fx_[n] * (bx + cx) + load_fy_[n] * (by + cy));
+        h = h + 0.5 * (load_fx_[n] * cx + load_fy_[n] * cy);
+        load_fx_[n] = load_fy_[n] = 0;
+        load_mark_[n] = 0;
+    }
+    w_loads_ += w;
+    h_loads_ = h;
 }
 
 // ======================================================================================
@@ -3448,9 +3798,12 @@ LPFDM_DEF void Simulation::step_reference() {
     if (step_ == 0) start_energy();
     reference_cell_strains();  // eq. 5a-5f
     reference_points();        // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b; eq. 7, 8
+    water_pass();              // WATER: pore pressure, Darcy flow, total stress into eq. 8's sums
     reference_nodal_forces();  // eq. 8, virtual work transpose of eq. 5, gravity eq. 10
+    load_forces();             // LOAD
     reference_compensate();    // eq. 12
     reference_integrate();     // eq. 13-14, fixed nodes, moving walls
+    load_work();
     parked_ += parking_.take();
     ++step_;
     if (reorder_due()) reorder_points();  // storage only (REORDER), as step() does
@@ -5136,9 +5489,12 @@ LPFDM_DEF void Simulation::step() {
     if (reference_only()) { step_reference(); return; }
     cell_strains();    // eq. 5a-5f
     point_pass();      // eq. 6, Jaumann by eq. 5f, volume, eq. 7a/7b; eq. 7, 8
+    water_pass();      // WATER (as step_reference)
     nodal_forces();    // virtual work transpose of eq. 5, gravity eq. 10
+    load_forces();     // LOAD
     compensate();      // eq. 12
     integrate();       // eq. 13-14, fixed nodes, moving walls
+    load_work();
     parked_ += parking_.take();
     ++step_;
     if (reorder_due()) reorder_points();  // storage only (REORDER)
@@ -5153,10 +5509,10 @@ inline void Simulation::step_profiled() {
         const auto t0 = clock::now();
         switch (k) {
         case 0: ref ? reference_cell_strains() : cell_strains(); break;
-        case 1: ref ? reference_points() : point_pass(); break;
-        case 2: ref ? reference_nodal_forces() : nodal_forces(); break;
+        case 1: ref ? reference_points() : point_pass(); water_pass(); break;
+        case 2: ref ? reference_nodal_forces() : nodal_forces(); load_forces(); break;
         case 3: ref ? reference_compensate() : compensate(); break;
-        default: ref ? reference_integrate() : integrate(); break;
+        default: ref ? reference_integrate() : integrate(); load_work(); break;
         }
         phase_s_[k] += std::chrono::duration<double>(clock::now() - t0).count();
     }
@@ -6695,6 +7051,8 @@ template <class S, class F> inline void Simulation::visit_state(S& s, F& f) {
         f("energy_d_absorb", e.d_absorb); f("energy_h_absorb", e.h_absorb); f("energy_w_held", e.w_held); f("energy_h_held", e.h_held);
         f("absorb_hold_x", s.hold_fx_); f("absorb_hold_y", s.hold_fy_);
     }
+    if (s.modes_.water) { f("water_drained", s.drained_); f("water_d_water", s.d_water_); }  // WATER
+    if (s.modes_.loads) { f("load_work", s.w_loads_); f("load_work_half", s.h_loads_); }     // LOAD
 }
 
 // ======================================================================================
@@ -6977,14 +7335,16 @@ LPFDM_DEF std::string deck_help() {
 // cell (any free corner of a body) has a faster mode, stiffness M + lambda instead of
 // M (M = K + 4G/3, lambda = K - 2G/3; 2G when lambda < 0), and local damping makes the
 // fastest mode see (1 + alpha) times its stiffness:
-//     dt <= L sqrt(rho / ((M + lambda)(1 + alpha)))   for the stiffest material.
+//     dt <= L sqrt(rho / ((M + lambda)(1 + alpha)))   for the stiffest material,
+// K of a saturated material (WATER) with the water's Kw / n added (undrained, the stiffest).
 // Measured (tests/test_hard.cpp): the limit at alpha = 0.8 is 0.74-0.75 of L / c_p,
 // predicted 0.745; a lone cell at nu = 0.25 0.866, predicted sqrt(3/4).
 LPFDM_DEF double stable_dt(const Scene& s) {
     double dt = std::numeric_limits<double>::infinity(), alpha = std::max(0.0, s.damping);
     for (const Shake& k : s.shakes) alpha = std::max(alpha, k.damping);  // the damping from START on
     for (const auto& m : s.materials) {
-        const double K = m.bulk(), G = m.shear(), M = K + 4 * G / 3, lam = K - 2 * G / 3;
+        const double K = m.bulk() + (s.water.on && m.porosity > 0 ? s.water.kw / m.porosity : 0.0);  // WATER: Kw / n
+        const double G = m.shear(), M = K + 4 * G / 3, lam = K - 2 * G / 3;
         const double k = (lam >= 0 ? M + lam : 2 * G) * (1 + alpha);
         dt = std::min(dt, s.cell_m * std::sqrt(m.rho / k));
     }
@@ -7019,9 +7379,9 @@ LPFDM_DEF std::string apply_setting(Scene& s, const std::string& key_in, double 
             if ((card == "MATERIAL" ? s.materials[i].id : s.walls[i].id) == num) { index = i; found = true; }
         if (!found) return "no " + card + " with id " + std::to_string(num);
         if (card == "MATERIAL") model = s.materials[index].model == Model::MohrCoulomb ? kMohr : kElastic;
-    } else if (card == "CLUSTER" || card == "FIX" || card == "OUTPUT" || card == "SHAKE" || card == "TRACK") {
+    } else if (card == "CLUSTER" || card == "FIX" || card == "OUTPUT" || card == "SHAKE" || card == "TRACK" || card == "DRAIN" || card == "LOAD") {
         count = card == "CLUSTER" ? s.clusters.size() : card == "FIX" ? s.fixes.size() : card == "SHAKE" ? s.shakes.size()
-                : card == "TRACK" ? s.tracks.size() : s.outputs.size();
+                : card == "TRACK" ? s.tracks.size() : card == "DRAIN" ? s.drains.size() : card == "LOAD" ? s.loads.size() : s.outputs.size();
         if (num < 1 || std::size_t(num) > count) return "there is no " + card + " number " + std::to_string(num) + " (cards of a kind count from 1)";
         index = std::size_t(num - 1);
     }
@@ -7225,6 +7585,51 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
         }
         if (n > 0)
             if (const std::string c = detail::wall_conflict(s, a); !c.empty()) err(w.pos, c);
+    }
+    // WATER, DRAIN, LOAD (the section "Pore water and loads")
+    if (s.water.on) {
+        keys("WATER", 0, s.water.pos, 0);
+        bool saturated = false;
+        for (const Material& m : s.materials) saturated |= m.porosity > 0;
+        if (!saturated && !unread.materials) err(s.water.pos, "WATER, but no MATERIAL has POROSITY: no material holds water");
+        if (s.mapping == Mapping::Smooth && !unread.mapping) err(s.water.pos, "WATER works with MAPPING PAPER (the default) only, so far");
+        if (s.advect == Advect::Points) err(s.water.pos, "WATER works with ADVECT EQ12 (the default) only, so far");
+    }
+    for (const Material& m : s.materials) {
+        if (m.porosity > 0 && !s.water.on) err(m.pos, "POROSITY makes the material saturated: the deck needs a WATER card");
+        if (m.perm > 0 && !(m.porosity > 0)) err(m.pos, "PERM without POROSITY: a dry material has no water to conduct");
+    }
+    for (std::size_t a = 0; a < s.drains.size(); ++a) {
+        const Drain& dr = s.drains[a];
+        keys("DRAIN", a, dr.pos, 0);
+        if (!s.water.on) err(dr.pos, "DRAIN needs a WATER card");
+        else if (s.water.undrained) err(dr.pos, "DRAIN with WATER UNDRAINED: no water flows");
+        if (!lattice) continue;
+        const long n = node_count(dr.box);
+        if (n < 0) err(dr.pos, "the box needs x0 <= x1 and y0 <= y1");
+        else if (n < 2) err(dr.pos, "the DRAIN box holds " + std::string(n == 0 ? "no node" : "one node") + ": it drains the cell edges whose two nodes it holds");
+    }
+    for (std::size_t a = 0; a < s.loads.size(); ++a) {
+        const Load& ld = s.loads[a];
+        keys("LOAD", a, ld.pos, 0);
+        if (ld.box.x0 != ld.box.x1 && ld.box.y0 != ld.box.y1) err(ld.pos, "a LOAD is a line: give x0 = x1 (a column of nodes) or y0 = y1 (a row)");
+        else if (lattice) {
+            const long n = node_count(ld.box);
+            if (n < 0) err(ld.pos, "the line needs x0 <= x1 and y0 <= y1");
+            else if (n < 2) err(ld.pos, "the LOAD line holds " + std::string(n == 0 ? "no node" : "one node") + ": a traction needs a line of two nodes or more");
+        }
+        if (s.advect == Advect::Flip) err(ld.pos, "LOAD works with ADVECT EQ12 and POINTS, not FLIP, so far");
+    }
+    if (s.water.on && !s.water.undrained && lattice && !unread.step && s.dt_s > 0 && std::isfinite(s.water.kw)) {
+        const double g = std::hypot(s.gravity_x, s.gravity_y), gw = s.water.rhow * (g > 0 ? g : 9.81);
+        double lim = std::numeric_limits<double>::infinity();
+        for (const Material& m : s.materials)
+            if (m.porosity > 0 && m.perm > 0) lim = std::min(lim, m.porosity * s.cell_m * s.cell_m * gw / ((s.drains.empty() ? 8 : 12) * s.water.kw * m.perm));
+        if (s.dt_s > lim) {
+            char buf[200];
+            std::snprintf(buf, sizeof buf, "time step %.6g s is above the pore water's stable limit %.6g s (n L^2 gamma_w / (%d KW PERM) of the most permeable material)", s.dt_s, lim, s.drains.empty() ? 8 : 12);
+            err(s.step_pos, buf);
+        }
     }
     for (std::size_t a = 0; a < s.shakes.size(); ++a) {
         const Shake& k = s.shakes[a];
@@ -8087,7 +8492,7 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
         u.all();
         return d;
     }
-    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_mapping = false, have_hourglass = false, have_advect = false, have_reorder = false;
+    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_mapping = false, have_hourglass = false, have_advect = false, have_reorder = false, have_water = false;
     Pos last{file, 1, 1};
     int cluster_cards = 0;
     // The cards with errors leave unchecked what depends on them (Unread); an unknown card
@@ -8139,6 +8544,36 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
             read_edges(r, "ABSORB", sc.absorb, sc.absorb_pos, kp);
         } else if (kw == "OUTFLOW") {
             read_edges(r, "OUTFLOW", sc.outflow, sc.outflow_pos, kp);
+        } else if (kw == "WATER") {  // WATER [KW=] [RHOW=] [TABLE=] [UNDRAINED], the word anywhere
+            once(have_water);
+            std::vector<Token> kept;
+            bool undrained = false;
+            for (std::size_t t = 0; t < toks.size(); ++t) {
+                const bool word = t > 0 && upper(toks[t].text) == "UNDRAINED" && !(t + 1 < toks.size() && toks[t + 1].text == "=");
+                if (!word) { kept.push_back(toks[t]); continue; }
+                if (undrained) r.fail(toks[t].pos, "UNDRAINED is given twice");
+                undrained = true;
+            }
+            if (r.ok()) {
+                CardReader w(kept, d);
+                sc.water.on = true;
+                sc.water.pos = kp;
+                sc.water.undrained = undrained;
+                w.parameters("WATER", 0, sc, 0);
+                w.finish();
+            }
+            continue;
+        } else if (kw == "DRAIN") {
+            sc.drains.emplace_back();
+            sc.drains.back().pos = kp;
+            r.fields("DRAIN", sc, sc.drains.size() - 1);
+            if (!r.ok()) sc.drains.pop_back();
+        } else if (kw == "LOAD") {
+            sc.loads.emplace_back();
+            sc.loads.back().pos = kp;
+            r.fields("LOAD", sc, sc.loads.size() - 1);
+            r.parameters("LOAD", 0, sc, sc.loads.size() - 1);
+            if (!r.ok()) sc.loads.pop_back();
         } else if (kw == "GRAVITY") {
             once(have_gravity);
             r.fields("GRAVITY", sc, 0);
@@ -8294,19 +8729,23 @@ LPFDM_DEF std::string history_columns(const Simulation& sim) {
     h += " e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error parked packed";
     if (sim.dynamic()) h += " w_ground d_absorb ground_dx ground_dy";  // SHAKE, ABSORB
     for (std::size_t t = 0; t < sim.tracked().size(); ++t) h += fmt::format(" t{0}_x t{0}_y t{0}_ux t{0}_uy", t + 1);  // TRACK
+    if (sim.loaded()) h += " w_loads";                     // LOAD
+    if (sim.water()) h += " d_water p_excess drained";      // WATER
     return h;
 }
 
 // Point table: one frame; frames are separated by two blank lines.
 // run: the provenance lines, after the names line (nullptr: none).
 LPFDM_DEF void write_points_header(std::FILE* f, const Simulation& sim, const std::string& deck, const RunInfo* run) {
-    fmt::print(f, "{}\n", kPointColumns);
+    const std::string columns = std::string(kPointColumns) + (sim.water() ? " p" : "");  // WATER: the pore pressure last
+    fmt::print(f, "{}\n", columns);
     if (run) write_provenance(f, sim, *run);
     fmt::print(f, "# lpfdm {} point table\n# deck: {}\n# title: {}\n", kVersion, deck, sim.scene().title);
     fmt::print(f, "# units: m, Pa (tension positive); lattice {} x {} cells of {} m\n", sim.mx(), sim.my(), sim.cell_size());
-    fmt::print(f, "# columns: {}\n", kPointColumns);
+    fmt::print(f, "# columns: {}\n", columns);
     fmt::print(f, "#   ep = accumulated plastic shear strain |d_eps1^p - d_eps3^p|; yielded = 1 once the point has yielded (softened)\n");
     fmt::print(f, "#   ux uy = displacement since step 0 [m]\n");
+    if (sim.water()) fmt::print(f, "#   sxx syy sxy szz are effective stresses; p = pore pressure [Pa, compression positive]: the total stress is sigma - p I\n");
 }
 
 LPFDM_DEF void write_points_frame(std::FILE* f, const Simulation& sim, bool first) {
@@ -8314,13 +8753,14 @@ LPFDM_DEF void write_points_frame(std::FILE* f, const Simulation& sim, bool firs
     fmt::memory_buffer b;
     if (!first) fmt::format_to(std::back_inserter(b), "\n\n");
     fmt::format_to(std::back_inserter(b), "# step {} time {:.9g}\n", sim.step_count(), sim.time());
-    const bool plastic = !p.plastic_shear.empty();
+    const bool plastic = !p.plastic_shear.empty(), water = sim.water();
     for (const std::int32_t slot : sim.by_id()) {  // by id, whatever the storage order (REORDER)
         const std::size_t k = std::size_t(slot);
         const std::size_t id = std::size_t(p.id[k]);
         fmt::format_to(std::back_inserter(b), FMT_COMPILE("{:.9g} {:.9g} {:.7g} {:.7g} {:.7g} {:.7g} {:.6g} {} {} {} {:.7g} {:.7g}\n"), p.x[k], p.y[k], p.sxx[k], p.syy[k],
                        p.sxy[k], p.szz[k], plastic ? p.plastic_shear[k] : 0.0, plastic ? int(p.yielded[k]) : 0, sim.material_id(k), p.id[k],
                        p.x[k] - sim.initial_x()[id], p.y[k] - sim.initial_y()[id]);
+        if (water) { b.resize(b.size() - 1); fmt::format_to(std::back_inserter(b), FMT_COMPILE(" {:.7g}\n"), p.pw[k]); }
         if (b.size() > (1 << 20)) { std::fwrite(b.data(), 1, b.size(), f); b.clear(); }
     }
     std::fwrite(b.data(), 1, b.size(), f);
@@ -8342,6 +8782,9 @@ LPFDM_DEF void write_history_header(std::FILE* f, const Simulation& sim, const s
     fmt::print(f, "#   packed = the most volume one cell's points hold over the cell's area (eq. 8's sum of V / L^2, the step's largest)\n");
     if (sim.dynamic())
         fmt::print(f, "#   w_ground work of the ground motion (SHAKE), d_absorb taken out by the dashpots (ABSORB); ground_dx ground_dy the ground's displacement [m]\n");
+    if (sim.loaded()) fmt::print(f, "#   w_loads work of the LOAD tractions (counted as work in)\n");
+    if (sim.water())
+        fmt::print(f, "#   d_water stored water energy the flow and the drains took out (dissipated); p_excess the largest pore pressure above hydrostatic [Pa]; drained water out through DRAIN [m^3/m]\n");
     fmt::print(f, "# {}\n", h);
 }
 
@@ -8364,6 +8807,8 @@ LPFDM_DEF void write_history_row(std::FILE* f, const Simulation& sim) {
         const double ux = k < 0 ? nan : x - sim.initial_x()[std::size_t(id)], uy = k < 0 ? nan : y - sim.initial_y()[std::size_t(id)];
         fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.7g} {:.7g}", x, y, ux, uy);
     }
+    if (sim.loaded()) fmt::format_to(std::back_inserter(b), " {:.9g}", e.w_loads);
+    if (sim.water()) fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g}", e.d_water, sim.excess_pressure(), sim.drained());
     b.push_back('\n');
     std::fwrite(b.data(), 1, b.size(), f);
 }
@@ -8531,6 +8976,8 @@ LPFDM_DEF void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<
     x.time(sim.time(), sim.step_count());
     x.text(fmt::format("    <Piece NumberOfPoints=\"{0}\" NumberOfCells=\"{0}\">\n      <PointData Scalars=\"ep\" Vectors=\"velocity\" Tensors=\"stress\">\n", n));
     for (const VtkArray& a : point_data) x.array(a, n, "        ");
+    if (sim.water())  // WATER: the stress above is effective; the total is stress - pore_pressure I
+        x.array({VtkArray::F64, "pore_pressure", 1, [&](std::size_t r, int) { return p.pw[std::size_t(order[r])]; }}, n, "        ");
     x.text("      </PointData>\n      <Points>\n");
     x.array(coords, n, "        ");
     x.text("      </Points>\n      <Cells>\n");

@@ -63,10 +63,12 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
     // Each scene exercises one path of the step: elastic under gravity, Mohr-Coulomb with
     // scatter and softening (the cliff), walls (compression test), points leaving the
     // lattice (trapdoor), the alternative motions, the hourglass control and MAPPING SMOOTH;
-    // ground motion in x and y with absorbing edges released at START (good_quake).
+    // ground motion in x and y with absorbing edges released at START (good_quake); pore
+    // water's flow and drains, and a LOAD (consolidation).
     struct Case { const char* deck; long steps; };
     for (const Case c : {Case{"decks/column.deck", 300}, Case{"decks/cliff.deck", 300}, Case{"decks/psc.deck", 300},
-                         Case{"decks/trapdoor.deck", 300}, Case{"decks/cut_high.deck", 300}, Case{"tests/decks/good_quake.deck", 200}}) {
+                         Case{"decks/trapdoor.deck", 300}, Case{"decks/cut_high.deck", 300}, Case{"tests/decks/good_quake.deck", 200},
+                         Case{"decks/consolidation.deck", 300}}) {
         const Scene s = deck(c.deck, c.steps);
         const long n = news_in_steps(s, c.steps);
         INFO(c.deck);

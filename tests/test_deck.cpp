@@ -666,7 +666,7 @@ TEST_CASE("deck error: unknown card") {
 }
 
 TEST_CASE("deck error: unknown parameter, named with the ones the card takes") {
-    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=0.3 RHO=2000 PHI=30"), 5, 42, "unknown parameter 'PHI' (this card takes E, NU, RHO)");
+    CHECK_ONE_ERROR(plus("MATERIAL 2 ELASTIC E=5E7 NU=0.3 RHO=2000 PHI=30"), 5, 42, "unknown parameter 'PHI' (this card takes E, NU, RHO, POROSITY, PERM)");
     CHECK_ONE_ERROR(plus("CLUSTER 1 2 2 4 4 PCC=3"), 5, 19, "unknown parameter 'PCC'");
     CHECK_ONE_ERROR(plus("MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=30 C=0 DILATION=5"), 5, 50, "unknown parameter 'DILATION'");
 }
@@ -1378,7 +1378,7 @@ TEST_CASE("apply_setting: CARD.PARAM overrides what the deck said, and names wha
 TEST_CASE("apply_setting: a key the material's model does not use is an error, not a silent no-op") {
     lpfdm::Scene s = read_ok(kGrid + "MATERIAL 1 ELASTIC E=2E7 NU=0.25 RHO=2000\nMATERIAL 2 MOHR E=5E7 NU=0.3 RHO=1700 PHI=30 C=1E4\n" + kCluster + kStep + "OUTPUT HISTORY h.txt EVERY 2\n");
     const std::string e = lpfdm::apply_setting(s, "MATERIAL1.PHI", 30);
-    CHECK(e == "MATERIAL 1 is ELASTIC: PHI is not one of its parameters (E, NU, RHO)");
+    CHECK(e == "MATERIAL 1 is ELASTIC: PHI is not one of its parameters (E, NU, RHO, POROSITY, PERM)");
     CHECK(lpfdm::apply_setting(s, "MATERIAL2.PHI", 25).empty());
     CHECK(s.materials[1].phi_deg == 25);
     CHECK(lpfdm::apply_setting(s, "MATERIAL2.PSI", 26) == "PSI must lie in [0, PHI]");  // PHI is 25 now
@@ -1403,7 +1403,7 @@ TEST_CASE("one table of cards and keys: --help lists it, decks/README.md documen
         if (k.param) CHECK(doc.find(std::string(k.name) + "=") != std::string::npos);  // in its card's synopsis
         if (!k.settable) continue;
         // the --set table: a row "| `CARD<..>` | `KEY`, ... |"
-        const std::size_t row = doc.find(std::string("| `") + k.card + (std::strcmp(k.card, "MATERIAL") == 0 || std::strcmp(k.card, "WALL") == 0 ? "<id>` |" : std::strcmp(k.card, "CLUSTER") == 0 || std::strcmp(k.card, "FIX") == 0 || std::strcmp(k.card, "SHAKE") == 0 || std::strcmp(k.card, "OUTPUT") == 0 || std::strcmp(k.card, "TRACK") == 0 ? "<n>` |" : "` |"));
+        const std::size_t row = doc.find(std::string("| `") + k.card + (std::strcmp(k.card, "MATERIAL") == 0 || std::strcmp(k.card, "WALL") == 0 ? "<id>` |" : std::strcmp(k.card, "CLUSTER") == 0 || std::strcmp(k.card, "FIX") == 0 || std::strcmp(k.card, "SHAKE") == 0 || std::strcmp(k.card, "OUTPUT") == 0 || std::strcmp(k.card, "TRACK") == 0 || std::strcmp(k.card, "DRAIN") == 0 || std::strcmp(k.card, "LOAD") == 0 ? "<n>` |" : "` |"));
         REQUIRE(row != std::string::npos);
         const std::string line = doc.substr(row, doc.find('\n', row) - row);
         CHECK(line.find(std::string("`") + k.name + "`") != std::string::npos);

@@ -1,0 +1,229 @@
+// Pore water (WATER, DRAIN, LOAD: the header's section "Pore water and loads"): effective
+// stress, the undrained response, Darcy flow, each against its closed form; the water's
+// volume kept by the flow; the deck's checks.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "../lpfdm.hpp"
+#include "common.hpp"
+
+using namespace lpfdm;
+
+namespace {
+
+Scene water_scene(const std::string& text) {
+    Scene s;
+    Unread u;
+    const Diagnostics d = parse_deck_text(text, "water.deck", s, &u);
+    REQUIRE(d.empty());
+    const Diagnostics v = validate(s, u);
+    for (const auto& m : v) INFO(m.str());
+    REQUIRE(v.empty());
+    return s;
+}
+
+// Errors a deck draws (parse and validate), as one text.
+std::string water_errors(const std::string& text) {
+    Scene s;
+    Unread u;
+    Diagnostics d = parse_deck_text(text, "water.deck", s, &u);
+    for (const auto& m : validate(s, u)) d.push_back(m);
+    std::string all;
+    for (const auto& m : d) all += m.str() + "\n";
+    return all;
+}
+
+// Terzaghi's series for the excess pore pressure at depth z below the drained top.
+double terzaghi(double p0, double z, double H, double T) {
+    double p = 0;
+    for (int i = 0; i < 400; ++i) {
+        const double m = kPi * (2 * i + 1) / 2;
+        p += 2 * p0 / m * std::sin(m * z / H) * std::exp(-m * m * T);
+    }
+    return p;
+}
+
+double constrained_modulus(double E, double nu) { return E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)); }
+
+const char* kOedometer = R"(GRID 2 8 0.25
+MATERIAL 1 ELASTIC E=10E6 NU=0.3 RHO=2000 POROSITY=0.4
+WATER KW=2E7 UNDRAINED
+CLUSTER 1 0 0 0.5 2
+FIX XY 0 0 0.5 0
+FIX X 0 0 0 2
+FIX X 0.5 0 0.5 2
+LOAD 0 2 0.5 2 TY=-10000
+DAMPING 0.8
+STEP 1E-4 20000
+)";
+
+}  // namespace
+
+TEST_CASE("undrained oedometric loading: the pore pressure takes q (KW/n) / (KW/n + M)") {
+    // KW = 2E7 (a compressible fluid) so that the split is far from all-to-the-water:
+    // KW/n = 5E7 Pa, M = 13.46 MPa, p = 0.788 q.
+    const Scene s = water_scene(kOedometer);
+    Simulation sim(s);
+    for (long n = 0; n < s.steps; ++n) sim.step();
+    const double q = 1e4, kwn = 2e7 / 0.4, M = constrained_modulus(10e6, 0.3), p = q * kwn / (kwn + M);
+    const Points& pt = sim.points();
+    REQUIRE(pt.size() == 64);
+    for (std::size_t k = 0; k < pt.size(); ++k) {
+        CHECK(pt.pw[k] == approx(p).epsilon(0.01));
+        // the total vertical stress carries q: sigma'_yy - p = -q, to eq. 8's volume (the
+        // cell's sum over L^2 of points that shrank by the volumetric strain, 2e-4)
+        CHECK(pt.syy[k] - pt.pw[k] == approx(-q).epsilon(0.01));
+    }
+    CHECK(sim.unbalanced_ratio() < 1e-6);
+    const Simulation::Energy e = sim.energy();
+    CHECK(e.w_loads > 0);
+    CHECK(std::fabs(e.error) < 1e-3);  // the water's stored energy counted with the strain energy
+}
+
+TEST_CASE("a submerged column at rest: hydrostatic pore pressure and the buoyant weight on the skeleton") {
+    // Water table at the top, the top drained: the skeleton, made stress-free with p
+    // already hydrostatic, settles under its buoyant weight while the excess drains.
+    const Scene s = water_scene(R"(GRID 1 10 0.2
+MATERIAL 1 ELASTIC E=50E6 NU=0.3 RHO=2000 POROSITY=0.4 PERM=3.9E-4
+WATER KW=2.2E8 TABLE=2
+CLUSTER 1 0 0 0.2 2
+FIX XY 0 0 0.2 0
+FIX X 0 0 0 2
+FIX X 0.2 0 0.2 2
+DRAIN 0 2 0.2 2
+GRAVITY 0 -9.81
+DAMPING 0.8
+STEP 1.5E-4 30000
+)");
+    Simulation sim(s);
+    for (long n = 0; n < s.steps; ++n) sim.step();
+    const double gw = 1000 * 9.81, gb = (2000 - 1000) * 9.81, H = 2;
+    const Points& pt = sim.points();
+    std::map<int, std::vector<std::size_t>> cells;
+    for (std::size_t k = 0; k < pt.size(); ++k) {
+        CHECK(pt.pw[k] == approx(gw * (H - pt.y[k])).epsilon(0.02));  // p at the point's own place
+        cells[pt.cell[k]].push_back(k);
+    }
+    for (const auto& [c, ks] : cells) {  // sigma'_yy, one value a cell (eq. 5, 6), at the cell's points' mean depth
+        double y = 0, syy = 0;
+        for (std::size_t k : ks) { y += pt.y[k]; syy += pt.syy[k]; }
+        y /= double(ks.size()); syy /= double(ks.size());
+        INFO("cell " << c << " y " << y);
+        CHECK(syy == approx(-gb * (H - y)).epsilon(0.02));
+    }
+    CHECK(sim.unbalanced_ratio() < 1e-6);
+    CHECK(std::fabs(sim.excess_pressure()) < 0.01 * gw * H);
+    CHECK(std::fabs(sim.energy().error) < 0.01);
+}
+
+TEST_CASE("Terzaghi's consolidation (decks/consolidation.deck, 20 cells over H): the isochrones and the settlement") {
+    Scene s;
+    REQUIRE(read_deck("decks/consolidation.deck", s).empty());
+    refine(s, 2);
+    REQUIRE(validate(s).empty());
+    Simulation sim(s);
+    const double E = 10e6, nu = 0.3, n = 0.4, kw = 2.2e8, k = 9e-5, H = 2, q = 1e4, gw = 1000 * 9.81;
+    const double M = constrained_modulus(E, nu), kwn = kw / n, cv = k / (gw * (1 / M + 1 / kwn)), p0 = q * kwn / (kwn + M);
+    const double L = s.cell_m, z0 = L / 4;
+    long done = 0;
+    for (const double T : {0.05, 0.2, 0.5}) {
+        const long to = std::lround(T * H * H / cv / s.dt_s);
+        for (long n = done; n < to; ++n) sim.step();
+        done = to;
+        const double t = sim.time(), Tv = cv * t / (H * H);
+        const Points& pt = sim.points();
+        double sq = 0, top = 0;
+        int row = 0;
+        for (std::size_t a = 0; a < pt.size(); ++a) {
+            const double e = pt.pw[a] - terzaghi(p0, H - pt.y[a], H, Tv);
+            sq += e * e;
+            if (pt.y[a] > H - L / 2) { top += sim.initial_y()[std::size_t(pt.id[a])] - pt.y[a]; ++row; }  // the top row of points
+        }
+        const double rms = std::sqrt(sq / double(pt.size())) / p0;
+        top /= row;
+        // The top row lies z0 = L / 4 below the surface: its settlement is the strain
+        // (q - p) / M integrated from z0 to H, the series' integral in closed form.
+        double pz = 0;
+        for (int i = 0; i < 400; ++i) { const double m = kPi * (2 * i + 1) / 2; pz += 2 * p0 * H / (m * m) * std::cos(m * z0 / H) * std::exp(-m * m * Tv); }
+        const double settled = (q * (H - z0) - pz) / M;
+        MESSAGE("T_v " << Tv << ": RMS " << rms << " of p0; settlement " << top << " m against " << settled << " m");
+        CHECK(rms < 0.03);
+        CHECK(top == approx(settled).epsilon(0.01));
+    }
+}
+
+TEST_CASE("the flow keeps the water's volume: a closed box, half above its water table") {
+    // Every node held: the points' volumes never change, so p changes by the flow alone,
+    // and sum V n p / KW (no drain) must stay what it was, to rounding.
+    const Scene s = water_scene(R"(GRID 4 8 0.25
+MATERIAL 1 ELASTIC E=50E6 NU=0.3 RHO=2000 POROSITY=0.3 PERM=1E-4
+MATERIAL 2 ELASTIC E=50E6 NU=0.3 RHO=2000 POROSITY=0.45 PERM=1E-6
+WATER KW=2.2E8 TABLE=1
+CLUSTER 1 0 0 1 2
+CLUSTER 2 0.5 0.5 1 1.5
+FIX XY 0 0 1 2
+GRAVITY 0 -9.81
+STEP 1E-4 2000
+)");
+    Simulation sim(s);
+    auto water = [&] {
+        const Points& pt = sim.points();
+        double w = 0;
+        for (std::size_t k = 0; k < pt.size(); ++k) w += pt.vol[k] * (sim.material_id(k) == 1 ? 0.3 : 0.45) * pt.pw[k] / 2.2e8;
+        return w;
+    };
+    const double before = water();
+    const std::vector<double> p0 = sim.points().pw;
+    for (long n = 0; n < s.steps; ++n) sim.step();
+    const double after = water();
+    CHECK(sim.points().pw != p0);  // it flowed
+    CHECK(std::fabs(after - before) < 1e-12 * before);
+    CHECK(sim.drained() == 0);
+}
+
+TEST_CASE("the deck's checks of WATER, DRAIN and LOAD") {
+    const std::string base = "GRID 2 8 0.25\nCLUSTER 1 0 0 0.5 2\nFIX XY 0 0 0.5 0\nSTEP 1E-4 10\n";
+    CHECK(water_errors(base + "MATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000 POROSITY=0.4\n").find("water.deck:5:1: error: POROSITY makes the material saturated: the deck needs a WATER card") != std::string::npos);
+    CHECK(water_errors(base + "MATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000\nWATER\n").find("water.deck:6:1: error: WATER, but no MATERIAL has POROSITY") != std::string::npos);
+    CHECK(water_errors(base + "MATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000 POROSITY=1.2\nWATER\n").find("POROSITY") != std::string::npos);
+    CHECK(water_errors(base + "MATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000 POROSITY=0.4\nWATER UNDRAINED UNDRAINED\n").find("water.deck:6:17: error: UNDRAINED is given twice") != std::string::npos);
+    CHECK(water_errors(base + "MATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000 POROSITY=0.4\nWATER KW=1E9 TABLE=3 UNDRAINED\nDRAIN 0 2 0.5 2\n").find("water.deck:7:1: error: DRAIN with WATER UNDRAINED") != std::string::npos);
+    CHECK(water_errors(base + "MATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000\nLOAD 0 0 0.5 2 TY=-1\n").find("water.deck:6:1: error: a LOAD is a line") != std::string::npos);
+    // the flow's own limit, n L^2 gamma_w / (8 KW k) without drains: 1.39e-5 s here
+    const std::string quick = water_errors(base + "MATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000 POROSITY=0.4 PERM=1E-2\nWATER KW=2.2E8\n");
+    CHECK(quick.find("water.deck:4:1: error: time step 0.0001 s is above the pore water's stable limit 1.39347e-05 s (n L^2 gamma_w / (8 KW PERM)") != std::string::npos);
+    CHECK(water_errors(base + "MATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000 POROSITY=0.4 PERM=1E-4\nWATER KW=2.2E8 TABLE=1.5\nDRAIN 0 2 0.5 2\nLOAD 0 2 0.5 2 TY=-1E4\n").empty());
+}
+
+TEST_CASE("Terzaghi's consolidation converges as L halves: 10, 20, 40 cells over H [verify]") {
+    const double E = 10e6, nu = 0.3, n = 0.4, kw = 2.2e8, k = 9e-5, H = 2, q = 1e4, gw = 1000 * 9.81;
+    const double M = constrained_modulus(E, nu), kwn = kw / n, cv = k / (gw * (1 / M + 1 / kwn)), p0 = q * kwn / (kwn + M);
+    double last[3] = {0, 0, 0};
+    for (const int r : {1, 2, 4}) {
+        Scene s;
+        REQUIRE(read_deck("decks/consolidation.deck", s).empty());
+        refine(s, r);
+        Simulation sim(s);
+        long done = 0;
+        int at = 0;
+        for (const double T : {0.05, 0.2, 0.5}) {
+            const long to = std::lround(T * H * H / cv / s.dt_s);
+            for (long m = done; m < to; ++m) sim.step();
+            done = to;
+            const Points& pt = sim.points();
+            double sq = 0;
+            for (std::size_t a = 0; a < pt.size(); ++a) {
+                const double e = pt.pw[a] - terzaghi(p0, H - pt.y[a], H, cv * sim.time() / (H * H));
+                sq += e * e;
+            }
+            const double rms = std::sqrt(sq / double(pt.size())) / p0;
+            MESSAGE((10 * r) << " cells over H, T_v " << T << ": RMS " << rms << " of p0");
+            if (r > 1) CHECK(rms < 0.75 * last[at]);  // first order: about half each time L halves (0.54-0.67 measured)
+            last[at++] = rms;
+        }
+    }
+}
