@@ -3559,7 +3559,8 @@ LPFDM_DEF double Simulation::unbalanced_ratio() const {
 //    full cell and in cells with more drained edges, keeping them stable and the exchange
 //    conservative (such a cell drains more slowly than Darcy's law says).
 //    gamma_w = rho_w |g| (rho_w 9.81 without gravity).
-// 3. The total stress: -V p (V as eq. 8 takes it) added to the cell's sums of sigma_xx, sigma_yy.
+// 3. The total stress: -V p (V and the cells' shares as eq. 8 took the point's stress,
+//    with every mapping and transfer) added to the cell's sums of sigma_xx, sigma_yy.
 // The mechanical step sees the water's stiffness, Kw / n added to K (stable_dt).
 // LOAD: each node of a LOAD line takes the traction times its share of the line's length;
 // the material point nearest the node at step 0 carries that force, and gives it each
@@ -3652,13 +3653,24 @@ inline void Simulation::water_pass() {
         p_.wvol[k] = v;
     }
     if (!sc_.water.undrained) water_flow();  // 2.
-    // 3. the total stress into eq. 8's sums
+    // 3. the total stress into eq. 8's sums, with the volume and weights the points'
+    // stress took: the cell holding the point, or (MAPPING SMOOTH) each cell its square
+    // overlaps by its share, on V0 with ADVECT FLIP (smear_points)
+    const bool smooth = modes_.mapping == Mapping::Smooth, flip = modes_.advect == Advect::Flip;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const int c = p_.cell[k];
         if (c < 0 || group_water_[p_.group[k]].kwn == 0) continue;
-        const double vp = std::min(p_.vol[k], groups_[p_.group[k]].vol0) * p_.pw[k];
-        svxx_[std::size_t(c)] -= vp;
-        svyy_[std::size_t(c)] -= vp;
+        const double v0 = groups_[p_.group[k]].vol0, vp = (flip ? v0 : std::min(p_.vol[k], v0)) * p_.pw[k];
+        if (!smooth) {
+            svxx_[std::size_t(c)] -= vp;
+            svyy_[std::size_t(c)] -= vp;
+            continue;
+        }
+        each_part(overlap_[k], [&](int ci, int cj, double, double, double w) {
+            const std::size_t a = std::size_t(cell(ci, cj));
+            svxx_[a] -= w * vp;
+            svyy_[a] -= w * vp;
+        });
     }
 }
 
@@ -7592,8 +7604,6 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
         bool saturated = false;
         for (const Material& m : s.materials) saturated |= m.porosity > 0;
         if (!saturated && !unread.materials) err(s.water.pos, "WATER, but no MATERIAL has POROSITY: no material holds water");
-        if (s.mapping == Mapping::Smooth && !unread.mapping) err(s.water.pos, "WATER works with MAPPING PAPER (the default) only, so far");
-        if (s.advect == Advect::Points) err(s.water.pos, "WATER works with ADVECT EQ12 (the default) only, so far");
     }
     for (const Material& m : s.materials) {
         if (m.porosity > 0 && !s.water.on) err(m.pos, "POROSITY makes the material saturated: the deck needs a WATER card");
@@ -7618,7 +7628,6 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
             if (n < 0) err(ld.pos, "the line needs x0 <= x1 and y0 <= y1");
             else if (n < 2) err(ld.pos, "the LOAD line holds " + std::string(n == 0 ? "no node" : "one node") + ": a traction needs a line of two nodes or more");
         }
-        if (s.advect == Advect::Flip) err(ld.pos, "LOAD works with ADVECT EQ12 and POINTS, not FLIP, so far");
     }
     if (s.water.on && !s.water.undrained && lattice && !unread.step && s.dt_s > 0 && std::isfinite(s.water.kw)) {
         const double g = std::hypot(s.gravity_x, s.gravity_y), gw = s.water.rhow * (g > 0 ? g : 9.81);
