@@ -148,6 +148,7 @@ figures: lpfdm | picture-deps
 	./lpfdm -q -o $(OUT) decks/trapdoor.deck
 	./lpfdm -q --fos -o $(OUT)/slope decks/slope.deck
 	./lpfdm -q -o $(OUT) decks/consolidation.deck
+	./lpfdm -q -o $(OUT) decks/drawdown.deck
 	gnuplot -e "in='$(OUT)/psc_history.txt'; out='$(OUT)/psc_curve.png'; wall=1; width=0.1; height=0.2; c=9800; phi=28.648; title='Plane-strain compression (Fig. 4): Table 1 soil, scatter and softening'" tools/psc_curve.gp
 	gnuplot -e "in='$(OUT)/psc_points.txt'; out='$(OUT)/psc_specimen.png'; L=0.01; mat=1; epmax=0.2; title='Plane-strain compression (Fig. 4)'" tools/specimen.gp
 	gnuplot -e "in='$(OUT)/psc_points.txt'; out='$(OUT)/psc.gif'; title='Plane-strain compression'; epmax=0.05" tools/animate.gp 2>/dev/null
@@ -157,6 +158,7 @@ figures: lpfdm | picture-deps
 	gnuplot -e "in='$(OUT)/trapdoor_points.txt'; out='$(OUT)/trapdoor.gif'; title='Trapdoor'; delay=25" tools/animate.gp 2>/dev/null
 	gnuplot -e "in='$(OUT)/slope/fails/slope_points.txt'; out='$(OUT)/slope_mechanism.png'; title='Slope 2:1 (Griffiths and Lane, ex. 1): the first trial that failed'; frame=-1; color='u'" tools/snapshot.gp
 	gnuplot -e "in='$(OUT)/consolidation_points.txt'; out='$(OUT)/consolidation.png'; title='Terzaghi consolidation (consolidation.deck, 10 cells over H): pore pressure against depth'" tools/consolidation.gp
+	gnuplot -e "in='$(OUT)/drawdown_points.txt'; out='$(OUT)/drawdown.png'; title='Rapid drawdown (drawdown.deck): the slope 5.5 s after its reservoir fell'; frame=-1; color='u'; size='1000,500'" tools/snapshot.gp
 	@echo "figures in $(OUT)/"
 
 clean:

@@ -300,6 +300,24 @@ struct Load {
     Pos pos;
 };
 
+// RESERVOIR level [TO=y] [START=t] [OVER=s]: free water outside the material, its surface
+// at y = level [m]; from model time START it is lowered (or raised) linearly to TO over
+// OVER seconds (0: at once). Below it, the material's free surfaces (cell edges to empty
+// cells inside the lattice) take its hydrostatic pressure and, for saturated material,
+// are drained to it.
+struct Reservoir {
+    bool on = false;
+    double level = 0;
+    double to = -std::numeric_limits<double>::infinity();  // -inf: stays at level
+    double start = 0, over = 0;
+    Pos pos;
+    double at(double t) const {
+        if (!(to > -std::numeric_limits<double>::infinity()) || t <= start) return level;
+        if (t >= start + over) return to;
+        return level + (to - level) * (t - start) / over;
+    }
+};
+
 // Edges of the lattice (ABSORB).
 enum : int { kBottom = 1, kTop = 2, kLeft = 4, kRight = 8 };
 
@@ -379,6 +397,12 @@ struct Scene {
     Water water;                        // WATER (water.on: the card is given)
     std::vector<Drain> drains;
     std::vector<Load> loads;
+    Reservoir reservoir;                // RESERVOIR (reservoir.on: the card is given)
+    // GEOSTATIC [K0=k]: the points start in geostatic equilibrium (Simulation::geostatic);
+    // k0 < 0: each material's nu / (1 - nu).
+    bool geostatic = false;
+    double k0 = -1;
+    Pos geostatic_pos;
     Pos grid_pos, step_pos, damping_pos, end_pos, advect_pos;
 
     const Material* material(int id) const {
@@ -468,6 +492,11 @@ inline const DeckKey kDeckKeys[] = {
     {"WATER",     "KW",      "the water's bulk modulus, Pa", "KW",       true,  false, true,  0,      kHuge,      true,  true,  false, "",       2.2e9, 0, LPFDM_OF(water.kw)},
     {"WATER",     "RHOW",    "the water's density, kg/m^3", "RHOW",      true,  false, true,  0,      kHuge,      true,  true,  false, "",       1000,  0, LPFDM_OF(water.rhow)},
     {"WATER",     "TABLE",   "phreatic level y, m", "TABLE",             true,  false, true,  -kHuge, kHuge,      true,  true,  false, "",       -kHuge, 0, LPFDM_OF(water.table)},
+    {"RESERVOIR", "LEVEL",   "level y of the water's surface, m", "the reservoir's level", false, true, true, -kHuge, kHuge, true, true, false, "", 0, 0, LPFDM_OF(reservoir.level)},
+    {"RESERVOIR", "TO",      "level y it is lowered to, m", "TO",        true,  false, true,  -kHuge, kHuge,      true,  true,  false, "",       -kHuge, 0, LPFDM_OF(reservoir.to)},
+    {"RESERVOIR", "START",   "model time the change starts, s", "START", true,  false, true,  0,      kHuge,      false, true,  false, "",         0,   0, LPFDM_OF(reservoir.start)},
+    {"RESERVOIR", "OVER",    "duration of the change, s", "OVER",        true,  false, true,  0,      kHuge,      false, true,  false, "",         0,   0, LPFDM_OF(reservoir.over)},
+    {"GEOSTATIC", "K0",      "sigma'_xx / sigma'_yy at rest (default nu / (1 - nu))", "K0", true, false, true, 0, 10,    false, false, false, "",        -1,   0, LPFDM_OF(k0)},
     {"DRAIN",     "X0",      "x0",                  "x0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(drains, box.x0)},
     {"DRAIN",     "Y0",      "y0",                  "y0",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(drains, box.y0)},
     {"DRAIN",     "X1",      "x1",                  "x1",                false, true,  true,  -kHuge, kHuge,      true,  true,  false, "",         0,   0, LPFDM_AT(drains, box.x1)},
@@ -503,8 +532,10 @@ inline const DeckCard kDeckCards[] = {
     {"ABSORB", "BOTTOM|TOP|LEFT|RIGHT ...", "", "viscous dashpots rho c_p (normal) and rho c_s (shear) on those edges of the lattice: outgoing waves leave"},
     {"OUTFLOW", "BOTTOM|TOP|LEFT|RIGHT ...", "", "material is meant to leave the lattice through those edges (an opening under it draws no warning)"},
     {"WATER", "", "[UNDRAINED]", "pore water in the materials with POROSITY: the models see effective stress, the lattice total stress; Darcy flow between cells (UNDRAINED: none)"},
+    {"RESERVOIR", "", "", "free water outside the material, its surface at LEVEL, lowered to TO from START over OVER seconds: its hydrostatic pressure on the material's free surfaces below it, which it drains"},
     {"DRAIN", "", "", "cell edges whose two nodes lie in the box hold the hydrostatic pore pressure: water leaves or enters there"},
     {"LOAD", "", "", "a traction [Pa] on the nodes of a line, each its share of the line's length, carried by the material point nearest each node"},
+    {"GEOSTATIC", "", "", "the points start at rest under gravity: sigma'_yy the weight above them in their column of cells (buoyant below the water table), sigma'_xx = sigma'_zz = K0 sigma'_yy"},
     {"GRAVITY", "", "", "gravity [m/s^2]"},
     {"DAMPING", "", "", "local non-viscous damping, eq. 13-14"},
     {"HOURGLASS", "", "", "viscous control of the checkerboard mode eq. 5 cannot see (0: off)"},
@@ -1357,7 +1388,7 @@ private:
     // the step's LOAD force and whether it has one (load_nodes_ lists those nodes).
     struct GroupWater { double kwn = 0, mobility = 0, n = 0; };
     std::vector<GroupWater> group_water_;
-    std::vector<double> wv_, wp_, wk_, wc_, wd_;
+    std::vector<double> wv_, wp_, wk_, wc_, wd_, wq_;  // (wq_: sum V n p / Kw, the cell's pressure: flows only when above 0)
     std::vector<std::uint8_t> drain_edges_;
     double gamma_w_ = 0;
     double drained_ = 0;            // water that left through the drains [m^3/m] (entered: negative)
@@ -1368,6 +1399,7 @@ private:
     std::vector<std::int32_t> load_nodes_;
     double hydrostatic(const Material& m, double x, double y) const;
     void setup_water();
+    void geostatic();
     void water_pass();
     void water_flow();
     void load_forces();
@@ -2561,7 +2593,7 @@ LPFDM_DEF Modes modes_of(const Scene& s, Kernel asked) {
     m.dynamic = !s.shakes.empty() || s.absorb != 0;
     m.shake = !s.shakes.empty();
     m.water = s.water.on;
-    m.loads = !s.loads.empty();
+    m.loads = !s.loads.empty() || s.reservoir.on;
     for (const auto& mat : s.materials) {
         m.plastic |= mat.model == Model::MohrCoulomb;
         m.scatter |= mat.scatter > 0;
@@ -2665,6 +2697,7 @@ inline void Simulation::setup() {
     }
     create_points();
     setup_water();
+    if (sc_.geostatic) geostatic();
     if (modes_.mapping == Mapping::Smooth) {  // the step's scratch: the points never grow in number
         overlap_.assign(p_.size(), {});
         row_points_.assign(std::size_t(my_) + 1, 0);
@@ -3544,7 +3577,10 @@ LPFDM_DEF double Simulation::unbalanced_ratio() const {
 //    edge (DRAIN) (2 k_a / gamma_w)(Phi_a - Phi_drain) dt leaves, from half a cell away,
 //    Phi_drain the hydrostatic pore pressure's potential at the edge. Edges to cells
 //    without water (free surfaces, empty cells, the lattice's edges) are impermeable
-//    unless drained. A cell's net inflow dW makes its potential Phi + dW / C: the water's
+//    unless drained. A cell whose water is at or below zero pressure (sum V n p / Kw <= 0:
+//    above the water table, or sucked by dilation) takes no part and its points keep their
+//    pressure: the flow is saturated flow only (above the table lpfdm models no
+//    unsaturated flow; pooled with the rest, such cells drained down into the table). A cell's net inflow dW makes its potential Phi + dW / C: the water's
 //    volume sum V n p / Kw changes by the drains' flow only, to rounding.
 //    Alone, the flow's update is stable while dt lambda <= 2 for the largest eigenvalue
 //    lambda of C^-1 T; coupled with the lattice it is not: a pressure mode that the update
@@ -3587,7 +3623,7 @@ inline void Simulation::setup_water() {
             group_water_.push_back(w);
         }
         const std::size_t cells = std::size_t(mx_) * std::size_t(my_);
-        for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_}) v->assign(cells, 0.0);
+        for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_, &wq_}) v->assign(cells, 0.0);
         drain_edges_.assign(cells, 0);
         std::vector<std::uint8_t> drained(std::size_t(mx_ + 1) * std::size_t(my_ + 1), 0);
         for (const Drain& d : sc_.drains) {
@@ -3637,8 +3673,47 @@ inline void Simulation::setup_water() {
                 }
         }
         std::size_t loaded = 0;
-        for (std::size_t k = 0; k < p_.size(); ++k) loaded += p_.load_x[k] != 0 || p_.load_y[k] != 0;
-        load_nodes_.reserve(4 * loaded);
+        for (std::size_t k = 0; k < p_.load_x.size(); ++k) loaded += p_.load_x[k] != 0 || p_.load_y[k] != 0;
+        load_nodes_.reserve(sc_.reservoir.on ? nodes : 4 * loaded);  // RESERVOIR: any node may take its pressure
+    }
+}
+
+// GEOSTATIC: each point's effective vertical stress is the weight above its centre in its
+// column of cells, per unit width: sigma'_yy = -(|g| / L) (sum of the masses of the
+// points above it + half those level with it), each mass times (rho - rho_w) / rho where
+// the point starts below the water table (buoyant), and sigma'_xx = sigma'_zz = K0
+// sigma'_yy (K0 = nu / (1 - nu) of the point's material unless the card gives it), no
+// shear. Exact for level ground; under a slope a state near equilibrium that local
+// damping settles. Water above the material (a RESERVOIR) adds to p and to the total
+// stress alike: nothing to sigma'.
+inline void Simulation::geostatic() {
+    const double g = -sc_.gravity_y, eps = 1e-9 * L_;
+    std::vector<std::vector<std::size_t>> cols(static_cast<std::size_t>(mx_));
+    for (std::size_t k = 0; k < p_.size(); ++k) cols[std::size_t(p_.cell[k] % mx_)].push_back(k);
+    for (auto& col : cols) {
+        std::sort(col.begin(), col.end(), [&](std::size_t a, std::size_t b) { return p_.y[a] > p_.y[b] || (p_.y[a] == p_.y[b] && a < b); });
+        auto weight = [&](std::size_t k) {
+            const Material& m = sc_.materials[std::size_t(groups_[p_.group[k]].mat_index)];
+            const bool wet = modes_.water && m.porosity > 0 && p_.y[k] < sc_.water.table;
+            return groups_[p_.group[k]].mass * (wet ? (m.rho - sc_.water.rhow) / m.rho : 1.0);
+        };
+        double above = 0;
+        for (std::size_t a = 0; a < col.size();) {
+            std::size_t b = a;
+            double level = 0;  // the points level with col[a]
+            while (b < col.size() && p_.y[col[a]] - p_.y[col[b]] <= eps) level += weight(col[b++]);
+            const double syy = -g / L_ * (above + 0.5 * level);
+            for (std::size_t q = a; q < b; ++q) {
+                const std::size_t k = col[q];
+                const Material& m = sc_.materials[std::size_t(groups_[p_.group[k]].mat_index)];
+                const double k0 = sc_.k0 >= 0 ? sc_.k0 : m.nu / (1 - m.nu);
+                p_.syy[k] = syy;
+                p_.sxx[k] = p_.szz[k] = k0 * syy;
+                p_.sxy[k] = 0;
+            }
+            above += level;
+            a = b;
+        }
     }
 }
 
@@ -3675,7 +3750,7 @@ inline void Simulation::water_pass() {
 }
 
 inline void Simulation::water_flow() {
-    for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_}) std::fill(v->begin(), v->end(), 0.0);
+    for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_, &wq_}) std::fill(v->begin(), v->end(), 0.0);
     const double dt = sc_.dt_s, rw = sc_.water.rhow, gx = sc_.gravity_x, gy = sc_.gravity_y;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const GroupWater& w = group_water_[p_.group[k]];
@@ -3686,10 +3761,15 @@ inline void Simulation::water_flow() {
         wp_[std::size_t(c)] += s * (p_.pw[k] - rw * (gx * p_.x[k] + gy * p_.y[k]));  // the point's potential
         wk_[std::size_t(c)] += v * w.mobility;
         wc_[std::size_t(c)] += s;
+        wq_[std::size_t(c)] += s * p_.pw[k];
     }
+    for (std::size_t c = 0; c < wc_.size(); ++c)  // water at or below zero pressure takes no part (no unsaturated flow)
+        if (!(wq_[c] > 0)) wc_[c] = 0;
     auto phi = [&](std::size_t c, int, int) { return wp_[c] / wc_[c]; };
     const Water& w = sc_.water;
     const bool table = w.table > -std::numeric_limits<double>::infinity();
+    const bool reservoir = sc_.reservoir.on;
+    const double level = reservoir ? sc_.reservoir.at(time()) : 0.0;
     auto phi_edge = [&](double x, double y) { return (table ? std::max(0.0, -rw * gy * (w.table - y)) : 0.0) - rw * (gx * x + gy * y); };
     for (int j = 0; j < my_; ++j)
         for (int i = 0; i < mx_; ++i) {
@@ -3706,9 +3786,23 @@ inline void Simulation::water_flow() {
             };
             if (i + 1 < mx_) exchange(c + 1, i + 1, j);
             if (j + 1 < my_) exchange(c + std::size_t(mx_), i, j + 1);
-            const std::uint8_t e = drain_edges_[c];
-            if (!e) continue;
+            std::uint8_t e = drain_edges_[c];
             const double t = std::min(2 * ka, wc_[c] / (8 * dt));
+            if (reservoir) {  // free faces below the reservoir's level drain to it (its potential rho_w |g_y| level)
+                auto open = [&](bool inside, std::size_t b) { return inside && wc_[b] == 0 && cmass_[b] == 0; };
+                auto to_reservoir = [&](bool o, double ym) {
+                    if (!o || ym > level) return;
+                    const double q = t * (pa - rw * -gy * level) * dt;
+                    wd_[c] -= q;
+                    drained_ += q;
+                };
+                const double yc = (j + 0.5) * L_;
+                to_reservoir(!(e & kEdgeTop) && open(j + 1 < my_, c + std::size_t(mx_)), (j + 1) * L_);
+                to_reservoir(!(e & kEdgeBottom) && open(j > 0, c - std::size_t(mx_)), j * L_);
+                to_reservoir(!(e & kEdgeLeft) && open(i > 0, c - 1), yc);
+                to_reservoir(!(e & kEdgeRight) && open(i + 1 < mx_, c + 1), yc);
+            }
+            if (!e) continue;
             auto drain = [&](double x, double y) {
                 const double q = t * (pa - phi_edge(x, y)) * dt;
                 wd_[c] -= q;
@@ -3722,7 +3816,7 @@ inline void Simulation::water_flow() {
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const GroupWater& gw = group_water_[p_.group[k]];
         const int c = p_.cell[k];
-        if (c < 0 || gw.kwn == 0) continue;
+        if (c < 0 || gw.kwn == 0 || wc_[std::size_t(c)] == 0) continue;
         const std::size_t cc = std::size_t(c);
         const double p0 = p_.pw[k], p1 = (wp_[cc] + wd_[cc]) / wc_[cc] + rw * (gx * p_.x[k] + gy * p_.y[k]);
         d_water_ -= 0.5 * energy_volume(k) * (p1 * p1 - p0 * p0) / gw.kwn;
@@ -3738,6 +3832,33 @@ inline void Simulation::water_flow() {
 inline void Simulation::load_forces() {
     if (!modes_.loads) return;
     load_nodes_.clear();
+    auto add = [&](std::size_t n, double fx, double fy) {
+        fx_[n] += fx; fy_[n] += fy;
+        load_fx_[n] += fx; load_fy_[n] += fy;
+        if (!load_mark_[n]) { load_mark_[n] = 1; load_nodes_.push_back(std::int32_t(n)); }
+    };
+    if (sc_.reservoir.on) {  // RESERVOIR: each free face below the level, p_w L / 2 on each of its nodes, into the material
+        const double level = sc_.reservoir.at(time()), rg = -sc_.water.rhow * sc_.gravity_y;
+        for (int j = 0; j < my_; ++j) {
+            if (j * L_ >= level) break;
+            for (int i = 0; i < mx_; ++i) {
+                if (cmass_[std::size_t(cell(i, j))] == 0) continue;
+                const std::size_t n1 = std::size_t(node(i, j)), n2 = n1 + 1, n3 = n1 + std::size_t(mx_) + 1, n4 = n3 + 1;
+                auto face = [&](bool open, double ym, std::size_t a, std::size_t b, double nx, double ny) {
+                    const double f = 0.5 * L_ * rg * (level - ym);
+                    if (!open || f <= 0) return;
+                    add(a, f * nx, f * ny);
+                    add(b, f * nx, f * ny);
+                };
+                const double yc = (j + 0.5) * L_;
+                face(j + 1 < my_ && cmass_[std::size_t(cell(i, j + 1))] == 0, (j + 1) * L_, n3, n4, 0, -1);  // top
+                face(j > 0 && cmass_[std::size_t(cell(i, j - 1))] == 0, j * L_, n1, n2, 0, 1);               // bottom
+                face(i > 0 && cmass_[std::size_t(cell(i - 1, j))] == 0, yc, n1, n3, 1, 0);                   // left
+                face(i + 1 < mx_ && cmass_[std::size_t(cell(i + 1, j))] == 0, yc, n2, n4, -1, 0);            // right
+            }
+        }
+    }
+    if (p_.load_x.empty()) return;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const double fx = p_.load_x[k], fy = p_.load_y[k];
         const int c = p_.cell[k];
@@ -3749,12 +3870,7 @@ inline void Simulation::load_forces() {
         const int n1 = node(i, j);
         const int at[4] = {n1, n1 + 1, n1 + mx_ + 1, n1 + mx_ + 2};
         const double w[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
-        for (int a = 0; a < 4; ++a) {
-            const std::size_t n = std::size_t(at[a]);
-            fx_[n] += w[a] * fx; fy_[n] += w[a] * fy;
-            load_fx_[n] += w[a] * fx; load_fy_[n] += w[a] * fy;
-            if (!load_mark_[n]) { load_mark_[n] = 1; load_nodes_.push_back(std::int32_t(n)); }
-        }
+        for (int a = 0; a < 4; ++a) add(std::size_t(at[a]), w[a] * fx, w[a] * fy);
     }
 }
 
@@ -7609,6 +7725,15 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
         if (m.porosity > 0 && !s.water.on) err(m.pos, "POROSITY makes the material saturated: the deck needs a WATER card");
         if (m.perm > 0 && !(m.porosity > 0)) err(m.pos, "PERM without POROSITY: a dry material has no water to conduct");
     }
+    if (s.geostatic) {
+        keys("GEOSTATIC", 0, s.geostatic_pos, 0);
+        if (s.gravity_y >= 0 || s.gravity_x != 0) err(s.geostatic_pos, "GEOSTATIC needs gravity straight down (GRAVITY 0 gy, gy < 0)");
+    }
+    if (s.reservoir.on) {
+        keys("RESERVOIR", 0, s.reservoir.pos, 0);
+        if (!s.water.on) err(s.reservoir.pos, "RESERVOIR needs a WATER card (its density; the pore water it drains)");
+        if (s.gravity_y >= 0 || s.gravity_x != 0) err(s.reservoir.pos, "RESERVOIR needs gravity straight down (GRAVITY 0 gy, gy < 0): its pressure is rho_w |gy| (level - y)");
+    }
     for (std::size_t a = 0; a < s.drains.size(); ++a) {
         const Drain& dr = s.drains[a];
         keys("DRAIN", a, dr.pos, 0);
@@ -7633,10 +7758,10 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
         const double g = std::hypot(s.gravity_x, s.gravity_y), gw = s.water.rhow * (g > 0 ? g : 9.81);
         double lim = std::numeric_limits<double>::infinity();
         for (const Material& m : s.materials)
-            if (m.porosity > 0 && m.perm > 0) lim = std::min(lim, m.porosity * s.cell_m * s.cell_m * gw / ((s.drains.empty() ? 8 : 12) * s.water.kw * m.perm));
+            if (m.porosity > 0 && m.perm > 0) lim = std::min(lim, m.porosity * s.cell_m * s.cell_m * gw / ((s.drains.empty() && !s.reservoir.on ? 8 : 12) * s.water.kw * m.perm));
         if (s.dt_s > lim) {
             char buf[200];
-            std::snprintf(buf, sizeof buf, "time step %.6g s is above the pore water's stable limit %.6g s (n L^2 gamma_w / (%d KW PERM) of the most permeable material)", s.dt_s, lim, s.drains.empty() ? 8 : 12);
+            std::snprintf(buf, sizeof buf, "time step %.6g s is above the pore water's stable limit %.6g s (n L^2 gamma_w / (%d KW PERM) of the most permeable material)", s.dt_s, lim, s.drains.empty() && !s.reservoir.on ? 8 : 12);
             err(s.step_pos, buf);
         }
     }
@@ -8501,7 +8626,7 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
         u.all();
         return d;
     }
-    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_mapping = false, have_hourglass = false, have_advect = false, have_reorder = false, have_water = false;
+    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_mapping = false, have_hourglass = false, have_advect = false, have_reorder = false, have_water = false, have_reservoir = false, have_geostatic = false;
     Pos last{file, 1, 1};
     int cluster_cards = 0;
     // The cards with errors leave unchecked what depends on them (Unread); an unknown card
@@ -8572,6 +8697,17 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
                 w.finish();
             }
             continue;
+        } else if (kw == "RESERVOIR") {
+            once(have_reservoir);
+            sc.reservoir.on = true;
+            sc.reservoir.pos = kp;
+            r.fields("RESERVOIR", sc, 0);
+            r.parameters("RESERVOIR", 0, sc, 0);
+        } else if (kw == "GEOSTATIC") {
+            once(have_geostatic);
+            sc.geostatic = true;
+            sc.geostatic_pos = kp;
+            r.parameters("GEOSTATIC", 0, sc, 0);
         } else if (kw == "DRAIN") {
             sc.drains.emplace_back();
             sc.drains.back().pos = kp;
@@ -8738,7 +8874,8 @@ LPFDM_DEF std::string history_columns(const Simulation& sim) {
     h += " e_kin e_strain e_grav w_walls w_fixes w_gravity d_damping d_plastic energy_error parked packed";
     if (sim.dynamic()) h += " w_ground d_absorb ground_dx ground_dy";  // SHAKE, ABSORB
     for (std::size_t t = 0; t < sim.tracked().size(); ++t) h += fmt::format(" t{0}_x t{0}_y t{0}_ux t{0}_uy", t + 1);  // TRACK
-    if (sim.loaded()) h += " w_loads";                     // LOAD
+    if (sim.loaded()) h += " w_loads";                     // LOAD, RESERVOIR
+    if (sim.scene().reservoir.on) h += " level";            // RESERVOIR
     if (sim.water()) h += " d_water p_excess drained";      // WATER
     return h;
 }
@@ -8791,7 +8928,8 @@ LPFDM_DEF void write_history_header(std::FILE* f, const Simulation& sim, const s
     fmt::print(f, "#   packed = the most volume one cell's points hold over the cell's area (eq. 8's sum of V / L^2, the step's largest)\n");
     if (sim.dynamic())
         fmt::print(f, "#   w_ground work of the ground motion (SHAKE), d_absorb taken out by the dashpots (ABSORB); ground_dx ground_dy the ground's displacement [m]\n");
-    if (sim.loaded()) fmt::print(f, "#   w_loads work of the LOAD tractions (counted as work in)\n");
+    if (sim.loaded()) fmt::print(f, "#   w_loads work of the LOAD tractions and the RESERVOIR's pressure (counted as work in)\n");
+    if (sim.scene().reservoir.on) fmt::print(f, "#   level the RESERVOIR's surface [m]\n");
     if (sim.water())
         fmt::print(f, "#   d_water stored water energy the flow and the drains took out (dissipated); p_excess the largest pore pressure above hydrostatic [Pa]; drained water out through DRAIN [m^3/m]\n");
     fmt::print(f, "# {}\n", h);
@@ -8817,6 +8955,7 @@ LPFDM_DEF void write_history_row(std::FILE* f, const Simulation& sim) {
         fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.7g} {:.7g}", x, y, ux, uy);
     }
     if (sim.loaded()) fmt::format_to(std::back_inserter(b), " {:.9g}", e.w_loads);
+    if (sim.scene().reservoir.on) fmt::format_to(std::back_inserter(b), " {:.9g}", sim.scene().reservoir.at(sim.time()));
     if (sim.water()) fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g}", e.d_water, sim.excess_pressure(), sim.drained());
     b.push_back('\n');
     std::fwrite(b.data(), 1, b.size(), f);

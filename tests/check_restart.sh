@@ -115,9 +115,10 @@ stopped_and_continued "$tmp/rr.deck" "reorder: "
 # would not be tested).
 sed 's/^END/MAPPING SMOOTH\nADVECT FLIP\nDAMPING 0.4\nEND/' "$tmp/r.deck" >"$tmp/rf.deck"
 stopped_and_continued "$tmp/rf.deck" "flip: "
-# WATER, DRAIN, LOAD: each point's pore pressure, the volume it last took, the force it
-# carries; the water drained, the flow's dissipation and the loads' work are state.
-sed 's/^\(MATERIAL 1 MOHR .*\)$/\1 POROSITY=0.4 PERM=1E-4/; s/^END/WATER KW=1E7 TABLE=2\nDRAIN 5 3 8 3\nLOAD 7 3 8 3 TY=-2E4\nEND/' "$tmp/r.deck" >"$tmp/rw.deck"
+# WATER, DRAIN, LOAD, RESERVOIR (falling from step 25 to 75), GEOSTATIC: each point's pore
+# pressure, the volume it last took, the force it carries; the water drained, the flow's
+# dissipation and the loads' work are state; the reservoir's level follows the time.
+sed 's/^\(MATERIAL 1 MOHR .*\)$/\1 POROSITY=0.4 PERM=1E-4/; s/^END/WATER KW=1E7 TABLE=2\nDRAIN 5 3 8 3\nLOAD 7 3 8 3 TY=-2E4\nRESERVOIR 3.5 TO=1 START=0.01 OVER=0.02\nGEOSTATIC\nEND/' "$tmp/r.deck" >"$tmp/rw.deck"
 stopped_and_continued "$tmp/rw.deck" "water: "
 
 # SHAKE and ABSORB: the ground's motion (replayed on restart), the base released at START

@@ -337,10 +337,10 @@ TEST_CASE("a user constitutive model (eq. 6's signature) runs the same in every 
 }
 
 // Pore water with every mapping and transfer, on 5 184 points (so that threads take the
-// points' passes): a saturated Mohr-Coulomb block under a water table, pressed by a wall
-// and loaded by a traction, draining through its top, softening, scattered, points
-// leaving the lattice on the right.
-TEST_CASE("WATER, DRAIN and LOAD with MAPPING PAPER, SMOOTH and SMOOTH + FLIP, by threads: the same bits") {
+// points' passes): a saturated Mohr-Coulomb block under a water table, starting
+// geostatic, pressed by a wall and loaded by a traction, draining through its top and to a
+// reservoir that falls from above it, softening, scattered, points leaving the lattice.
+TEST_CASE("WATER, DRAIN, LOAD, RESERVOIR and GEOSTATIC with MAPPING PAPER, SMOOTH and SMOOTH + FLIP, by threads: the same bits") {
     const char* text = R"(GRID 64 32 0.125
 MATERIAL 1 MOHR E=5E7 NU=0.3 RHO=2000 PHI=30 C=2000 SOFTEN=0.5 SCATTER=0.2 POROSITY=0.4 PERM=1E-4
 CLUSTER 1 5 0 8 3 PPC=3
@@ -349,6 +349,8 @@ WALL 1 5.5 3 6.5 3 0 -2
 WATER KW=1E7 TABLE=2
 DRAIN 5 3 8 3
 LOAD 7 3 8 3 TY=-2E4
+RESERVOIR 3.5 TO=1 START=0.01 OVER=0.02
+GEOSTATIC
 GRAVITY 0 -98.1
 SEED 7
 STEP 4E-4 120

@@ -227,3 +227,101 @@ TEST_CASE("Terzaghi's consolidation converges as L halves: 10, 20, 40 cells over
         }
     }
 }
+
+TEST_CASE("GEOSTATIC: level ground starts in equilibrium, dry and below a water table") {
+    // sigma'_yy = -(rho g z) above the table, -(rho g (H - T) + (rho - rho_w) g (T - y))
+    // below, sigma'_xx = nu / (1 - nu) sigma'_yy: the first step's forces balance to rounding.
+    for (const bool wet : {false, true}) {
+        std::string text = "GRID 3 12 0.25\nCLUSTER 1 0 0 0.75 3\nFIX XY 0 0 0.75 0\nFIX X 0 0 0 3\nFIX X 0.75 0 0.75 3\n"
+                           "GRAVITY 0 -9.81\nGEOSTATIC\nSTEP 1E-4 1\n";
+        text += wet ? "MATERIAL 1 MOHR E=2E7 NU=0.25 RHO=2000 PHI=30 C=1000 POROSITY=0.4 PERM=1E-6\nWATER KW=2E8 TABLE=2\n"
+                    : "MATERIAL 1 MOHR E=2E7 NU=0.25 RHO=2000 PHI=30 C=1000\n";
+        const Scene s = water_scene(text);
+        Simulation sim(s);
+        const Points& pt = sim.points();
+        const double g = 9.81, H = 3, T = 2;
+        for (std::size_t k = 0; k < pt.size(); ++k) {
+            const double y = pt.y[k];
+            const double syy = !wet || y >= T ? -2000 * g * (H - y) : -2000 * g * (H - T) - 1000 * g * (T - y);
+            INFO("wet " << wet << " y " << y);
+            CHECK(pt.syy[k] == approx(syy).epsilon(1e-12));
+            CHECK(pt.sxx[k] == approx(syy / 3).epsilon(1e-12));
+            CHECK(pt.szz[k] == pt.sxx[k]);
+        }
+        sim.step();
+        CHECK(sim.unbalanced_ratio() < 1e-9);  // at rest from the first step
+    }
+}
+
+TEST_CASE("RESERVOIR: a submerged block under a metre of water, and a drawdown that fails a slope") {
+    SUBCASE("the reservoir's pressure on the top and the drained surface: p hydrostatic to its level") {
+        // GEOSTATIC starts the skeleton at its buoyant weight: it has only the reservoir's
+        // top pressure to settle, which p takes and the drained top lets go.
+        const Scene s = water_scene(R"(GRID 2 20 0.2
+MATERIAL 1 ELASTIC E=50E6 NU=0.3 RHO=2000 POROSITY=0.4 PERM=3.9E-4
+WATER KW=2.2E8 TABLE=3
+RESERVOIR 3
+CLUSTER 1 0 0 0.4 2
+FIX XY 0 0 0.4 0
+FIX X 0 0 0 4
+FIX X 0.4 0 0.4 4
+GRAVITY 0 -9.81
+GEOSTATIC
+DAMPING 0.8
+STEP 1.5E-4 5000
+)");
+        Simulation sim(s);
+        for (long n = 0; n < s.steps; ++n) sim.step();
+        const Points& pt = sim.points();
+        std::map<int, std::vector<std::size_t>> cells;
+        for (std::size_t k = 0; k < pt.size(); ++k) {
+            CHECK(pt.pw[k] == approx(1000 * 9.81 * (3 - pt.y[k])).epsilon(0.01));
+            cells[pt.cell[k]].push_back(k);
+        }
+        for (const auto& [c, ks] : cells) {  // the block's buoyant weight on the skeleton; the water above weighs on p alone
+            double y = 0, syy = 0;
+            for (std::size_t k : ks) { y += pt.y[k]; syy += pt.syy[k]; }
+            y /= double(ks.size()); syy /= double(ks.size());
+            CHECK(syy == approx(-1000 * 9.81 * (2 - y)).epsilon(0.01));
+        }
+        CHECK(sim.unbalanced_ratio() < 1e-6);
+        // the reservoir's pressure on the top, rho_w g 1 m x 0.4 m, is part of the base's reaction
+        CHECK(sim.reaction_y() == approx(2000 * 9.81 * 0.8 + 1000 * 9.81 * 0.4).epsilon(1e-3));
+    }
+    SUBCASE("drawdown.deck at L = 1 m: it stands with its reservoir, and slides when the reservoir falls") {
+        for (const bool falls : {false, true}) {
+            Scene s;
+            REQUIRE(read_deck("decks/drawdown.deck", s).empty());
+            // twice as coarse: L = 1 m, 816 points, dt doubled (the flow's limit allows it)
+            s.mx /= 2; s.my /= 2; s.cell_m *= 2; s.dt_s *= 2; s.steps /= 2;
+            s.outputs.clear();
+            if (!falls) s.reservoir.to = s.reservoir.level;
+            REQUIRE(validate(s).empty());
+            Simulation sim(s);
+            const long before = std::lround(s.reservoir.start / s.dt_s);
+            for (long n = 0; n < before; ++n) sim.step();
+            CHECK(sim.unbalanced_ratio() < 1e-3);  // at rest under the full reservoir
+            auto face_x = [&] { return sim.points().x[std::size_t(sim.slot_of(sim.tracked()[1]))]; };  // (the storage is sorted now and then)
+            const double x_before = face_x();
+            for (long n = before; n < s.steps; ++n) sim.step();
+            const double moved = face_x() - x_before;
+            MESSAGE(std::string(falls ? "drawdown" : "reservoir kept") << ": the face moved " << moved << " m, unbalanced " << sim.unbalanced_ratio());
+            if (falls) {
+                CHECK(moved > 0.5);  // it slides (measured 1.5 m in the 5.5 s after, and moving)
+                CHECK(sim.unbalanced_ratio() > 1e-2);
+            } else {
+                CHECK(std::fabs(moved) < 0.01);
+                CHECK(sim.unbalanced_ratio() < 1e-4);
+            }
+            CHECK(std::fabs(sim.energy().error) < 0.1);
+        }
+    }
+}
+
+TEST_CASE("the deck's checks of RESERVOIR and GEOSTATIC") {
+    const std::string base = "GRID 2 8 0.25\nCLUSTER 1 0 0 0.5 2\nFIX XY 0 0 0.5 0\nSTEP 1E-4 10\nMATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000\n";
+    CHECK(water_errors(base + "GRAVITY 0 -9.81\nRESERVOIR 3\n").find("water.deck:7:1: error: RESERVOIR needs a WATER card") != std::string::npos);
+    CHECK(water_errors(base + "GEOSTATIC\n").find("water.deck:6:1: error: GEOSTATIC needs gravity straight down") != std::string::npos);
+    CHECK(water_errors(base + "GRAVITY 0 -9.81\nGEOSTATIC K0=-1\n").find("K0") != std::string::npos);
+    CHECK(water_errors(base + "GRAVITY 0 -9.81\nGEOSTATIC K0=0.5\nRESERVOIR 3 TO=1 START=1 OVER=2\n").find("RESERVOIR needs a WATER") != std::string::npos);
+}
