@@ -667,6 +667,9 @@ lpfdm::Diagnostics fos_problems(const lpfdm::Scene& scene) {
         d.push_back({k.pos, "--fos finds the factor of safety of a scene at rest under GRAVITY, and SHAKE moves the ground (a seismic coefficient is a horizontal GRAVITY gx)"});
     for (const auto& w : scene.walls)
         if (w.vx != 0 || w.vy != 0) d.push_back({w.pos, fmt::format("--fos finds the factor of safety of a scene at rest, and WALL {} moves", w.id)});
+    const lpfdm::Reservoir& r = scene.reservoir;
+    if (r.on && r.to > -std::numeric_limits<double>::infinity() && r.to != r.level)
+        d.push_back({r.pos, "--fos finds the factor of safety of a scene at rest, and the RESERVOIR's level moves (for the state after a drawdown: the reservoir at its last level, TO= left out)"});
     return d;
 }
 

@@ -3575,9 +3575,11 @@ LPFDM_DEF double Simulation::unbalanced_ratio() const {
 //    Across an edge between two such cells the volume
 //    (k_ab / gamma_w)(Phi_a - Phi_b) dt flows (k_ab their harmonic mean); across a drained
 //    edge (DRAIN) (2 k_a / gamma_w)(Phi_a - Phi_drain) dt leaves, from half a cell away,
-//    Phi_drain the hydrostatic pore pressure's potential at the edge. Edges to cells
-//    without water (free surfaces, empty cells, the lattice's edges) are impermeable
-//    unless drained. A cell whose water is at or below zero pressure (sum V n p / Kw <= 0:
+//    Phi_drain the hydrostatic pore pressure's potential at the edge. A free surface (an
+//    edge to an empty cell inside the lattice) is a seepage face: water under pressure
+//    leaves there to p = 0 at the face, as to a drain, and none enters; below a
+//    RESERVOIR's level it is drained to the reservoir both ways. The lattice's edges and
+//    edges to dry material are impermeable unless drained. A cell whose water is at or below zero pressure (sum V n p / Kw <= 0:
 //    above the water table, or sucked by dilation) takes no part and its points keep their
 //    pressure: the flow is saturated flow only (above the table lpfdm models no
 //    unsaturated flow; pooled with the rest, such cells drained down into the table). A cell's net inflow dW makes its potential Phi + dW / C: the water's
@@ -3788,19 +3790,23 @@ inline void Simulation::water_flow() {
             if (j + 1 < my_) exchange(c + std::size_t(mx_), i, j + 1);
             std::uint8_t e = drain_edges_[c];
             const double t = std::min(2 * ka, wc_[c] / (8 * dt));
-            if (reservoir) {  // free faces below the reservoir's level drain to it (its potential rho_w |g_y| level)
+            {  // free faces (edges to empty cells inside the lattice): below a reservoir's level
+               // drained to it (its potential rho_w |g_y| level), else seepage faces: water under
+               // pressure leaves to p = 0 at the face, none enters
                 auto open = [&](bool inside, std::size_t b) { return inside && wc_[b] == 0 && cmass_[b] == 0; };
-                auto to_reservoir = [&](bool o, double ym) {
-                    if (!o || ym > level) return;
-                    const double q = t * (pa - rw * -gy * level) * dt;
+                auto face = [&](bool o, double xm, double ym) {
+                    if (!o) return;
+                    const bool under = reservoir && ym <= level;
+                    const double q = t * (pa - (under ? rw * -gy * level : -rw * (gx * xm + gy * ym))) * dt;
+                    if (!under && q <= 0) return;
                     wd_[c] -= q;
                     drained_ += q;
                 };
-                const double yc = (j + 0.5) * L_;
-                to_reservoir(!(e & kEdgeTop) && open(j + 1 < my_, c + std::size_t(mx_)), (j + 1) * L_);
-                to_reservoir(!(e & kEdgeBottom) && open(j > 0, c - std::size_t(mx_)), j * L_);
-                to_reservoir(!(e & kEdgeLeft) && open(i > 0, c - 1), yc);
-                to_reservoir(!(e & kEdgeRight) && open(i + 1 < mx_, c + 1), yc);
+                const double xc = (i + 0.5) * L_, yc = (j + 0.5) * L_;
+                face(!(e & kEdgeTop) && open(j + 1 < my_, c + std::size_t(mx_)), xc, (j + 1) * L_);
+                face(!(e & kEdgeBottom) && open(j > 0, c - std::size_t(mx_)), xc, j * L_);
+                face(!(e & kEdgeLeft) && open(i > 0, c - 1), i * L_, yc);
+                face(!(e & kEdgeRight) && open(i + 1 < mx_, c + 1), (i + 1) * L_, yc);
             }
             if (!e) continue;
             auto drain = [&](double x, double y) {
