@@ -127,6 +127,7 @@ refused() {  # NAME PATTERN ARGS...
 refused elastic '^decks/column.deck:[0-9]+:[0-9]+: error: --fos reduces the strength of MOHR materials' --fos decks/column.deck
 refused shake "^decks/quake_slope.deck:$(grep -n '^SHAKE' decks/quake_slope.deck | cut -d: -f1):1: error: --fos .*SHAKE" --fos decks/quake_slope.deck
 refused wall "^decks/psc.deck:$(grep -n '^WALL' decks/psc.deck | head -n 1 | cut -d: -f1):1: error: --fos .*WALL 1 moves" --fos decks/psc.deck
+refused reservoir "^decks/drawdown.deck:$(grep -n '^RESERVOIR' decks/drawdown.deck | cut -d: -f1):1: error: --fos .*RESERVOIR's level moves" --fos decks/drawdown.deck
 sed 's/^DAMPING .*/DAMPING 0/' "$tmp/fall.deck" >"$tmp/ringing.deck"
 refused ringing "^$tmp/ringing.deck:8:1: error: --fos: even with unlimited strength .* still moving after its 3000 steps" --fos "$tmp/ringing.deck"
 refused tol "error: --fos-tol needs a number from 1e-4 to 1, not '0'" --fos --fos-tol 0 decks/slope.deck
