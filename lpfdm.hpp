@@ -3719,24 +3719,47 @@ inline void Simulation::geostatic() {
     }
 }
 
+// Two passes over the points: 1 (and 2's cell sums) in the first, 2's new pressures and
+// 3 in the second; the cells' exchange between them.
 inline void Simulation::water_pass() {
     if (!modes_.water) return;
-    // 1. the undrained response to each point's volume change
+    const bool flow = !sc_.water.undrained;
+    const double rw = sc_.water.rhow, gx = sc_.gravity_x, gy = sc_.gravity_y;
+    if (flow)
+        for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_, &wq_}) std::fill(v->begin(), v->end(), 0.0);
     for (std::size_t k = 0; k < p_.size(); ++k) {
-        const double kwn = group_water_[p_.group[k]].kwn;
-        if (kwn == 0) continue;
+        const GroupWater& w = group_water_[p_.group[k]];
+        if (w.kwn == 0) continue;
+        // 1. the undrained response to the point's volume change
         const double v = p_.vol[k];
-        p_.pw[k] -= kwn * (v / p_.wvol[k] - 1);
+        p_.pw[k] -= w.kwn * (v / p_.wvol[k] - 1);
         p_.wvol[k] = v;
+        const int c = p_.cell[k];
+        if (!flow || c < 0) continue;
+        // 2. its water into its cell's sums
+        const std::size_t a = std::size_t(c);
+        const double s = v / w.kwn;
+        wv_[a] += v;
+        wp_[a] += s * (p_.pw[k] - rw * (gx * p_.x[k] + gy * p_.y[k]));  // the point's potential
+        wk_[a] += v * w.mobility;
+        wc_[a] += s;
+        wq_[a] += s * p_.pw[k];
     }
-    if (!sc_.water.undrained) water_flow();  // 2.
+    if (flow) water_flow();  // 2. the cells' exchange
     // 3. the total stress into eq. 8's sums, with the volume and weights the points'
     // stress took: the cell holding the point, or (MAPPING SMOOTH) each cell its square
     // overlaps by its share, on V0 with ADVECT FLIP (smear_points)
     const bool smooth = modes_.mapping == Mapping::Smooth, flip = modes_.advect == Advect::Flip;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const int c = p_.cell[k];
-        if (c < 0 || group_water_[p_.group[k]].kwn == 0) continue;
+        const GroupWater& w = group_water_[p_.group[k]];
+        if (c < 0 || w.kwn == 0) continue;
+        if (flow && wc_[std::size_t(c)] != 0) {  // 2. the pressure its cell's water now has at the point
+            const std::size_t a = std::size_t(c);
+            const double p0 = p_.pw[k], p1 = (wp_[a] + wd_[a]) / wc_[a] + rw * (gx * p_.x[k] + gy * p_.y[k]);
+            d_water_ -= 0.5 * energy_volume(k) * (p1 * p1 - p0 * p0) / w.kwn;
+            p_.pw[k] = p1;
+        }
         const double v0 = groups_[p_.group[k]].vol0, vp = (flip ? v0 : std::min(p_.vol[k], v0)) * p_.pw[k];
         if (!smooth) {
             svxx_[std::size_t(c)] -= vp;
@@ -3751,20 +3774,9 @@ inline void Simulation::water_pass() {
     }
 }
 
+// 2. The cells' exchange, from the sums water_pass made: each cell's net inflow wd_.
 inline void Simulation::water_flow() {
-    for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_, &wq_}) std::fill(v->begin(), v->end(), 0.0);
     const double dt = sc_.dt_s, rw = sc_.water.rhow, gx = sc_.gravity_x, gy = sc_.gravity_y;
-    for (std::size_t k = 0; k < p_.size(); ++k) {
-        const GroupWater& w = group_water_[p_.group[k]];
-        const int c = p_.cell[k];
-        if (c < 0 || w.kwn == 0) continue;
-        const double v = p_.vol[k], s = v / w.kwn;
-        wv_[std::size_t(c)] += v;
-        wp_[std::size_t(c)] += s * (p_.pw[k] - rw * (gx * p_.x[k] + gy * p_.y[k]));  // the point's potential
-        wk_[std::size_t(c)] += v * w.mobility;
-        wc_[std::size_t(c)] += s;
-        wq_[std::size_t(c)] += s * p_.pw[k];
-    }
     for (std::size_t c = 0; c < wc_.size(); ++c)  // water at or below zero pressure takes no part (no unsaturated flow)
         if (!(wq_[c] > 0)) wc_[c] = 0;
     auto phi = [&](std::size_t c, int, int) { return wp_[c] / wc_[c]; };
@@ -3819,15 +3831,6 @@ inline void Simulation::water_flow() {
             if (e & kEdgeLeft) drain(i * L_, (j + 0.5) * L_);
             if (e & kEdgeRight) drain((i + 1) * L_, (j + 0.5) * L_);
         }
-    for (std::size_t k = 0; k < p_.size(); ++k) {
-        const GroupWater& gw = group_water_[p_.group[k]];
-        const int c = p_.cell[k];
-        if (c < 0 || gw.kwn == 0 || wc_[std::size_t(c)] == 0) continue;
-        const std::size_t cc = std::size_t(c);
-        const double p0 = p_.pw[k], p1 = (wp_[cc] + wd_[cc]) / wc_[cc] + rw * (gx * p_.x[k] + gy * p_.y[k]);
-        d_water_ -= 0.5 * energy_volume(k) * (p1 * p1 - p0 * p0) / gw.kwn;
-        p_.pw[k] = p1;
-    }
 }
 
 // LOAD: each loaded point's force to the nodes of its cell: along its line by the linear
@@ -7519,6 +7522,8 @@ LPFDM_DEF std::string apply_setting(Scene& s, const std::string& key_in, double 
         if (num < 1 || std::size_t(num) > count) return "there is no " + card + " number " + std::to_string(num) + " (cards of a kind count from 1)";
         index = std::size_t(num - 1);
     }
+    if ((card == "WATER" && !s.water.on) || (card == "RESERVOIR" && !s.reservoir.on) || (card == "GEOSTATIC" && !s.geostatic))
+        return "the deck has no " + card + " card: " + key_in + " would change nothing";
     const DeckKey* k = deck_key(card, par);
     if (!k || !k->settable) {
         const std::vector<std::string> names = key_names(card, model, true);
@@ -9129,9 +9134,11 @@ LPFDM_DEF void write_vtu(std::FILE* f, const Simulation& sim, const std::vector<
     x.text("  <UnstructuredGrid>\n");
     x.time(sim.time(), sim.step_count());
     x.text(fmt::format("    <Piece NumberOfPoints=\"{0}\" NumberOfCells=\"{0}\">\n      <PointData Scalars=\"ep\" Vectors=\"velocity\" Tensors=\"stress\">\n", n));
+    // WATER: the stress above is effective; the total is stress - pore_pressure I. (Named
+    // here: BINARY writes the arrays' bytes in finish(), which reads them then.)
+    const VtkArray pore = {VtkArray::F64, "pore_pressure", 1, [&](std::size_t r, int) { return p.pw[std::size_t(order[r])]; }};
     for (const VtkArray& a : point_data) x.array(a, n, "        ");
-    if (sim.water())  // WATER: the stress above is effective; the total is stress - pore_pressure I
-        x.array({VtkArray::F64, "pore_pressure", 1, [&](std::size_t r, int) { return p.pw[std::size_t(order[r])]; }}, n, "        ");
+    if (sim.water()) x.array(pore, n, "        ");
     x.text("      </PointData>\n      <Points>\n");
     x.array(coords, n, "        ");
     x.text("      </Points>\n      <Cells>\n");

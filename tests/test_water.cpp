@@ -111,7 +111,9 @@ STEP 1.5E-4 30000
         CHECK(pt.pw[k] == approx(gw * (H - pt.y[k])).epsilon(0.02));  // p at the point's own place
         cells[pt.cell[k]].push_back(k);
     }
-    for (const auto& [c, ks] : cells) {  // sigma'_yy, one value a cell (eq. 5, 6), at the cell's points' mean depth
+    for (const auto& cell_points : cells) {  // sigma'_yy, one value a cell (eq. 5, 6), at the cell's points' mean depth
+        const int c = cell_points.first;
+        const std::vector<std::size_t>& ks = cell_points.second;
         double y = 0, syy = 0;
         for (std::size_t k : ks) { y += pt.y[k]; syy += pt.syy[k]; }
         y /= double(ks.size()); syy /= double(ks.size());
@@ -306,7 +308,8 @@ STEP 1.5E-4 5000
             CHECK(pt.pw[k] == approx(1000 * 9.81 * (3 - pt.y[k])).epsilon(0.01));
             cells[pt.cell[k]].push_back(k);
         }
-        for (const auto& [c, ks] : cells) {  // the block's buoyant weight on the skeleton; the water above weighs on p alone
+        for (const auto& cell_points : cells) {  // the block's buoyant weight on the skeleton; the water above weighs on p alone
+            const std::vector<std::size_t>& ks = cell_points.second;
             double y = 0, syy = 0;
             for (std::size_t k : ks) { y += pt.y[k]; syy += pt.syy[k]; }
             y /= double(ks.size()); syy /= double(ks.size());
@@ -347,6 +350,17 @@ STEP 1.5E-4 5000
 }
 
 TEST_CASE("the deck's checks of RESERVOIR and GEOSTATIC") {
+    {  // --set on a card the deck does not have changes nothing, and says so
+        Scene sc;
+        REQUIRE(read_deck("decks/column.deck", sc).empty());
+        CHECK(apply_setting(sc, "WATER.KW", 1e9) == "the deck has no WATER card: WATER.KW would change nothing");
+        CHECK(apply_setting(sc, "reservoir.to", 3) == "the deck has no RESERVOIR card: reservoir.to would change nothing");
+        CHECK(apply_setting(sc, "GEOSTATIC.K0", 0.5) == "the deck has no GEOSTATIC card: GEOSTATIC.K0 would change nothing");
+        Scene dd;
+        REQUIRE(read_deck("decks/drawdown.deck", dd).empty());
+        CHECK(apply_setting(dd, "RESERVOIR.TO", 10) == "");
+        CHECK(dd.reservoir.to == 10);
+    }
     const std::string base = "GRID 2 8 0.25\nCLUSTER 1 0 0 0.5 2\nFIX XY 0 0 0.5 0\nSTEP 1E-4 10\nMATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000\n";
     CHECK(water_errors(base + "GRAVITY 0 -9.81\nRESERVOIR 3\n").find("water.deck:7:1: error: RESERVOIR needs a WATER card") != std::string::npos);
     CHECK(water_errors(base + "GEOSTATIC\n").find("water.deck:6:1: error: GEOSTATIC needs gravity straight down") != std::string::npos);
