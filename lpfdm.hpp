@@ -3644,7 +3644,6 @@ inline void Simulation::setup_water() {
     if (modes_.loads) {
         const std::size_t nodes = std::size_t(mx_ + 1) * std::size_t(my_ + 1);
         load_fx_.assign(nodes, 0.0); load_fy_.assign(nodes, 0.0); load_mark_.assign(nodes, 0);
-        load_nodes_.reserve(4 * nodes < 4 * p_.size() ? 4 * nodes : 4 * p_.size());
         for (const Load& ld : sc_.loads) {
             int i0, i1, j0, j1;
             detail::box_nodes(ld.box, L_, mx_, my_, i0, i1, j0, j1);
@@ -3779,7 +3778,7 @@ inline void Simulation::water_flow() {
     const double dt = sc_.dt_s, rw = sc_.water.rhow, gx = sc_.gravity_x, gy = sc_.gravity_y;
     for (std::size_t c = 0; c < wc_.size(); ++c)  // water at or below zero pressure takes no part (no unsaturated flow)
         if (!(wq_[c] > 0)) wc_[c] = 0;
-    auto phi = [&](std::size_t c, int, int) { return wp_[c] / wc_[c]; };
+    auto phi = [&](std::size_t c) { return wp_[c] / wc_[c]; };
     const Water& w = sc_.water;
     const bool table = w.table > -std::numeric_limits<double>::infinity();
     const bool reservoir = sc_.reservoir.on;
@@ -3789,17 +3788,17 @@ inline void Simulation::water_flow() {
         for (int i = 0; i < mx_; ++i) {
             const std::size_t c = std::size_t(cell(i, j));
             if (wc_[c] == 0) continue;
-            const double pa = phi(c, i, j), ka = wk_[c] / wv_[c];
-            auto exchange = [&](std::size_t b, int bi, int bj) {
+            const double pa = phi(c), ka = wk_[c] / wv_[c];
+            auto exchange = [&](std::size_t b) {
                 if (wc_[b] == 0) return;
                 const double kb = wk_[b] / wv_[b];
                 const double t = std::min(ka + kb > 0 ? 2 * ka * kb / (ka + kb) : 0.0, std::min(wc_[c], wc_[b]) / (8 * dt));
-                const double q = t * (pa - phi(b, bi, bj)) * dt;
+                const double q = t * (pa - phi(b)) * dt;
                 wd_[c] -= q;
                 wd_[b] += q;
             };
-            if (i + 1 < mx_) exchange(c + 1, i + 1, j);
-            if (j + 1 < my_) exchange(c + std::size_t(mx_), i, j + 1);
+            if (i + 1 < mx_) exchange(c + 1);
+            if (j + 1 < my_) exchange(c + std::size_t(mx_));
             std::uint8_t e = drain_edges_[c];
             const double t = std::min(2 * ka, wc_[c] / (8 * dt));
             {  // free faces (edges to empty cells inside the lattice): below a reservoir's level
@@ -7638,6 +7637,76 @@ inline std::string wall_conflict(const Scene& s, std::size_t a) {
 }
 }  // namespace detail
 
+namespace detail {
+// validate's checks of the cards of the section "Pore water and loads" (WATER, DRAIN, LOAD,
+// RESERVOIR, GEOSTATIC) and of the flow's stable step.
+inline void water_checks(const Scene& s, const Unread& unread, Diagnostics& d) {
+    auto err = [&](const Pos& p, std::string m) { d.push_back({p, std::move(m)}); };
+    const bool lattice = s.mx > 0 && s.my > 0 && s.cell_m > 0;
+    auto keys = [&](const char* card, std::size_t index, const Pos& pos) {
+        for (const DeckKey& k : kDeckKeys)
+            if (std::strcmp(k.card, card) == 0 && !key_ok(k, k.get(s, index), s, index, true)) err(pos, range_message(k, k.get(s, index)));
+    };
+    auto node_count = [&](const Box& b) {
+        if (b.x0 > b.x1 || b.y0 > b.y1) return -1L;
+        int i0, i1, j0, j1;
+        box_nodes(b, s.cell_m, s.mx, s.my, i0, i1, j0, j1);
+        return (i1 < i0 || j1 < j0) ? 0L : (i1 - i0 + 1L) * (j1 - j0 + 1L);
+    };
+    // WATER, DRAIN, LOAD (the section "Pore water and loads")
+    if (s.water.on) {
+        keys("WATER", 0, s.water.pos);
+        bool saturated = false;
+        for (const Material& m : s.materials) saturated |= m.porosity > 0;
+        if (!saturated && !unread.materials) err(s.water.pos, "WATER, but no MATERIAL has POROSITY: no material holds water");
+    }
+    for (const Material& m : s.materials) {
+        if (m.porosity > 0 && !s.water.on) err(m.pos, "POROSITY makes the material saturated: the deck needs a WATER card");
+        if (m.perm > 0 && !(m.porosity > 0)) err(m.pos, "PERM without POROSITY: a dry material has no water to conduct");
+    }
+    if (s.geostatic) {
+        keys("GEOSTATIC", 0, s.geostatic_pos);
+        if (s.gravity_y >= 0 || s.gravity_x != 0) err(s.geostatic_pos, "GEOSTATIC needs gravity straight down (GRAVITY 0 gy, gy < 0)");
+    }
+    if (s.reservoir.on) {
+        keys("RESERVOIR", 0, s.reservoir.pos);
+        if (!s.water.on) err(s.reservoir.pos, "RESERVOIR needs a WATER card (its density; the pore water it drains)");
+        if (s.gravity_y >= 0 || s.gravity_x != 0) err(s.reservoir.pos, "RESERVOIR needs gravity straight down (GRAVITY 0 gy, gy < 0): its pressure is rho_w |gy| (level - y)");
+    }
+    for (std::size_t a = 0; a < s.drains.size(); ++a) {
+        const Drain& dr = s.drains[a];
+        keys("DRAIN", a, dr.pos);
+        if (!s.water.on) err(dr.pos, "DRAIN needs a WATER card");
+        else if (s.water.undrained) err(dr.pos, "DRAIN with WATER UNDRAINED: no water flows");
+        if (!lattice) continue;
+        const long n = node_count(dr.box);
+        if (n < 0) err(dr.pos, "the box needs x0 <= x1 and y0 <= y1");
+        else if (n < 2) err(dr.pos, "the DRAIN box holds " + std::string(n == 0 ? "no node" : "one node") + ": it drains the cell edges whose two nodes it holds");
+    }
+    for (std::size_t a = 0; a < s.loads.size(); ++a) {
+        const Load& ld = s.loads[a];
+        keys("LOAD", a, ld.pos);
+        if (ld.box.x0 != ld.box.x1 && ld.box.y0 != ld.box.y1) err(ld.pos, "a LOAD is a line: give x0 = x1 (a column of nodes) or y0 = y1 (a row)");
+        else if (lattice) {
+            const long n = node_count(ld.box);
+            if (n < 0) err(ld.pos, "the line needs x0 <= x1 and y0 <= y1");
+            else if (n < 2) err(ld.pos, "the LOAD line holds " + std::string(n == 0 ? "no node" : "one node") + ": a traction needs a line of two nodes or more");
+        }
+    }
+    if (s.water.on && !s.water.undrained && lattice && !unread.step && s.dt_s > 0 && std::isfinite(s.water.kw)) {
+        const double g = std::hypot(s.gravity_x, s.gravity_y), gw = s.water.rhow * (g > 0 ? g : 9.81);
+        double lim = std::numeric_limits<double>::infinity();
+        for (const Material& m : s.materials)
+            if (m.porosity > 0 && m.perm > 0) lim = std::min(lim, m.porosity * s.cell_m * s.cell_m * gw / ((s.drains.empty() && !s.reservoir.on ? 8 : 12) * s.water.kw * m.perm));
+        if (s.dt_s > lim) {
+            char buf[200];
+            std::snprintf(buf, sizeof buf, "time step %.6g s is above the pore water's stable limit %.6g s (n L^2 gamma_w / (%d KW PERM) of the most permeable material)", s.dt_s, lim, s.drains.empty() && !s.reservoir.on ? 8 : 12);
+            err(s.step_pos, buf);
+        }
+    }
+}
+}  // namespace detail
+
 LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
     Diagnostics d;
     auto err = [&](const Pos& p, std::string m) { d.push_back({p, std::move(m)}); };
@@ -7725,57 +7794,7 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
         if (n > 0)
             if (const std::string c = detail::wall_conflict(s, a); !c.empty()) err(w.pos, c);
     }
-    // WATER, DRAIN, LOAD (the section "Pore water and loads")
-    if (s.water.on) {
-        keys("WATER", 0, s.water.pos, 0);
-        bool saturated = false;
-        for (const Material& m : s.materials) saturated |= m.porosity > 0;
-        if (!saturated && !unread.materials) err(s.water.pos, "WATER, but no MATERIAL has POROSITY: no material holds water");
-    }
-    for (const Material& m : s.materials) {
-        if (m.porosity > 0 && !s.water.on) err(m.pos, "POROSITY makes the material saturated: the deck needs a WATER card");
-        if (m.perm > 0 && !(m.porosity > 0)) err(m.pos, "PERM without POROSITY: a dry material has no water to conduct");
-    }
-    if (s.geostatic) {
-        keys("GEOSTATIC", 0, s.geostatic_pos, 0);
-        if (s.gravity_y >= 0 || s.gravity_x != 0) err(s.geostatic_pos, "GEOSTATIC needs gravity straight down (GRAVITY 0 gy, gy < 0)");
-    }
-    if (s.reservoir.on) {
-        keys("RESERVOIR", 0, s.reservoir.pos, 0);
-        if (!s.water.on) err(s.reservoir.pos, "RESERVOIR needs a WATER card (its density; the pore water it drains)");
-        if (s.gravity_y >= 0 || s.gravity_x != 0) err(s.reservoir.pos, "RESERVOIR needs gravity straight down (GRAVITY 0 gy, gy < 0): its pressure is rho_w |gy| (level - y)");
-    }
-    for (std::size_t a = 0; a < s.drains.size(); ++a) {
-        const Drain& dr = s.drains[a];
-        keys("DRAIN", a, dr.pos, 0);
-        if (!s.water.on) err(dr.pos, "DRAIN needs a WATER card");
-        else if (s.water.undrained) err(dr.pos, "DRAIN with WATER UNDRAINED: no water flows");
-        if (!lattice) continue;
-        const long n = node_count(dr.box);
-        if (n < 0) err(dr.pos, "the box needs x0 <= x1 and y0 <= y1");
-        else if (n < 2) err(dr.pos, "the DRAIN box holds " + std::string(n == 0 ? "no node" : "one node") + ": it drains the cell edges whose two nodes it holds");
-    }
-    for (std::size_t a = 0; a < s.loads.size(); ++a) {
-        const Load& ld = s.loads[a];
-        keys("LOAD", a, ld.pos, 0);
-        if (ld.box.x0 != ld.box.x1 && ld.box.y0 != ld.box.y1) err(ld.pos, "a LOAD is a line: give x0 = x1 (a column of nodes) or y0 = y1 (a row)");
-        else if (lattice) {
-            const long n = node_count(ld.box);
-            if (n < 0) err(ld.pos, "the line needs x0 <= x1 and y0 <= y1");
-            else if (n < 2) err(ld.pos, "the LOAD line holds " + std::string(n == 0 ? "no node" : "one node") + ": a traction needs a line of two nodes or more");
-        }
-    }
-    if (s.water.on && !s.water.undrained && lattice && !unread.step && s.dt_s > 0 && std::isfinite(s.water.kw)) {
-        const double g = std::hypot(s.gravity_x, s.gravity_y), gw = s.water.rhow * (g > 0 ? g : 9.81);
-        double lim = std::numeric_limits<double>::infinity();
-        for (const Material& m : s.materials)
-            if (m.porosity > 0 && m.perm > 0) lim = std::min(lim, m.porosity * s.cell_m * s.cell_m * gw / ((s.drains.empty() && !s.reservoir.on ? 8 : 12) * s.water.kw * m.perm));
-        if (s.dt_s > lim) {
-            char buf[200];
-            std::snprintf(buf, sizeof buf, "time step %.6g s is above the pore water's stable limit %.6g s (n L^2 gamma_w / (%d KW PERM) of the most permeable material)", s.dt_s, lim, s.drains.empty() && !s.reservoir.on ? 8 : 12);
-            err(s.step_pos, buf);
-        }
-    }
+    detail::water_checks(s, unread, d);  // WATER, DRAIN, LOAD, RESERVOIR, GEOSTATIC
     for (std::size_t a = 0; a < s.shakes.size(); ++a) {
         const Shake& k = s.shakes[a];
         keys("SHAKE", a, k.pos, 0);
@@ -8558,6 +8577,40 @@ inline void read_shake(CardReader& r, Scene& sc, const Pos& kp, const std::strin
     }
     if (!r.ok()) sc.shakes.pop_back();
 }
+// WATER [KW=] [RHOW=] [TABLE=] [UNDRAINED], the word anywhere on the card: read from its
+// tokens without the word (r: the card's reader, for the word's own errors).
+inline void read_water(const std::vector<Token>& toks, Diagnostics& d, Scene& sc, const Pos& kp, CardReader& r) {
+    std::vector<Token> kept;
+    bool undrained = false;
+    for (std::size_t t = 0; t < toks.size(); ++t) {
+        const bool word = t > 0 && upper(toks[t].text) == "UNDRAINED" && !(t + 1 < toks.size() && toks[t + 1].text == "=");
+        if (!word) { kept.push_back(toks[t]); continue; }
+        if (undrained) r.fail(toks[t].pos, "UNDRAINED is given twice");
+        undrained = true;
+    }
+    if (!r.ok()) return;
+    CardReader w(kept, d);
+    sc.water.on = true;
+    sc.water.pos = kp;
+    sc.water.undrained = undrained;
+    w.parameters("WATER", 0, sc, 0);
+    w.finish();
+}
+// DRAIN x0 y0 x1 y1, LOAD x0 y0 x1 y1 [TX=] [TY=]
+inline void read_drain_or_load(CardReader& r, Scene& sc, const Pos& kp, bool load) {
+    if (load) {
+        sc.loads.emplace_back();
+        sc.loads.back().pos = kp;
+        r.fields("LOAD", sc, sc.loads.size() - 1);
+        r.parameters("LOAD", 0, sc, sc.loads.size() - 1);
+        if (!r.ok()) sc.loads.pop_back();
+        return;
+    }
+    sc.drains.emplace_back();
+    sc.drains.back().pos = kp;
+    r.fields("DRAIN", sc, sc.drains.size() - 1);
+    if (!r.ok()) sc.drains.pop_back();
+}
 // ABSORB BOTTOM|TOP|LEFT|RIGHT ... and OUTFLOW BOTTOM|TOP|LEFT|RIGHT ...: the edges into
 // edges (kBottom | kTop | kLeft | kRight), the first card's place into at.
 inline void read_edges(CardReader& r, const char* card, int& edges, Pos& at, const Pos& kp) {
@@ -8689,24 +8742,9 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
             read_edges(r, "ABSORB", sc.absorb, sc.absorb_pos, kp);
         } else if (kw == "OUTFLOW") {
             read_edges(r, "OUTFLOW", sc.outflow, sc.outflow_pos, kp);
-        } else if (kw == "WATER") {  // WATER [KW=] [RHOW=] [TABLE=] [UNDRAINED], the word anywhere
+        } else if (kw == "WATER") {
             once(have_water);
-            std::vector<Token> kept;
-            bool undrained = false;
-            for (std::size_t t = 0; t < toks.size(); ++t) {
-                const bool word = t > 0 && upper(toks[t].text) == "UNDRAINED" && !(t + 1 < toks.size() && toks[t + 1].text == "=");
-                if (!word) { kept.push_back(toks[t]); continue; }
-                if (undrained) r.fail(toks[t].pos, "UNDRAINED is given twice");
-                undrained = true;
-            }
-            if (r.ok()) {
-                CardReader w(kept, d);
-                sc.water.on = true;
-                sc.water.pos = kp;
-                sc.water.undrained = undrained;
-                w.parameters("WATER", 0, sc, 0);
-                w.finish();
-            }
+            if (r.ok()) read_water(toks, d, sc, kp, r);
             continue;
         } else if (kw == "RESERVOIR") {
             once(have_reservoir);
@@ -8719,17 +8757,8 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
             sc.geostatic = true;
             sc.geostatic_pos = kp;
             r.parameters("GEOSTATIC", 0, sc, 0);
-        } else if (kw == "DRAIN") {
-            sc.drains.emplace_back();
-            sc.drains.back().pos = kp;
-            r.fields("DRAIN", sc, sc.drains.size() - 1);
-            if (!r.ok()) sc.drains.pop_back();
-        } else if (kw == "LOAD") {
-            sc.loads.emplace_back();
-            sc.loads.back().pos = kp;
-            r.fields("LOAD", sc, sc.loads.size() - 1);
-            r.parameters("LOAD", 0, sc, sc.loads.size() - 1);
-            if (!r.ok()) sc.loads.pop_back();
+        } else if (kw == "DRAIN" || kw == "LOAD") {
+            read_drain_or_load(r, sc, kp, kw == "LOAD");
         } else if (kw == "GRAVITY") {
             once(have_gravity);
             r.fields("GRAVITY", sc, 0);
