@@ -19,7 +19,8 @@
 #      (unit_quick, unit_slow) and one test for every tests/check_*.sh; the quick checks
 #      (labels quick and check: cli and vtu) pass with that program;
 #   5. the unit tests (the rest of cmake --build DIR: one unity translation unit): no
-#      warning, and unit_quick (the unit tests not tagged [slow], label quick) passes.
+#      warning, and the cases of test_mohr.cpp and test_deck.cpp pass (make test runs
+#      every case with its own build: the same sources, at -O2).
 #   make test runs the other checks and the [slow] unit tests with its own builds. Run by
 #   ctest as the test `cmake` (LPFDM_CMAKE_INSIDE_CTEST set), the check leaves 4 and 5 out:
 #   that ctest run is the full build.
@@ -218,7 +219,15 @@ else
     else
         passed=$((passed + 1))
     fi
-    ctest_quick unit "the unit tests not tagged [slow]"
+    # make test's own build runs every case; this build's binary runs two files' cases
+    # (the models' and the deck reader's, a few seconds), to show it works
+    if (OMP_NUM_THREADS=1 "$full/lpfdm_tests" --no-version=1 '--source-file=*test_mohr.cpp,*test_deck.cpp' --test-case-exclude='*[slow]*') >"$tmp/unit-run.log" 2>&1 &&
+       grep -qE '^\[doctest\] test cases: +[1-9][0-9]* \|' "$tmp/unit-run.log"; then
+        passed=$((passed + 1))
+        echo "cmake: the unit tests of test_mohr.cpp and test_deck.cpp: $(grep -E '^\[doctest\] test cases:' "$tmp/unit-run.log")"
+    else
+        fail "the unit tests of the full build (test_mohr.cpp, test_deck.cpp): $(grep -E 'ERROR|test cases:' "$tmp/unit-run.log" | head -n 5)"
+    fi
 fi
 took 5 $start
 echo "cmake: $passed passed, $failed failed"
