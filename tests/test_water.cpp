@@ -231,7 +231,7 @@ TEST_CASE("the deck's checks of WATER, DRAIN and LOAD") {
     CHECK(water_errors(base + "MATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000 POROSITY=0.4 PERM=1E-4\nWATER KW=2.2E8 TABLE=1.5\nDRAIN 0 2 0.5 2\nLOAD 0 2 0.5 2 TY=-1E4\n").empty());
 }
 
-TEST_CASE("Terzaghi's consolidation converges as L halves: 10, 20, 40 cells over H [verify]") {
+TEST_CASE("Terzaghi's consolidation converges as L halves: 10, 20, 40 cells over H [slow][verify]") {
     const double E = 10e6, nu = 0.3, n = 0.4, kw = 2.2e8, k = 9e-5, H = 2, q = 1e4, gw = 1000 * 9.81;
     const double M = constrained_modulus(E, nu), kwn = kw / n, cv = k / (gw * (1 / M + 1 / kwn)), p0 = q * kwn / (kwn + M);
     double last[3] = {0, 0, 0};
