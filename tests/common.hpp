@@ -6,6 +6,7 @@
 
 #include <doctest/doctest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <system_error>
@@ -23,6 +24,20 @@ constexpr double kDeg = kPi / 180;  // radians per degree
 // comparison of the tests is this one. The comparison is strict, so approx(0) passes
 // nothing, not even 0: where a value may be zero, .scale(s) gives the floor s.
 inline doctest::Approx approx(double v) { return doctest::Approx(v).scale(0); }
+
+// The whole-scene comparisons at a smaller size: true when LPFDM_TEST_SMALL=1, as make
+// test's sanitizer run sets it. The fast kernels against the reference cycle, AVX2 against
+// one point at a time and threads against one thread then run a quarter of their steps (a
+// tenth of test_reference.cpp's budget): ASan and UBSan look for faults along the code's
+// paths, which the shorter runs take as well (tests/README says how that was checked), at
+// a seventh of their time there; the -O2 run checks every bound at full size.
+inline bool small_runs() {
+    static const bool small = [] {
+        const char* e = std::getenv("LPFDM_TEST_SMALL");
+        return e != nullptr && std::string(e) == "1";
+    }();
+    return small;
+}
 
 // A directory name of this test process's own, "build/NAME.PID": make test runs the -O2
 // and the sanitizer builds of the unit tests at once, and two runs writing the same files

@@ -38,8 +38,9 @@ job() {
                echo $rc >"$dir/built.${arg//\//_}"; [ $rc = 0 ] ;;
         # the cases tagged [verify] are make verify's: a case without it checks the same at a coarser size
         unit-o2) built build/tests && OMP_NUM_THREADS=1 build/tests --no-version=1 --test-case-exclude='*[verify]*' ;;
-        # the sanitizer build leaves out the [slow] cases; the kernel's own threads stay at one
-        unit-san) built build/tests-san && OMP_NUM_THREADS=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+        # the sanitizer build leaves out the [slow] cases and runs the whole-scene comparisons
+        # smaller (LPFDM_TEST_SMALL: tests/common.hpp); the kernel's own threads stay at one
+        unit-san) built build/tests-san && LPFDM_TEST_SMALL=1 OMP_NUM_THREADS=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
                       build/tests-san --no-version=1 --test-case-exclude='*[slow]*,*[verify]*' ;;
         check) built test-deps && built "${arg#* }" && bash ${arg% *} "${arg#* }" ;;
     esac >"$dir/$n.log" 2>&1

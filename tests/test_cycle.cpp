@@ -673,6 +673,17 @@ Scene scene_of(const std::string& deck, const char* name) {
     return s;
 }
 
+// With small_runs(): a quarter of the steps with the motion four times as fast (gravity
+// sixteen times, g t^2 being the same at t / 4; the walls' velocities four times), so that
+// the shorter run still takes points across cells and off the lattice.
+void quicken(Scene& s) {
+    if (!small_runs()) return;
+    s.steps /= 4;
+    s.gravity_x *= 16;
+    s.gravity_y *= 16;
+    for (Wall& w : s.walls) { w.vx *= 4; w.vy *= 4; }
+}
+
 // A slope collapsing over the lattice's right edge: an elastic base and Mohr-Coulomb
 // with scatter and softening above, the interface through the middle of a cell row (the
 // row's cells go to one cluster each), ppc x ppc points per cell (3: runs of nine, two of four lanes and one
@@ -692,6 +703,7 @@ SEED     7
 STEP     3E-4 400
 )") + extra + "\nEND\n";
     Scene s = scene_of(deck, "slope");
+    quicken(s);
     for (auto& c : s.clusters) c.ppc = ppc;
     if (!scatter) {  // the material's own strength for every point, and a tension cut-off
         s.materials[1].scatter = 0;
@@ -755,8 +767,8 @@ Exercised compare_scenes(const Scene& s, int threads, bool mix = false, double t
     // the lattice (checked by the callers), and (with two threads) the threaded point loop.
     CHECK(wide.points().size() > 4096);
     CHECK(wide.points().size() == narrow.points().size());
-    if (mix) CHECK(ex.mixed_runs > 100000);
-    CHECK(ex.crossings > 100);
+    if (mix) CHECK(ex.mixed_runs > 250 * s.steps);  // (100 000 in 400 steps)
+    CHECK(ex.crossings > s.steps / 4);
     ex.outflow = wide.mass_outflow();
     return ex;
 }
@@ -775,7 +787,9 @@ GRAVITY  100 -9.81         ! a strong pull to the right: the soft block shears o
 STEP     3E-4 400
 END
 )";
-    return scene_of(deck, "spread");
+    Scene s = scene_of(deck, "spread");
+    quicken(s);
+    return s;
 }
 
 // A tower on a wide base: 22 200 points, a box of 130 x 75 cells, so that the lattice
@@ -798,8 +812,10 @@ END
 void compare_wide_and_narrow(int ppc, int threads, const std::string& extra = "", bool scatter = true, bool mix = false) {
     const Exercised ex = compare_scenes(collapsing_slope(ppc, extra, scatter), threads, mix);
     // Damping slows the collapse, and elastic points among the Mohr-Coulomb ones stiffen
-    // it: none leave in 400 steps.
-    if (extra.empty() && !mix) CHECK(ex.outflow > 0);
+    // it: none leave in 400 steps. The first leave after 325 steps, and the quickened run
+    // (small_runs()) is too short for them: the sanitizers see points leaving in the
+    // spreading block below and in test_reference.cpp's decks.
+    if (extra.empty() && !mix && !small_runs()) CHECK(ex.outflow > 0);
 }
 
 }  // namespace
@@ -858,13 +874,13 @@ TEST_CASE("the AVX2 point loop of an elastic scene (its four-point runs in regis
     if (!Simulation::have_wide()) return;
     const Scene s = spreading_block();
     for (int threads : {1, 2}) {
-        // About 2 000 runs a step, over 400 steps, more than half of them usual.
+        // About 2 000 runs a step, more than half of them usual.
         const Exercised ex = compare_scenes(s, threads, false, 2e4);
-        CHECK(ex.usual_runs > 200000);
-        CHECK(ex.crossings > 10000);
+        CHECK(ex.usual_runs > 500 * s.steps);
+        CHECK(ex.crossings > 25 * s.steps);
         CHECK(ex.outflow > 0);
         const Exercised mixed = compare_scenes(s, threads, true, 2e4);
-        CHECK(mixed.usual_runs > 50000);
+        CHECK(mixed.usual_runs > 125 * s.steps);
     }
     // A block of 40 x 40 cells falling free in the middle of the lattice: for its first
     // steps every run is a usual one, so the cells and columns it reaches (which bound the
@@ -873,9 +889,10 @@ TEST_CASE("the AVX2 point loop of an elastic scene (its four-point runs in regis
     Scene fall;
     REQUIRE(read_deck_text("GRID 60 60 0.2\nMATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nCLUSTER 1 2 2 10 10\n"
                            "GRAVITY 0 -9.81\nSTEP 3E-4 400\nEND\n", "fall", fall).empty());
+    quicken(fall);
     for (int ppc : {2, 3}) {
         fall.clusters[0].ppc = ppc;
-        for (int threads : {1, 2}) CHECK(compare_scenes(fall, threads).usual_runs > 1600 * 400 * 3 / 4);
+        for (int threads : {1, 2}) CHECK(compare_scenes(fall, threads).usual_runs > 1600 * fall.steps * 3 / 4);
     }
 }
 

@@ -4,6 +4,7 @@
 // 1, 2 and 3 threads; at every frame the point table and the history rows (as the program
 // writes them) and the bits of every point, cell and node array must be equal.
 #include "../lpfdm.hpp"
+#include "common.hpp"
 
 #include <doctest/doctest.h>
 
@@ -129,16 +130,11 @@ std::vector<std::filesystem::path> runnable_decks() {
     return v;
 }
 
-// Steps for a scene of n points: about 3e5 particle-steps a run (1e5 in the sanitizer
-// build, several times slower), at least 12 and at most the deck's.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr double kBudget = 1e5;
-#else
-constexpr double kBudget = 3e5;
-#endif
+// Steps for a scene of n points: about 3e5 particle-steps a run (3e4 with small_runs(),
+// under the sanitizers), at least 12 and at most the deck's.
 long steps_for(const Scene& s) {
-    const double n = std::max(1.0, count_points(s));
-    return std::min(s.steps, std::max(12L, long(kBudget / n)));
+    const double n = std::max(1.0, count_points(s)), budget = small_runs() ? 3e4 : 3e5;
+    return std::min(s.steps, std::max(12L, long(budget / n)));
 }
 
 }  // namespace
