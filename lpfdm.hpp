@@ -1152,7 +1152,8 @@ private:
     void smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, int j0, int j1, Landing& t);
     void smear_points(Landing& t);
     std::vector<long> row_points_;  // by_rows' share of rows between threads
-    template <class F> void by_rows(int n, const F& f);
+    template <class F> void by_rows(int n, const F& f) { by_rows(n, row_points_, f); }
+    template <class F> void by_rows(int n, const std::vector<long>& counts, const F& f);
     // A thread's share of the threaded point pass (advance_parted): the cells own_lo ..
     // own_hi-1 take its chunk's sums directly; a point landing in any other cell is listed
     // in p_.listed[list_at ..] (listed of them). The defaults: every cell (one thread).
@@ -1221,7 +1222,7 @@ private:
     template <class F> __attribute__((target("avx2"))) static void row_wide(const F& f, int j) { f(j, std::true_type{}); }
 #endif
     // The lattice phases' loops over rows (by_rows), each with its own blocks of rows by thread.
-    enum RowLoop { kClearRows, kStrainRows, kSmearRows, kForceRows, kFillRows, kShiftRows, kCarryRows, kAdvanceRows, kEnergyRows, kRowLoops };
+    enum RowLoop { kClearRows, kStrainRows, kSmearRows, kForceRows, kFillRows, kShiftRows, kCarryRows, kAdvanceRows, kEnergyRows, kWaterRows, kRowLoops };
     // Thread u's block of a loop's rows is rows[u] .. rows[u+1]-1, with edges at[u] as
     // fractions of the loop's range (which changes from step to step) for team threads;
     // seconds[u]: the time it took.
@@ -1384,11 +1385,17 @@ private:
     std::vector<double> cmass_, cvol_, svxx_, svyy_, svxy_;
     // WATER and LOAD (water_pass, load_forces): per group Kw / n (0: dry), k / gamma_w and n;
     // per cell the water points' sums (sum V, sum V p n / Kw, sum V k / gamma_w, the storage
-    // sum V n / Kw) and the step's net inflow; per cell its drained edges (kEdge*); per node
+    // sum V n / Kw) and the step's net inflow and outflow through drains and faces; per cell
+    // its drained edges (kEdge*); per point the stored energy the flow took (summed in point
+    // order); the points in the rows of cells below each row (water_pass's bands); per node
     // the step's LOAD force and whether it has one (load_nodes_ lists those nodes).
     struct GroupWater { double kwn = 0, mobility = 0, n = 0; };
     std::vector<GroupWater> group_water_;
-    std::vector<double> wv_, wp_, wk_, wc_, wd_, wq_;  // (wq_: sum V n p / Kw, the cell's pressure: flows only when above 0)
+    std::vector<double> wv_, wp_, wk_, wc_, wd_, wq_, wr_;  // (wq_: sum V n p / Kw, the cell's pressure: flows only when above 0)
+    std::vector<double> wkc_, wphi_, wqx_, wqy_;  // water_flow's: each cell's k and Phi, the flux across its right and top edges
+    std::vector<double> wde_;
+    std::vector<long> water_rows_;
+    std::vector<std::int32_t> water_cell_points_;
     std::vector<std::uint8_t> drain_edges_;
     double gamma_w_ = 0;
     double drained_ = 0;            // water that left through the drains [m^3/m] (entered: negative)
@@ -1402,6 +1409,7 @@ private:
     void geostatic();
     void water_pass();
     void water_flow();
+    void water_faces_row(int j);
     void load_forces();
     void load_work();
     // Strain increments of eq. 5a-5d and the rotation of eq. 5f per cell, one record per
@@ -3625,7 +3633,10 @@ inline void Simulation::setup_water() {
             group_water_.push_back(w);
         }
         const std::size_t cells = std::size_t(mx_) * std::size_t(my_);
-        for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_, &wq_}) v->assign(cells, 0.0);
+        for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_, &wq_, &wr_, &wkc_, &wphi_, &wqx_, &wqy_}) v->assign(cells, 0.0);
+        wde_.assign(p_.size(), 0.0);  // (the points never grow in number)
+        water_rows_.assign(std::size_t(my_) + 1, 0);
+        water_cell_points_.assign(cells, 0);
         drain_edges_.assign(cells, 0);
         std::vector<std::uint8_t> drained(std::size_t(mx_ + 1) * std::size_t(my_ + 1), 0);
         for (const Drain& d : sc_.drains) {
@@ -3718,118 +3729,236 @@ inline void Simulation::geostatic() {
     }
 }
 
-// Two passes over the points: 1 (and 2's cell sums) in the first, 2's new pressures and
-// 3 in the second; the cells' exchange between them.
+// 1, 2 and 3 for every point. Each point's own updates go by threads in any order; every
+// sum takes its terms in the order one pass in point order (or cell order) gives them, so
+// that one thread and many give the same bits: the cells' sums (2, and 3's total stress)
+// by bands of rows of cells, each band taking every point whose cell is in its rows, in
+// point order (by_rows, water_rows_); the stored energy each point's new pressure takes,
+// kept per point and summed in point order.
 inline void Simulation::water_pass() {
     if (!modes_.water) return;
-    const bool flow = !sc_.water.undrained;
+    const bool flow = !sc_.water.undrained, smooth = modes_.mapping == Mapping::Smooth, flip = modes_.advect == Advect::Flip;
     const double rw = sc_.water.rhow, gx = sc_.gravity_x, gy = sc_.gravity_y;
-    if (flow)
-        for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_, &wq_}) std::fill(v->begin(), v->end(), 0.0);
-    for (std::size_t k = 0; k < p_.size(); ++k) {
-        const GroupWater& w = group_water_[p_.group[k]];
-        if (w.kwn == 0) continue;
-        // 1. the undrained response to the point's volume change
+    if (!serial()) {  // the bands: water_rows_[j], the points in the rows of cells below row j
+        std::fill(water_cell_points_.begin(), water_cell_points_.end(), 0);
+        for (std::size_t k = 0; k < p_.size(); ++k)  // (per cell first: a division per point cost more than the bands saved)
+            if (p_.cell[k] >= 0) ++water_cell_points_[std::size_t(p_.cell[k])];
+        for (int j = 0; j < my_; ++j) {
+            long in = 0;
+            for (int i = 0; i < mx_; ++i) in += water_cell_points_[std::size_t(cell(i, j))];
+            water_rows_[std::size_t(j) + 1] = water_rows_[std::size_t(j)] + in;
+        }
+    }
+    // Point k of the band j0 .. j1-1 (a point outside the lattice: the lowest band's).
+    auto in_band = [&](std::size_t k, int j0, int j1) {
+        const int c = p_.cell[k];
+        return c < 0 ? j0 == 0 : c >= cell(0, j0) && c < cell(0, j1);
+    };
+    auto undrained = [&](std::size_t k, const GroupWater& w) {  // 1. the response to the point's volume change
         const double v = p_.vol[k];
         p_.pw[k] -= w.kwn * (v / p_.wvol[k] - 1);
         p_.wvol[k] = v;
+    };
+    // 3. the total stress into eq. 8's sums, with the volume and weights the points' stress
+    // took: the cell holding the point, or (MAPPING SMOOTH) each cell its square overlaps by
+    // its share (its rows b and b + 1, in the bands j0 .. j1-1), on V0 with ADVECT FLIP
+    // (smear_points)
+    auto total_stress = [&](std::size_t k, int j0, int j1) {
         const int c = p_.cell[k];
-        if (!flow || c < 0) continue;
-        // 2. its water into its cell's sums
-        const std::size_t a = std::size_t(c);
-        const double s = v / w.kwn;
-        wv_[a] += v;
-        wp_[a] += s * (p_.pw[k] - rw * (gx * p_.x[k] + gy * p_.y[k]));  // the point's potential
-        wk_[a] += v * w.mobility;
-        wc_[a] += s;
-        wq_[a] += s * p_.pw[k];
-    }
-    if (flow) water_flow();  // 2. the cells' exchange
-    // 3. the total stress into eq. 8's sums, with the volume and weights the points'
-    // stress took: the cell holding the point, or (MAPPING SMOOTH) each cell its square
-    // overlaps by its share, on V0 with ADVECT FLIP (smear_points)
-    const bool smooth = modes_.mapping == Mapping::Smooth, flip = modes_.advect == Advect::Flip;
-    for (std::size_t k = 0; k < p_.size(); ++k) {
-        const int c = p_.cell[k];
-        const GroupWater& w = group_water_[p_.group[k]];
-        if (c < 0 || w.kwn == 0) continue;
-        if (flow && wc_[std::size_t(c)] != 0) {  // 2. the pressure its cell's water now has at the point
-            const std::size_t a = std::size_t(c);
-            const double p0 = p_.pw[k], p1 = (wp_[a] + wd_[a]) / wc_[a] + rw * (gx * p_.x[k] + gy * p_.y[k]);
-            d_water_ -= 0.5 * energy_volume(k) * (p1 * p1 - p0 * p0) / w.kwn;
-            p_.pw[k] = p1;
-        }
         const double v0 = groups_[p_.group[k]].vol0, vp = (flip ? v0 : std::min(p_.vol[k], v0)) * p_.pw[k];
         if (!smooth) {
             svxx_[std::size_t(c)] -= vp;
             svyy_[std::size_t(c)] -= vp;
-            continue;
+            return;
         }
-        each_part(overlap_[k], [&](int ci, int cj, double, double, double w) {
+        const detail::Overlap& o = overlap_[k];
+        if (o.b >= j1 || o.b + 1 < j0) return;
+        each_part(o, [&](int ci, int cj, double, double, double wt) {
+            if (cj < j0 || cj >= j1) return;
             const std::size_t a = std::size_t(cell(ci, cj));
-            svxx_[a] -= w * vp;
-            svyy_[a] -= w * vp;
+            svxx_[a] -= wt * vp;
+            svyy_[a] -= wt * vp;
         });
+    };
+    if (!flow) {
+        by_rows(my_, water_rows_, [&](int j0, int j1) {
+            for (std::size_t k = 0; k < p_.size(); ++k) {
+                const GroupWater& w = group_water_[p_.group[k]];
+                if (w.kwn == 0 || !(smooth || in_band(k, j0, j1))) continue;
+                if (in_band(k, j0, j1)) undrained(k, w);
+                if (smooth) continue;
+                if (p_.cell[k] >= 0) total_stress(k, j0, j1);
+            }
+        });
+        if (smooth) by_rows(my_, row_points_, [&](int j0, int j1) {
+            for (std::size_t k = 0; k < p_.size(); ++k)
+                if (p_.cell[k] >= 0 && group_water_[p_.group[k]].kwn != 0) total_stress(k, j0, j1);
+        });
+        return;
     }
+    // (The loops below read the arrays through local pointers and constants: through the
+    // members, the compiler reloads them after every store.)
+    const std::size_t n = p_.size();
+    const std::int32_t* cellp = p_.cell.data();
+    const std::uint16_t* group = p_.group.data();
+    const GroupWater* gw = group_water_.data();
+    const double *px = p_.x.data(), *py = p_.y.data(), *vol = p_.vol.data();
+    double *pw = p_.pw.data(), *wvol = p_.wvol.data();
+    by_rows(my_, water_rows_, [=](int j0, int j1) {  // 1, and 2: each point's water into its cell's sums
+        const int c0 = cell(0, j0), c1 = cell(0, j1);
+        double *sv = wv_.data(), *sp = wp_.data(), *sk = wk_.data(), *sc = wc_.data(), *sq = wq_.data();
+        for (double* v : {sv, sp, sk, sc, sq}) std::fill(v + c0, v + c1, 0.0);
+        for (std::size_t k = 0; k < n; ++k) {
+            const int c = cellp[k];
+            if (!(c < 0 ? j0 == 0 : c >= c0 && c < c1)) continue;
+            const GroupWater& w = gw[group[k]];
+            if (w.kwn == 0) continue;
+            const double v = vol[k];
+            const double p = pw[k] - w.kwn * (v / wvol[k] - 1);  // 1. the undrained response
+            pw[k] = p;
+            wvol[k] = v;
+            if (c < 0) continue;
+            const std::size_t a = std::size_t(c);
+            const double s = v / w.kwn;
+            sv[a] += v;
+            sp[a] += s * (p - rw * (gx * px[k] + gy * py[k]));  // the point's potential
+            sk[a] += v * w.mobility;
+            sc[a] += s;
+            sq[a] += s * p;
+        }
+    });
+    water_flow();  // 2. the cells' exchange
+    // 2. the pressure its cell's water now has at each point, and the stored energy that
+    // took: on one thread summed at once, by threads kept per point (wde_) and summed after;
+    // with the paper's mapping, 3 as well
+    const bool one = serial();
+    double taken = d_water_;
+    double* into = &taken;
+    by_rows(my_, water_rows_, [=](int j0, int j1) {
+        const int c0 = cell(0, j0), c1 = cell(0, j1);
+        const double *sp = wp_.data(), *sc = wc_.data(), *sd = wd_.data();
+        double *sxx = svxx_.data(), *syy = svyy_.data(), *de = wde_.data();
+        const Group* gr = groups_.data();
+        double dw = *into;
+        for (std::size_t k = 0; k < n; ++k) {
+            const int c = cellp[k];
+            if (c < c0 || c >= c1) continue;
+            const GroupWater& w = gw[group[k]];
+            if (w.kwn == 0) continue;
+            const std::size_t a = std::size_t(c);
+            const double v0 = gr[group[k]].vol0, v = flip ? v0 : std::min(vol[k], v0);  // (energy_volume)
+            double e = 0, p = pw[k];
+            if (sc[a] != 0) {
+                const double p1 = (sp[a] + sd[a]) / sc[a] + rw * (gx * px[k] + gy * py[k]);
+                e = 0.5 * v * (p1 * p1 - p * p) / w.kwn;
+                p = p1;
+                pw[k] = p1;
+            }
+            if (one) dw -= e;
+            else de[k] = e;
+            if (smooth) continue;
+            sxx[a] -= v * p;
+            syy[a] -= v * p;
+        }
+        if (one) *into = dw;
+    });
+    if (one) d_water_ = taken;
+    else
+        for (std::size_t k = 0; k < n; ++k)  // (0 where a point took none)
+            if (gw[group[k]].kwn != 0 && cellp[k] >= 0) d_water_ -= wde_[k];
+    if (smooth) by_rows(my_, row_points_, [&](int j0, int j1) {
+        for (std::size_t k = 0; k < p_.size(); ++k)
+            if (p_.cell[k] >= 0 && group_water_[p_.group[k]].kwn != 0) total_stress(k, j0, j1);
+    });
 }
 
-// 2. The cells' exchange, from the sums water_pass made: each cell's net inflow wd_.
+// 2. The cells' exchange, from the sums water_pass made: each cell's net inflow wd_ and
+// the water it let out through drains and free faces (wr_; drained_ sums them in cell
+// order). Three passes over the rows of cells, each by threads: each cell's own k and Phi
+// (a cell whose water is at or below zero pressure takes no part: no unsaturated flow);
+// the flux across each edge between two wet cells (wqx_: its right edge, wqy_: its top;
+// 0 where no water crosses); each cell's inflow, its edges' fluxes in the order one pass
+// over the cells in row order would add them (the edge below, the edge on the left, its
+// right and top edges), then its free faces and drains (water_faces_row).
 inline void Simulation::water_flow() {
+    const long cells = long(mx_) * my_;
+    const double dt = sc_.dt_s;
+    by_rows(kWaterRows, 0, my_, cells, [&](int j) {
+        for (std::size_t c = std::size_t(cell(0, j)), e = c + std::size_t(mx_); c < e; ++c) {
+            if (!(wq_[c] > 0)) wc_[c] = 0;
+            if (wc_[c] == 0) continue;
+            wkc_[c] = wk_[c] / wv_[c];
+            wphi_[c] = wp_[c] / wc_[c];
+        }
+    });
+    const std::size_t row = std::size_t(mx_);
+    auto flux = [&](std::size_t a, std::size_t b) {  // from cell a to cell b, both wet
+        const double ka = wkc_[a], kb = wkc_[b];
+        const double t = std::min(ka + kb > 0 ? 2 * ka * kb / (ka + kb) : 0.0, std::min(wc_[a], wc_[b]) / (8 * dt));
+        return t * (wphi_[a] - wphi_[b]) * dt;
+    };
+    by_rows(kWaterRows, 0, my_, cells, [&](int j) {
+        for (int i = 0; i < mx_; ++i) {
+            const std::size_t c = std::size_t(cell(i, j));
+            const bool wet = wc_[c] != 0;
+            wqx_[c] = wet && i + 1 < mx_ && wc_[c + 1] != 0 ? flux(c, c + 1) : 0.0;
+            wqy_[c] = wet && j + 1 < my_ && wc_[c + row] != 0 ? flux(c, c + row) : 0.0;
+        }
+    });
+    by_rows(kWaterRows, 0, my_, cells, [&](int j) { water_faces_row(j); });
+    for (std::size_t c = 0; c < wr_.size(); ++c) drained_ += wr_[c];
+}
+
+// Each cell of row j: its net inflow (wd_) and what it let out (wr_).
+inline void Simulation::water_faces_row(int j) {
     const double dt = sc_.dt_s, rw = sc_.water.rhow, gx = sc_.gravity_x, gy = sc_.gravity_y;
-    for (std::size_t c = 0; c < wc_.size(); ++c)  // water at or below zero pressure takes no part (no unsaturated flow)
-        if (!(wq_[c] > 0)) wc_[c] = 0;
-    auto phi = [&](std::size_t c) { return wp_[c] / wc_[c]; };
     const Water& w = sc_.water;
     const bool table = w.table > -std::numeric_limits<double>::infinity();
     const bool reservoir = sc_.reservoir.on;
     const double level = reservoir ? sc_.reservoir.at(time()) : 0.0;
     auto phi_edge = [&](double x, double y) { return (table ? std::max(0.0, -rw * gy * (w.table - y)) : 0.0) - rw * (gx * x + gy * y); };
-    for (int j = 0; j < my_; ++j)
-        for (int i = 0; i < mx_; ++i) {
-            const std::size_t c = std::size_t(cell(i, j));
-            if (wc_[c] == 0) continue;
-            const double pa = phi(c), ka = wk_[c] / wv_[c];
-            auto exchange = [&](std::size_t b) {
-                if (wc_[b] == 0) return;
-                const double kb = wk_[b] / wv_[b];
-                const double t = std::min(ka + kb > 0 ? 2 * ka * kb / (ka + kb) : 0.0, std::min(wc_[c], wc_[b]) / (8 * dt));
-                const double q = t * (pa - phi(b)) * dt;
-                wd_[c] -= q;
-                wd_[b] += q;
-            };
-            if (i + 1 < mx_) exchange(c + 1);
-            if (j + 1 < my_) exchange(c + std::size_t(mx_));
-            std::uint8_t e = drain_edges_[c];
+    const std::size_t row = std::size_t(mx_);
+    for (int i = 0; i < mx_; ++i) {
+        const std::size_t c = std::size_t(cell(i, j));
+        double d = 0, out = 0;
+        if (wc_[c] != 0) {
+            if (j > 0) d += wqy_[c - row];  // (a flux of 0 adds nothing: d is never -0)
+            if (i > 0) d += wqx_[c - 1];
+            d -= wqx_[c];
+            d -= wqy_[c];
+            const double pa = wphi_[c], ka = wkc_[c];
+            const std::uint8_t e = drain_edges_[c];
             const double t = std::min(2 * ka, wc_[c] / (8 * dt));
-            {  // free faces (edges to empty cells inside the lattice): below a reservoir's level
-               // drained to it (its potential rho_w |g_y| level), else seepage faces: water under
-               // pressure leaves to p = 0 at the face, none enters
-                auto open = [&](bool inside, std::size_t b) { return inside && wc_[b] == 0 && cmass_[b] == 0; };
-                auto face = [&](bool o, double xm, double ym) {
-                    if (!o) return;
-                    const bool under = reservoir && ym <= level;
-                    const double q = t * (pa - (under ? rw * -gy * level : -rw * (gx * xm + gy * ym))) * dt;
-                    if (!under && q <= 0) return;
-                    wd_[c] -= q;
-                    drained_ += q;
-                };
-                const double xc = (i + 0.5) * L_, yc = (j + 0.5) * L_;
-                face(!(e & kEdgeTop) && open(j + 1 < my_, c + std::size_t(mx_)), xc, (j + 1) * L_);
-                face(!(e & kEdgeBottom) && open(j > 0, c - std::size_t(mx_)), xc, j * L_);
-                face(!(e & kEdgeLeft) && open(i > 0, c - 1), i * L_, yc);
-                face(!(e & kEdgeRight) && open(i + 1 < mx_, c + 1), (i + 1) * L_, yc);
-            }
-            if (!e) continue;
+            // free faces (edges to empty cells inside the lattice): below a reservoir's level
+            // drained to it (its potential rho_w |g_y| level), else seepage faces: water under
+            // pressure leaves to p = 0 at the face, none enters
+            auto open = [&](bool inside, std::size_t b) { return inside && wc_[b] == 0 && cmass_[b] == 0; };
+            auto face = [&](bool o, double xm, double ym) {
+                if (!o) return;
+                const bool under = reservoir && ym <= level;
+                const double q = t * (pa - (under ? rw * -gy * level : -rw * (gx * xm + gy * ym))) * dt;
+                if (!under && q <= 0) return;
+                d -= q;
+                out += q;
+            };
+            const double xc = (i + 0.5) * L_, yc = (j + 0.5) * L_;
+            face(!(e & kEdgeTop) && open(j + 1 < my_, c + row), xc, (j + 1) * L_);
+            face(!(e & kEdgeBottom) && open(j > 0, c - row), xc, j * L_);
+            face(!(e & kEdgeLeft) && open(i > 0, c - 1), i * L_, yc);
+            face(!(e & kEdgeRight) && open(i + 1 < mx_, c + 1), (i + 1) * L_, yc);
             auto drain = [&](double x, double y) {
                 const double q = t * (pa - phi_edge(x, y)) * dt;
-                wd_[c] -= q;
-                drained_ += q;
+                d -= q;
+                out += q;
             };
             if (e & kEdgeBottom) drain((i + 0.5) * L_, j * L_);
             if (e & kEdgeTop) drain((i + 0.5) * L_, (j + 1) * L_);
             if (e & kEdgeLeft) drain(i * L_, (j + 0.5) * L_);
             if (e & kEdgeRight) drain((i + 1) * L_, (j + 0.5) * L_);
         }
+        wd_[c] = d;
+        wr_[c] = out;
+    }
 }
 
 // LOAD: each loaded point's force to the nodes of its cell: along its line by the linear
@@ -4452,10 +4581,11 @@ inline void Simulation::smear_points(Landing& t) {
 
 // f(j0, j1) for bands of the rows 0 .. n-1 (of cells or nodes) that together hold them
 // all: in the fast kernel's threaded point pass, a band a thread, the bands splitting
-// the points evenly by the first row of their squares (row_points_, smooth_map); one band
+// the points evenly by counts[j], the points below row j (row_points_: by the first row of
+// their squares, smooth_map; water_rows_: by their cells' rows, water_pass); one band
 // otherwise. f adds every point's terms in its rows, in point order, so every cell or
 // node takes the terms it takes on one thread, in the same order.
-template <class F> inline void Simulation::by_rows(int n, const F& f) {
+template <class F> inline void Simulation::by_rows(int n, const std::vector<long>& counts, const F& f) {
 #if defined(_OPENMP)
     if (!serial()) {
         const long points = long(p_.size());
@@ -4465,7 +4595,7 @@ template <class F> inline void Simulation::by_rows(int n, const F& f) {
             auto band = [&](int u) {  // the first row of thread u's band
                 if (u >= nt) return n;
                 int j = 0;
-                while (j < n && row_points_[std::size_t(std::min(j, my_))] < points * u / nt) ++j;
+                while (j < n && counts[std::size_t(std::min(j, my_))] < points * u / nt) ++j;
                 return j;
             };
             f(band(id), band(id + 1));
