@@ -4585,7 +4585,7 @@ inline void Simulation::smear_points(Landing& t) {
 // their squares, smooth_map; water_rows_: by their cells' rows, water_pass); one band
 // otherwise. f adds every point's terms in its rows, in point order, so every cell or
 // node takes the terms it takes on one thread, in the same order.
-template <class F> inline void Simulation::by_rows(int n, const std::vector<long>& counts, const F& f) {
+template <class F> inline void Simulation::by_rows(int n, [[maybe_unused]] const std::vector<long>& counts, const F& f) {
 #if defined(_OPENMP)
     if (!serial()) {
         const long points = long(p_.size());
