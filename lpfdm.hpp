@@ -3749,28 +3749,11 @@ inline void Simulation::water_pass() {
             water_rows_[std::size_t(j) + 1] = water_rows_[std::size_t(j)] + in;
         }
     }
-    // Point k of the band j0 .. j1-1 (a point outside the lattice: the lowest band's).
-    auto in_band = [&](std::size_t k, int j0, int j1) {
-        const int c = p_.cell[k];
-        return c < 0 ? j0 == 0 : c >= cell(0, j0) && c < cell(0, j1);
-    };
-    auto undrained = [&](std::size_t k, const GroupWater& w) {  // 1. the response to the point's volume change
-        const double v = p_.vol[k];
-        p_.pw[k] -= w.kwn * (v / p_.wvol[k] - 1);
-        p_.wvol[k] = v;
-    };
-    // 3. the total stress into eq. 8's sums, with the volume and weights the points' stress
-    // took: the cell holding the point, or (MAPPING SMOOTH) each cell its square overlaps by
-    // its share (its rows b and b + 1, in the bands j0 .. j1-1), on V0 with ADVECT FLIP
-    // (smear_points)
-    auto total_stress = [&](std::size_t k, int j0, int j1) {
-        const int c = p_.cell[k];
-        const double v0 = groups_[p_.group[k]].vol0, vp = (flip ? v0 : std::min(p_.vol[k], v0)) * p_.pw[k];
-        if (!smooth) {
-            svxx_[std::size_t(c)] -= vp;
-            svyy_[std::size_t(c)] -= vp;
-            return;
-        }
+    // 3 with MAPPING SMOOTH: each cell the point's square overlaps by its share (its rows b
+    // and b + 1, in the band j0 .. j1-1), on V0 with ADVECT FLIP (smear_points); the paper's
+    // mapping: in the second pass below
+    auto smooth_stress = [&](std::size_t k, int j0, int j1) {
+        const double vp = energy_volume(k) * p_.pw[k];
         const detail::Overlap& o = overlap_[k];
         if (o.b >= j1 || o.b + 1 < j0) return;
         each_part(o, [&](int ci, int cj, double, double, double wt) {
@@ -3780,22 +3763,6 @@ inline void Simulation::water_pass() {
             svyy_[a] -= wt * vp;
         });
     };
-    if (!flow) {
-        by_rows(my_, water_rows_, [&](int j0, int j1) {
-            for (std::size_t k = 0; k < p_.size(); ++k) {
-                const GroupWater& w = group_water_[p_.group[k]];
-                if (w.kwn == 0 || !(smooth || in_band(k, j0, j1))) continue;
-                if (in_band(k, j0, j1)) undrained(k, w);
-                if (smooth) continue;
-                if (p_.cell[k] >= 0) total_stress(k, j0, j1);
-            }
-        });
-        if (smooth) by_rows(my_, row_points_, [&](int j0, int j1) {
-            for (std::size_t k = 0; k < p_.size(); ++k)
-                if (p_.cell[k] >= 0 && group_water_[p_.group[k]].kwn != 0) total_stress(k, j0, j1);
-        });
-        return;
-    }
     // (The loops below read the arrays through local pointers and constants: through the
     // members, the compiler reloads them after every store.)
     const std::size_t n = p_.size();
@@ -3804,10 +3771,13 @@ inline void Simulation::water_pass() {
     const GroupWater* gw = group_water_.data();
     const double *px = p_.x.data(), *py = p_.y.data(), *vol = p_.vol.data();
     double *pw = p_.pw.data(), *wvol = p_.wvol.data();
+    // The points of a band: those whose cells lie in its rows (a point outside the lattice:
+    // the lowest band's).
     by_rows(my_, water_rows_, [=](int j0, int j1) {  // 1, and 2: each point's water into its cell's sums
         const int c0 = cell(0, j0), c1 = cell(0, j1);
         double *sv = wv_.data(), *sp = wp_.data(), *sk = wk_.data(), *sc = wc_.data(), *sq = wq_.data();
-        for (double* v : {sv, sp, sk, sc, sq}) std::fill(v + c0, v + c1, 0.0);
+        if (flow)
+            for (double* v : {sv, sp, sk, sc, sq}) std::fill(v + c0, v + c1, 0.0);
         for (std::size_t k = 0; k < n; ++k) {
             const int c = cellp[k];
             if (!(c < 0 ? j0 == 0 : c >= c0 && c < c1)) continue;
@@ -3817,7 +3787,7 @@ inline void Simulation::water_pass() {
             const double p = pw[k] - w.kwn * (v / wvol[k] - 1);  // 1. the undrained response
             pw[k] = p;
             wvol[k] = v;
-            if (c < 0) continue;
+            if (c < 0 || !flow) continue;
             const std::size_t a = std::size_t(c);
             const double s = v / w.kwn;
             sv[a] += v;
@@ -3827,10 +3797,11 @@ inline void Simulation::water_pass() {
             sq[a] += s * p;
         }
     });
-    water_flow();  // 2. the cells' exchange
+    if (flow) water_flow();  // 2. the cells' exchange
     // 2. the pressure its cell's water now has at each point, and the stored energy that
     // took: on one thread summed at once, by threads kept per point (wde_) and summed after;
-    // with the paper's mapping, 3 as well
+    // with the paper's mapping, 3: the total stress into eq. 8's sums, with the volume the
+    // points' stress took (energy_volume: V0 with ADVECT FLIP, else min(V, V0))
     const bool one = serial();
     double taken = d_water_;
     double* into = &taken;
@@ -3846,9 +3817,9 @@ inline void Simulation::water_pass() {
             const GroupWater& w = gw[group[k]];
             if (w.kwn == 0) continue;
             const std::size_t a = std::size_t(c);
-            const double v0 = gr[group[k]].vol0, v = flip ? v0 : std::min(vol[k], v0);  // (energy_volume)
+            const double v0 = gr[group[k]].vol0, v = flip ? v0 : std::min(vol[k], v0);  // (energy_volume, inline)
             double e = 0, p = pw[k];
-            if (sc[a] != 0) {
+            if (flow && sc[a] != 0) {
                 const double p1 = (sp[a] + sd[a]) / sc[a] + rw * (gx * px[k] + gy * py[k]);
                 e = 0.5 * v * (p1 * p1 - p * p) / w.kwn;
                 p = p1;
@@ -3868,7 +3839,7 @@ inline void Simulation::water_pass() {
             if (gw[group[k]].kwn != 0 && cellp[k] >= 0) d_water_ -= wde_[k];
     if (smooth) by_rows(my_, row_points_, [&](int j0, int j1) {
         for (std::size_t k = 0; k < p_.size(); ++k)
-            if (p_.cell[k] >= 0 && group_water_[p_.group[k]].kwn != 0) total_stress(k, j0, j1);
+            if (p_.cell[k] >= 0 && group_water_[p_.group[k]].kwn != 0) smooth_stress(k, j0, j1);
     });
 }
 
