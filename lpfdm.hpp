@@ -999,7 +999,8 @@ public:
     //   d_plastic dissipated by the plastic returns (Points::plastic_work);
     //   error     (w_walls + w_fixes + w_ground - kinetic - strain - gravity - d_damping - d_plastic
     //             - d_absorb) / max(|w_walls + w_fixes + w_ground|, kinetic + |strain| + |gravity|, the
-    //             largest kinetic energy so far, d_damping + d_plastic + d_absorb): energy the discrete cycle
+    //             largest kinetic energy so far, d_damping + d_plastic + d_absorb, 1e-10 of the
+    //             strain and potential energies at the start): energy the discrete cycle
     //             created (< 0) or lost (> 0), as a fraction of the energy in play.
     // Nodal works are trapezoidal in time (the force at t and t + dt on the increment between).
     // Points that left the lattice keep the strain and potential energy they left with;
@@ -3532,7 +3533,10 @@ LPFDM_DEF Simulation::Energy Simulation::energy() const {
     e.d_water = d_water_;
     const double in = e.w_walls + e.w_fixes + e.w_ground + e.w_loads;
     const double out = e.d_damping + e.d_plastic + e.d_absorb + e.d_water;
-    const double scale = std::max({std::fabs(in), e.kinetic + std::fabs(e.strain) + std::fabs(e.gravity), es_.peak_kinetic, std::fabs(out)});
+    // (at least 1e-10 of the energies whose differences the terms are: below that the
+    // account's own rounding, as a scene exactly at rest has, would read as energy made)
+    const double rounding = 1e-10 * (std::fabs(es_.strain0) + std::fabs(es_.potential0));
+    const double scale = std::max({std::fabs(in), e.kinetic + std::fabs(e.strain) + std::fabs(e.gravity), es_.peak_kinetic, std::fabs(out), rounding});
     e.error = scale > 0 ? (in - e.kinetic - e.strain - e.gravity - out) / scale : 0.0;
     return e;
 }
