@@ -700,6 +700,21 @@ struct Tally {
     long take() { return n.exchange(0); }
 };
 
+// WATER, per group of points: Kw / n (0: dry), k / gamma_w, n, and V0.
+struct GroupWater { double kwn = 0, mobility = 0, n = 0, vol0 = 0; };
+// What water_pass's passes over the points read and write, by value: in the loops'
+// registers (members or captures reached through memory are reloaded after every store).
+struct WaterPoints {
+    std::size_t n = 0;
+    const std::int32_t* cell = nullptr;
+    const std::uint16_t* group = nullptr;
+    const GroupWater* gw = nullptr;
+    const double *x = nullptr, *y = nullptr, *vol = nullptr;
+    double *pw = nullptr, *wvol = nullptr;
+    double rw = 0, gx = 0, gy = 0;
+    bool flow = false, flip = false, smooth = false;
+};
+
 // MAPPING SMOOTH: a point's square across the cells (square_overlap along each axis): its
 // first cell (a, b), the fractions of the square in that cell and the next along x and y,
 // and the centres of those parts.
@@ -1390,9 +1405,9 @@ private:
     // its drained edges (kEdge*); per point the stored energy the flow took (summed in point
     // order); the points in the rows of cells below each row (water_pass's bands); per node
     // the step's LOAD force and whether it has one (load_nodes_ lists those nodes).
-    struct GroupWater { double kwn = 0, mobility = 0, n = 0; };
+    using GroupWater = detail::GroupWater;
     std::vector<GroupWater> group_water_;
-    std::vector<double> wv_, wp_, wk_, wc_, wd_, wq_, wr_;  // (wq_: sum V n p / Kw, the cell's pressure: flows only when above 0)
+    std::vector<double> wv_, wp_, wk_, wc_, wnew_, wq_, wr_;  // (wq_: sum V n p / Kw, the cell's pressure: flows only when above 0; wnew_: Phi after the exchange)
     std::vector<double> wkc_, wphi_, wqx_, wqy_;  // water_flow's: each cell's k and Phi, the flux across its right and top edges
     std::vector<double> wde_;
     std::vector<long> water_rows_;
@@ -3588,7 +3603,7 @@ LPFDM_DEF double Simulation::unbalanced_ratio() const {
 //    (k_ab / gamma_w)(Phi_a - Phi_b) dt flows (k_ab their harmonic mean); across a drained
 //    edge (DRAIN) (2 k_a / gamma_w)(Phi_a - Phi_drain) dt leaves, from half a cell away,
 //    Phi_drain the hydrostatic pore pressure's potential at the edge. A free surface (an
-//    edge to an empty cell inside the lattice) is a seepage face: water under pressure
+//    edge to a cell inside the lattice holding no point) is a seepage face: water under pressure
 //    leaves there to p = 0 at the face, as to a drain, and none enters; below a
 //    RESERVOIR's level it is drained to the reservoir both ways. The lattice's edges and
 //    edges to dry material are impermeable unless drained. A cell whose water is at or below zero pressure (sum V n p / Kw <= 0:
@@ -3634,10 +3649,11 @@ inline void Simulation::setup_water() {
             const Material& m = sc_.materials[std::size_t(gr.mat_index)];
             GroupWater w;
             if (m.porosity > 0) { w.n = m.porosity; w.kwn = sc_.water.kw / m.porosity; w.mobility = m.perm / gamma_w_; }
+            w.vol0 = gr.vol0;
             group_water_.push_back(w);
         }
         const std::size_t cells = std::size_t(mx_) * std::size_t(my_);
-        for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wd_, &wq_, &wr_, &wkc_, &wphi_, &wqx_, &wqy_}) v->assign(cells, 0.0);
+        for (auto* v : {&wv_, &wp_, &wk_, &wc_, &wnew_, &wq_, &wr_, &wkc_, &wphi_, &wqx_, &wqy_}) v->assign(cells, 0.0);
         wde_.assign(p_.size(), 0.0);  // (the points never grow in number)
         water_rows_.assign(std::size_t(my_) + 1, 0);
         water_cell_points_.assign(cells, 0);
@@ -3733,21 +3749,127 @@ inline void Simulation::geostatic() {
     }
 }
 
+namespace detail {
+// water_pass's first pass over the points of cells c0 .. c1-1 (low: and those outside the
+// lattice), in point order: 1, each point's undrained response p to its volume change since
+// its pressure last took one (V against V_before), and 2, its terms into its cell's sums
+// (not UNDRAINED): sum V, sum s (p - rho_w g . x), sum V k / gamma_w, sum s, sum s p, with
+// s = V n / Kw its storage.
+// While the points stay in one cell, its sums stay in registers (t*), stored when a point
+// of another cell comes: the same additions in the same order as adding each term into
+// the arrays, where a chain of additions through memory waits for each store.
+inline void water_sums(const WaterPoints w, int c0, int c1, bool low, double* sv, double* sp, double* sk, double* sc, double* sq) {
+    std::ptrdiff_t at = -1;  // the cell whose sums are in t*
+    double tv = 0, tp = 0, tk = 0, tc = 0, tq = 0;
+    auto store = [&]() LPFDM_INLINE {
+        if (at >= 0) { sv[at] = tv; sp[at] = tp; sk[at] = tk; sc[at] = tc; sq[at] = tq; }
+    };
+    auto mine = [&](std::size_t k) LPFDM_INLINE {
+        const int c = w.cell[k];
+        return (c < 0 ? low : c >= c0 && c < c1) && w.gw[w.group[k]].kwn != 0;
+    };
+    auto take = [&](std::size_t k, double v, double p, double s, double sphi, double vk, double spk) LPFDM_INLINE {
+        w.pw[k] = p;
+        w.wvol[k] = v;
+        const std::ptrdiff_t c = w.cell[k];
+        if (c < 0 || !w.flow) return;
+        if (c != at) {
+            store();
+            at = c;
+            tv = sv[c]; tp = sp[c]; tk = sk[c]; tc = sc[c]; tq = sq[c];
+        }
+        tv += v;
+        tp += sphi;  // the point's potential
+        tk += vk;
+        tc += s;
+        tq += spk;
+    };
+    for (std::size_t k = 0; k < w.n; ++k) {
+        if (!mine(k)) continue;
+        const GroupWater& g = w.gw[w.group[k]];
+        const double v = w.vol[k];
+        const double p = w.pw[k] - g.kwn * (v / w.wvol[k] - 1);  // 1. the undrained response
+        const double s = v / g.kwn;
+        take(k, v, p, s, s * (p - w.rw * (w.gx * w.x[k] + w.gy * w.y[k])), v * g.mobility, s * p);
+    }
+    store();
+}
+
+// water_pass's second pass over the points of cells c0 .. c1-1, in point order: 2, the
+// pressure p1 = Phi + rho_w g . x its cell's water now gives each point whose cell's water
+// flows (sc: its storage, 0 where it takes no part; phi: its potential Phi after the
+// exchange), and the stored energy that took, V (p1^2 - p^2) / (2 Kw / n), subtracted
+// from dw (one: one thread) or kept in de; with the
+// paper's mapping, 3: -V p into the cell's sums of sigma_xx and sigma_yy, with the volume
+// the point's stress took (energy_volume: V0 with ADVECT FLIP, else min(V, V0)), the
+// cell's sums in registers as water_sums keeps them. Returns dw.
+inline double water_pressures(const WaterPoints w, int c0, int c1, const double* sc, const double* phi, double* sxx, double* syy, double* de, bool one, double dw) {
+    std::ptrdiff_t at = -1;
+    double txx = 0, tyy = 0;
+    auto store = [&]() LPFDM_INLINE {
+        if (at >= 0) { sxx[at] = txx; syy[at] = tyy; }
+    };
+    auto mine = [&](std::size_t k) LPFDM_INLINE {
+        const int c = w.cell[k];
+        return c >= c0 && c < c1 && w.gw[w.group[k]].kwn != 0;
+    };
+    auto flows = [&](std::size_t k) LPFDM_INLINE { return w.flow && sc[w.cell[k]] != 0; };
+    auto take = [&](std::size_t k, double v, double p, double e) LPFDM_INLINE {
+        w.pw[k] = p;
+        if (one) dw -= e;
+        else de[k] = e;
+        if (w.smooth) return;
+        const std::ptrdiff_t c = w.cell[k];
+        if (c != at) {
+            store();
+            at = c;
+            txx = sxx[c]; tyy = syy[c];
+        }
+        txx -= v * p;
+        tyy -= v * p;
+    };
+    auto volume = [&](double vol, double v0) LPFDM_INLINE { return w.flip ? v0 : std::min(vol, v0); };
+    for (std::size_t k = 0; k < w.n; ++k) {
+        if (!mine(k)) continue;
+        const GroupWater& g = w.gw[w.group[k]];
+        const double v = volume(w.vol[k], g.vol0);
+        double e = 0, p = w.pw[k];
+        if (flows(k)) {
+            const double p1 = phi[w.cell[k]] + w.rw * (w.gx * w.x[k] + w.gy * w.y[k]);
+            e = 0.5 * v * (p1 * p1 - p * p) / g.kwn;
+            p = p1;
+        }
+        take(k, v, p, e);
+    }
+    store();
+    return dw;
+}
+}  // namespace detail
+
 // 1, 2 and 3 for every point. Each point's own updates go by threads in any order; every
 // sum takes its terms in the order one pass in point order (or cell order) gives them, so
 // that one thread and many give the same bits: the cells' sums (2, and 3's total stress)
 // by bands of rows of cells, each band taking every point whose cell is in its rows, in
 // point order (by_rows, water_rows_); the stored energy each point's new pressure takes,
-// kept per point and summed in point order.
+// kept per point and summed in point order (detail::water_sums, water_pressures). No
+// AVX2 version: four points' arithmetic in the lanes of a vector, their terms then added
+// one point after another, made the run 0.8 times as fast (tools/README.md): the passes
+// wait on their sums, not on their arithmetic.
 inline void Simulation::water_pass() {
     if (!modes_.water) return;
     const bool flow = !sc_.water.undrained, smooth = modes_.mapping == Mapping::Smooth, flip = modes_.advect == Advect::Flip;
     const double rw = sc_.water.rhow, gx = sc_.gravity_x, gy = sc_.gravity_y;
+    // The points in each cell (water_cell_points_): the material's cells, whose edges to
+    // cells without points are its free faces (water_faces_row, and RESERVOIR's pressure in
+    // load_forces). With the paper's mapping these are the cells holding mass; with MAPPING
+    // SMOOTH a cell beside them may hold a sliver of a point's square, which is not
+    // material: a reservoir's pressure on its nodes, of that sliver's mass, drove them 82 m
+    // in the second step of drawdown.deck, and its faces were closed to the water.
+    std::fill(water_cell_points_.begin(), water_cell_points_.end(), 0);
+    for (std::size_t k = 0; k < p_.size(); ++k)
+        if (p_.cell[k] >= 0) ++water_cell_points_[std::size_t(p_.cell[k])];
     if (!serial()) {  // the bands: water_rows_[j], the points in the rows of cells below row j
-        std::fill(water_cell_points_.begin(), water_cell_points_.end(), 0);
-        for (std::size_t k = 0; k < p_.size(); ++k)  // (per cell first: a division per point cost more than the bands saved)
-            if (p_.cell[k] >= 0) ++water_cell_points_[std::size_t(p_.cell[k])];
-        for (int j = 0; j < my_; ++j) {
+        for (int j = 0; j < my_; ++j) {  // (per cell first: a division per point cost more than the bands saved)
             long in = 0;
             for (int i = 0; i < mx_; ++i) in += water_cell_points_[std::size_t(cell(i, j))];
             water_rows_[std::size_t(j) + 1] = water_rows_[std::size_t(j)] + in;
@@ -3767,87 +3889,44 @@ inline void Simulation::water_pass() {
             svyy_[a] -= wt * vp;
         });
     };
-    // (The loops below read the arrays through local pointers and constants: through the
-    // members, the compiler reloads them after every store.)
-    const std::size_t n = p_.size();
-    const std::int32_t* cellp = p_.cell.data();
-    const std::uint16_t* group = p_.group.data();
-    const GroupWater* gw = group_water_.data();
-    const double *px = p_.x.data(), *py = p_.y.data(), *vol = p_.vol.data();
-    double *pw = p_.pw.data(), *wvol = p_.wvol.data();
+    detail::WaterPoints w;
+    w.n = p_.size(); w.cell = p_.cell.data(); w.group = p_.group.data(); w.gw = group_water_.data();
+    w.x = p_.x.data(); w.y = p_.y.data(); w.vol = p_.vol.data(); w.pw = p_.pw.data(); w.wvol = p_.wvol.data();
+    w.rw = rw; w.gx = gx; w.gy = gy; w.flow = flow; w.flip = flip; w.smooth = smooth;
     // The points of a band: those whose cells lie in its rows (a point outside the lattice:
     // the lowest band's).
-    by_rows(my_, water_rows_, [=](int j0, int j1) {  // 1, and 2: each point's water into its cell's sums
+    by_rows(my_, water_rows_, [&, w](int j0, int j1) {  // 1, and 2: each point's water into its cell's sums
         const int c0 = cell(0, j0), c1 = cell(0, j1);
         double *sv = wv_.data(), *sp = wp_.data(), *sk = wk_.data(), *sc = wc_.data(), *sq = wq_.data();
         if (flow)
             for (double* v : {sv, sp, sk, sc, sq}) std::fill(v + c0, v + c1, 0.0);
-        for (std::size_t k = 0; k < n; ++k) {
-            const int c = cellp[k];
-            if (!(c < 0 ? j0 == 0 : c >= c0 && c < c1)) continue;
-            const GroupWater& w = gw[group[k]];
-            if (w.kwn == 0) continue;
-            const double v = vol[k];
-            const double p = pw[k] - w.kwn * (v / wvol[k] - 1);  // 1. the undrained response
-            pw[k] = p;
-            wvol[k] = v;
-            if (c < 0 || !flow) continue;
-            const std::size_t a = std::size_t(c);
-            const double s = v / w.kwn;
-            sv[a] += v;
-            sp[a] += s * (p - rw * (gx * px[k] + gy * py[k]));  // the point's potential
-            sk[a] += v * w.mobility;
-            sc[a] += s;
-            sq[a] += s * p;
-        }
+        detail::water_sums(w, c0, c1, j0 == 0, sv, sp, sk, sc, sq);
     });
     if (flow) water_flow();  // 2. the cells' exchange
     // 2. the pressure its cell's water now has at each point, and the stored energy that
     // took: on one thread summed at once, by threads kept per point (wde_) and summed after;
-    // with the paper's mapping, 3: the total stress into eq. 8's sums, with the volume the
-    // points' stress took (energy_volume: V0 with ADVECT FLIP, else min(V, V0))
+    // with the paper's mapping, 3: the total stress into eq. 8's sums
     const bool one = serial();
     double taken = d_water_;
-    double* into = &taken;
-    by_rows(my_, water_rows_, [=](int j0, int j1) {
+    by_rows(my_, water_rows_, [&, w](int j0, int j1) {
         const int c0 = cell(0, j0), c1 = cell(0, j1);
-        const double *sp = wp_.data(), *sc = wc_.data(), *sd = wd_.data();
+        const double *sc = wc_.data(), *phi = wnew_.data();
         double *sxx = svxx_.data(), *syy = svyy_.data(), *de = wde_.data();
-        const Group* gr = groups_.data();
-        double dw = *into;
-        for (std::size_t k = 0; k < n; ++k) {
-            const int c = cellp[k];
-            if (c < c0 || c >= c1) continue;
-            const GroupWater& w = gw[group[k]];
-            if (w.kwn == 0) continue;
-            const std::size_t a = std::size_t(c);
-            const double v0 = gr[group[k]].vol0, v = flip ? v0 : std::min(vol[k], v0);  // (energy_volume, inline)
-            double e = 0, p = pw[k];
-            if (flow && sc[a] != 0) {
-                const double p1 = (sp[a] + sd[a]) / sc[a] + rw * (gx * px[k] + gy * py[k]);
-                e = 0.5 * v * (p1 * p1 - p * p) / w.kwn;
-                p = p1;
-                pw[k] = p1;
-            }
-            if (one) dw -= e;
-            else de[k] = e;
-            if (smooth) continue;
-            sxx[a] -= v * p;
-            syy[a] -= v * p;
-        }
-        if (one) *into = dw;
+        const double dw = detail::water_pressures(w, c0, c1, sc, phi, sxx, syy, de, one, taken);
+        if (one) taken = dw;
     });
     if (one) d_water_ = taken;
     else
-        for (std::size_t k = 0; k < n; ++k)  // (0 where a point took none)
-            if (gw[group[k]].kwn != 0 && cellp[k] >= 0) d_water_ -= wde_[k];
+        for (std::size_t k = 0; k < w.n; ++k)  // (0 where a point took none)
+            if (w.gw[w.group[k]].kwn != 0 && w.cell[k] >= 0) d_water_ -= wde_[k];
     if (smooth) by_rows(my_, row_points_, [&](int j0, int j1) {
         for (std::size_t k = 0; k < p_.size(); ++k)
             if (p_.cell[k] >= 0 && group_water_[p_.group[k]].kwn != 0) smooth_stress(k, j0, j1);
     });
 }
 
-// 2. The cells' exchange, from the sums water_pass made: each cell's net inflow wd_ and
+// 2. The cells' exchange, from the sums water_pass made: each cell's potential after it
+// (wnew_: its net inflow dW makes Phi + dW / C, taken as (sum + dW) / C) and
 // the water it let out through drains and free faces (wr_; drained_ sums them in cell
 // order). Three passes over the rows of cells, each by threads: each cell's own k and Phi
 // (a cell whose water is at or below zero pressure takes no part: no unsaturated flow);
@@ -3884,7 +3963,7 @@ inline void Simulation::water_flow() {
     for (std::size_t c = 0; c < wr_.size(); ++c) drained_ += wr_[c];
 }
 
-// Each cell of row j: its net inflow (wd_) and what it let out (wr_).
+// Each cell of row j: its potential after the exchange (wnew_) and what it let out (wr_).
 inline void Simulation::water_faces_row(int j) {
     const double dt = sc_.dt_s, rw = sc_.water.rhow, gx = sc_.gravity_x, gy = sc_.gravity_y;
     const Water& w = sc_.water;
@@ -3904,10 +3983,10 @@ inline void Simulation::water_faces_row(int j) {
             const double pa = wphi_[c], ka = wkc_[c];
             const std::uint8_t e = drain_edges_[c];
             const double t = std::min(2 * ka, wc_[c] / (8 * dt));
-            // free faces (edges to empty cells inside the lattice): below a reservoir's level
+            // free faces (edges to cells inside the lattice holding no point): below a reservoir's level
             // drained to it (its potential rho_w |g_y| level), else seepage faces: water under
             // pressure leaves to p = 0 at the face, none enters
-            auto open = [&](bool inside, std::size_t b) { return inside && wc_[b] == 0 && cmass_[b] == 0; };
+            auto open = [&](bool inside, std::size_t b) { return inside && water_cell_points_[b] == 0; };
             auto face = [&](bool o, double xm, double ym) {
                 if (!o) return;
                 const bool under = reservoir && ym <= level;
@@ -3931,7 +4010,7 @@ inline void Simulation::water_faces_row(int j) {
             if (e & kEdgeLeft) drain(i * L_, (j + 0.5) * L_);
             if (e & kEdgeRight) drain((i + 1) * L_, (j + 0.5) * L_);
         }
-        wd_[c] = d;
+        wnew_[c] = wc_[c] != 0 ? (wp_[c] + d) / wc_[c] : 0.0;
         wr_[c] = out;
     }
 }
@@ -3951,10 +4030,11 @@ inline void Simulation::load_forces() {
     };
     if (sc_.reservoir.on) {  // RESERVOIR: each free face below the level, p_w L / 2 on each of its nodes, into the material
         const double level = sc_.reservoir.at(time()), rg = -sc_.water.rhow * sc_.gravity_y;
+        auto bare = [&](int i, int j) { return water_cell_points_[std::size_t(cell(i, j))] == 0; };  // no point (water_pass)
         for (int j = 0; j < my_; ++j) {
             if (j * L_ >= level) break;
             for (int i = 0; i < mx_; ++i) {
-                if (cmass_[std::size_t(cell(i, j))] == 0) continue;
+                if (bare(i, j)) continue;
                 const std::size_t n1 = std::size_t(node(i, j)), n2 = n1 + 1, n3 = n1 + std::size_t(mx_) + 1, n4 = n3 + 1;
                 auto face = [&](bool open, double ym, std::size_t a, std::size_t b, double nx, double ny) {
                     const double f = 0.5 * L_ * rg * (level - ym);
@@ -3963,10 +4043,10 @@ inline void Simulation::load_forces() {
                     add(b, f * nx, f * ny);
                 };
                 const double yc = (j + 0.5) * L_;
-                face(j + 1 < my_ && cmass_[std::size_t(cell(i, j + 1))] == 0, (j + 1) * L_, n3, n4, 0, -1);  // top
-                face(j > 0 && cmass_[std::size_t(cell(i, j - 1))] == 0, j * L_, n1, n2, 0, 1);               // bottom
-                face(i > 0 && cmass_[std::size_t(cell(i - 1, j))] == 0, yc, n1, n3, 1, 0);                   // left
-                face(i + 1 < mx_ && cmass_[std::size_t(cell(i + 1, j))] == 0, yc, n2, n4, -1, 0);            // right
+                face(j + 1 < my_ && bare(i, j + 1), (j + 1) * L_, n3, n4, 0, -1);  // top
+                face(j > 0 && bare(i, j - 1), j * L_, n1, n2, 0, 1);               // bottom
+                face(i > 0 && bare(i - 1, j), yc, n1, n3, 1, 0);                   // left
+                face(i + 1 < mx_ && bare(i + 1, j), yc, n2, n4, -1, 0);            // right
             }
         }
     }
