@@ -2036,70 +2036,64 @@ LPFDM_INLINE inline MohrResult mohr_coulomb_return(const MaterialConstants& k, c
     return detail::mohr_coulomb_correct(k, st, t, s);
 }
 
-inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, const MohrTrial& t, Stress& s) {
-    MohrResult res;
-    const double np = t.np, two_c_sq = t.two_c_sq, sig_t = t.sig_t, a = t.a, r = t.r;
-    double ns = st.n_psi;
-    // In-plane principal stresses about the current principal direction; index 2 is zz.
-    const double* trial = t.sig;
-    int i1 = 0, i2 = 1, i3 = 2;  // sig1 <= sig2 <= sig3
-    if (trial[i1] > trial[i2]) std::swap(i1, i2);
-    if (trial[i2] > trial[i3]) std::swap(i2, i3);
-    if (trial[i1] > trial[i2]) std::swap(i1, i2);
-    const double fs = trial[i1] - trial[i3] * np + two_c_sq, ft = sig_t - trial[i3];  // not both >= 0 here
-    const double a1 = k.a1, a2 = k.a2;
-    const double tol = 1e-11 * (std::fabs(trial[0]) + std::fabs(trial[1]) + std::fabs(trial[2]) + two_c_sq + (std::isfinite(sig_t) ? sig_t : 0));
-    auto to_xy = [&](const double sg[3]) {  // same principal direction, new principal values
-        const double pn = 0.5 * (sg[1] + sg[0]), rn = 0.5 * (sg[1] - sg[0]);
-        const double inv_r = 1 / r, c2 = r > 0 ? a * inv_r : 1.0, s2 = r > 0 ? s.xy * inv_r : 0.0;  // one division
-        s.xx = pn + rn * c2; s.yy = pn - rn * c2; s.xy = rn * s2; s.zz = sg[2];
-    };
-    // FLAC's closed form: shear on (sig1, sig3) or tension on sig3, chosen by h. Most
-    // corrections end here; the result is admissible when no plane is violated.
-    // h is needed only when both planes are violated (its square root is not paid otherwise).
-    auto h_fn = [&]() {
-        const double alpha_p = std::sqrt(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
-        return trial[i3] - sig_t + alpha_p * (trial[i1] - sig_p);
-    };
-    const bool shear_first = fs < 0 && (ft >= 0 || !(h_fn() > 0));
-    {
-        double sg[3] = {trial[0], trial[1], trial[2]}, e1 = 0, e3 = 0;
-        if (shear_first) {  // mu D (e1 - N_psi e3), mu = -fs / (n . D m)
-            const double ns0 = st.n_psi;
-            const double d1 = a1 - a2 * ns0, d2 = a2 * (1 - ns0), d3 = a2 - a1 * ns0;
-            const double mu = -fs / (d1 - np * d3);
-            sg[i1] += mu * d1; sg[i2] += mu * d2; sg[i3] += mu * d3;
-            e1 = -mu; e3 = mu * ns0;
-        } else {  // mu D (-e3), mu = -ft / a1
-            const double mu = -ft / a1;
-            sg[i1] -= mu * a2; sg[i2] -= mu * a2; sg[i3] -= mu * a1;
-            e3 = mu;
-        }
-        const double lo = std::min(std::min(sg[0], sg[1]), sg[2]), hi = std::max(std::max(sg[0], sg[1]), sg[2]);
-        if (lo - np * hi + two_c_sq >= -tol && sig_t - hi >= -tol) {
-            res.mode = shear_first ? MohrResult::Shear : MohrResult::Tension;
-            res.d_gamma_p = std::fabs(e1 - e3);
-            res.d_vol_p = e1 + e3;
-            to_xy(sg);
-            return res;
-        }
-    }
+namespace detail {
+// The trial's principal direction with new principal values sg (in-plane sg[0], sg[1];
+// sg[2] = sigma_zz), written into s, which holds the trial: one division.
+inline void mohr_to_xy(const MohrTrial& t, const double sg[3], Stress& s) {
+    const double pn = 0.5 * (sg[1] + sg[0]), rn = 0.5 * (sg[1] - sg[0]);
+    const double inv_r = 1 / t.r, c2 = t.r > 0 ? t.a * inv_r : 1.0, s2 = t.r > 0 ? s.xy * inv_r : 0.0;
+    s.xx = pn + rn * c2; s.yy = pn - rn * c2; s.xy = rn * s2; s.zz = sg[2];
+}
 
-    // The nine planes: f = n . sig + kk >= 0, flow m. Shear plane (i, j): n = e_i - N_phi
-    // e_j, m = e_i - N_psi e_j; tension plane i: n = m = -e_i. The components are the
-    // values e_i - N e_j takes (1 - N 0, 0 - N 1, 0 - N 0), written out per plane instead
-    // of looped over an identity table. Each plane is made when a set first holds
-    // it (most searches need two or three of the nine), and again for the second flow rule.
+// FLAC's closed form: shear on (sig_i1, sig_i3) (shear_first) or tension on sig_i3 (i: the
+// principal values in order, fs and ft the trial's shear and tension functions). Most
+// corrections end here: true when the result violates no plane (to tol), with res and s.
+inline bool mohr_closed_form(const MaterialConstants& k, const MohrStrength& st, const MohrTrial& t, const int (&i)[3], bool shear_first, double fs, double ft, double tol,
+                             Stress& s, MohrResult& res) {
+    const double a1 = k.a1, a2 = k.a2;
+    double sg[3] = {t.sig[0], t.sig[1], t.sig[2]}, e1 = 0, e3 = 0;
+    if (shear_first) {  // mu D (e1 - N_psi e3), mu = -fs / (n . D m)
+        const double ns0 = st.n_psi;
+        const double d1 = a1 - a2 * ns0, d2 = a2 * (1 - ns0), d3 = a2 - a1 * ns0;
+        const double mu = -fs / (d1 - t.np * d3);
+        sg[i[0]] += mu * d1; sg[i[1]] += mu * d2; sg[i[2]] += mu * d3;
+        e1 = -mu; e3 = mu * ns0;
+    } else {  // mu D (-e3), mu = -ft / a1
+        const double mu = -ft / a1;
+        sg[i[0]] -= mu * a2; sg[i[1]] -= mu * a2; sg[i[2]] -= mu * a1;
+        e3 = mu;
+    }
+    const double lo = std::min(std::min(sg[0], sg[1]), sg[2]), hi = std::max(std::max(sg[0], sg[1]), sg[2]);
+    if (!(lo - t.np * hi + t.two_c_sq >= -tol && t.sig_t - hi >= -tol)) return false;
+    res.mode = shear_first ? MohrResult::Shear : MohrResult::Tension;
+    res.d_gamma_p = std::fabs(e1 - e3);
+    res.d_vol_p = e1 + e3;
+    mohr_to_xy(t, sg, s);
+    return true;
+}
+
+// The nine planes: f = n . sig + kk >= 0, flow m. Shear plane (i, j): n = e_i - N_phi
+// e_j, m = e_i - N_psi e_j; tension plane i: n = m = -e_i. The components are the
+// values e_i - N e_j takes (1 - N 0, 0 - N 1, 0 - N 0), written out per plane instead
+// of looped over an identity table. Each plane is made when a set first holds
+// it (most searches need two or three of the nine), and again for the second flow rule.
+struct MohrSearch {
     struct Plane { double n[3], kk, m[3]; };
+    double np, ns, two_c_sq, sig_t, a1, a2, tol, mu_min;
+    const double* trial;
+    int npl;
     Plane pl[9];
-    const int npl = std::isfinite(sig_t) ? 9 : 6;
-    static constexpr int kShear[6][2] = {{0, 1}, {0, 2}, {1, 0}, {1, 2}, {2, 0}, {2, 1}};  // (i, j), i the compressive side
-    auto shear_plane = [](int i, int j) { return 2 * i + (j > i ? j - 1 : j); };  // kShear's index of (i, j)
-    auto f_at = [&](const Plane& q, const double sg[3]) { return q.n[0] * sg[0] + q.n[1] * sg[1] + q.n[2] * sg[2] + q.kk; };
     // Per plane, once per flow rule: D m in principal space and f at the trial stress.
     double dmp[9][3], ftrial[9];
     unsigned made = 0;  // bit a: plane a made for this flow rule
-    auto plane = [&](int a) {
+    // The admissible set found: the stress, the multipliers and the planes.
+    double best[3] = {0, 0, 0}, best_mu[3] = {0, 0, 0};
+    int best_act[3] = {-1, -1, -1}, best_na = 0;
+
+    static constexpr int kShear[6][2] = {{0, 1}, {0, 2}, {1, 0}, {1, 2}, {2, 0}, {2, 1}};  // (i, j), i the compressive side
+    static int shear_plane(int i, int j) { return 2 * i + (j > i ? j - 1 : j); }  // kShear's index of (i, j)
+    static double f_at(const Plane& q, const double sg[3]) { return q.n[0] * sg[0] + q.n[1] * sg[1] + q.n[2] * sg[2] + q.kk; }
+    void plane(int a) {
         if (made >> a & 1) return;
         made |= 1u << a;
         Plane& q = pl[a];
@@ -2118,16 +2112,12 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
         const double d12 = a1 - a2, a2_tr = a2 * (q.m[0] + q.m[1] + q.m[2]);  // a2 trace(m)
         dmp[a][0] = a2_tr + d12 * q.m[0]; dmp[a][1] = a2_tr + d12 * q.m[1]; dmp[a][2] = a2_tr + d12 * q.m[2];
         ftrial[a] = f_at(q, trial);
-    };
-
-    // Solves the active set act[0..na) and checks the result; true if admissible.
-    double best[3] = {0, 0, 0}, best_mu[3] = {0, 0, 0};
-    int best_act[3] = {-1, -1, -1}, best_na = 0;
-    const double mu_min = -tol / (a1 + 1);
-    // NA is a compile-time constant (std::integral_constant), so that the 1x1 and 2x2
-    // systems tried most often run without loop overhead; the arithmetic is the same.
-    auto try_set = [&](const int* act, auto NA) {
-        constexpr int na = decltype(NA)::value;
+    }
+    // Solves the active set act[0..NA) and checks the result; true if admissible (kept in
+    // best*). NA a constant, so that the 1x1 and 2x2 systems tried most often run without
+    // loop overhead.
+    template <int NA> bool try_set(const int* act) {
+        constexpr int na = NA;
         double A[3][3], b[3], mu[3] = {0, 0, 0};
         const double* dm[3];
         for (int u = 0; u < na; ++u) { plane(act[u]); dm[u] = dmp[act[u]]; }
@@ -2166,7 +2156,80 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
         for (int u = 0; u < na; ++u) { best_mu[u] = mu[u]; best_act[u] = act[u]; }
         best_na = na;
         return true;
+    }
+    // The search itself (see mohr_coulomb_correct): the sets holding p0 first, with the
+    // planes first[] before the others; then, for each flow rule, the other sets. The
+    // mode of the return found, or Elastic when none is.
+    MohrResult::Mode run(int p0, const int (&first)[3]);
+};
+
+inline MohrResult::Mode MohrSearch::run(int p0, const int (&first)[3]) {
+    // The planes to join p0 in a set, in the order tried: first[], then the others.
+    int partner[8], npartner = 0;
+    if (p0 < npl) {
+        for (int u = 0; u < 3; ++u)
+            if (first[u] >= 0 && first[u] < npl && first[u] != p0) partner[npartner++] = first[u];
+        for (int q = 0; q < npl; ++q)
+            if (q != p0 && q != first[0] && q != first[1] && q != first[2]) partner[npartner++] = q;
+    }
+    bool found = false;
+    MohrResult::Mode mode = MohrResult::Elastic;
+    for (int pass = 0; pass < 2 && !found; ++pass) {
+        if (pass == 1) { ns = np; made = 0; }  // the associated flow rule: the planes made again
+        int act[3];
+        // The sets holding p0: pairs, then triples (the apex), each set's planes sorted by index.
+        for (int u = 0; u < npartner && !found; ++u) {
+            act[0] = std::min(p0, partner[u]); act[1] = std::max(p0, partner[u]);
+            found = try_set<2>(act);
+        }
+        for (int u = 0; u < npartner && !found; ++u)
+            for (int v = u + 1; v < npartner && !found; ++v) {
+                int x = p0, y = partner[u], z = partner[v];  // sorted: x < y < z
+                if (x > y) std::swap(x, y);
+                if (y > z) std::swap(y, z);
+                if (x > y) std::swap(x, y);
+                act[0] = x; act[1] = y; act[2] = z;
+                found = try_set<3>(act);
+            }
+        if (found) { mode = MohrResult::Edge; break; }
+        // The others: single planes, pairs, triples, each in index order.
+        for (act[0] = 0; act[0] < npl && !found; ++act[0]) {
+            if (found = try_set<1>(act), found) { mode = act[0] < 6 ? MohrResult::Shear : MohrResult::Tension; break; }
+        }
+        for (int na = 2; na <= 3 && !found; ++na) {
+            for (act[0] = 0; act[0] < npl && !found; ++act[0])
+                for (act[1] = act[0] + 1; act[1] < npl && !found; ++act[1]) {
+                    if (act[0] == p0 || act[1] == p0) continue;
+                    if (na == 2) { found = try_set<2>(act); continue; }
+                    for (act[2] = act[1] + 1; act[2] < npl && !found; ++act[2])
+                        if (act[2] != p0) found = try_set<3>(act);
+                }
+            if (found) mode = MohrResult::Edge;
+        }
+    }
+    return mode;
+}
+}  // namespace detail
+
+inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const MohrStrength& st, const MohrTrial& t, Stress& s) {
+    MohrResult res;
+    const double np = t.np, two_c_sq = t.two_c_sq, sig_t = t.sig_t;
+    // In-plane principal stresses about the current principal direction; index 2 is zz.
+    const double* trial = t.sig;
+    int i1 = 0, i2 = 1, i3 = 2;  // sig1 <= sig2 <= sig3
+    if (trial[i1] > trial[i2]) std::swap(i1, i2);
+    if (trial[i2] > trial[i3]) std::swap(i2, i3);
+    if (trial[i1] > trial[i2]) std::swap(i1, i2);
+    const double fs = trial[i1] - trial[i3] * np + two_c_sq, ft = sig_t - trial[i3];  // not both >= 0 here
+    const double tol = 1e-11 * (std::fabs(trial[0]) + std::fabs(trial[1]) + std::fabs(trial[2]) + two_c_sq + (std::isfinite(sig_t) ? sig_t : 0));
+    // FLAC's choice of plane by its h function, needed only when both planes are violated
+    // (its square root is not paid otherwise).
+    auto h_fn = [&]() {
+        const double alpha_p = std::sqrt(1 + np * np) + np, sig_p = sig_t * np - two_c_sq;
+        return trial[i3] - sig_t + alpha_p * (trial[i1] - sig_p);
     };
+    const bool shear_first = fs < 0 && (ft >= 0 || !(h_fn() > 0));
+    if (mohr_closed_form(k, st, t, {i1, i2, i3}, shear_first, fs, ft, tol, s, res)) return res;
 
     // The closed form was not admissible (the return crossed into another plane): a search
     // over the sets of one, two and three planes for the first admissible one. With psi < phi
@@ -2194,69 +2257,30 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     // loop makes those first two sets four points at a time (detail::lanes::edge_return: the
     // same operations): a change to the search's order or arithmetic is a
     // change there.
-    bool found = false;
-    const int p0 = shear_first ? shear_plane(i1, i3) : 6 + i3;
+    MohrSearch q;
+    q.np = np; q.ns = st.n_psi; q.two_c_sq = two_c_sq; q.sig_t = sig_t; q.a1 = k.a1; q.a2 = k.a2; q.tol = tol;
+    q.mu_min = -tol / (k.a1 + 1);
+    q.trial = trial;
+    q.npl = std::isfinite(sig_t) ? 9 : 6;
+    const int p0 = shear_first ? MohrSearch::shear_plane(i1, i3) : 6 + i3;
     int first[3] = {-1, -1, -1};  // the planes to pair with p0 before the others, in order
-    if (shear_first) { first[0] = shear_plane(i1, i2); first[1] = 6 + i1; first[2] = shear_plane(i2, i3); }
+    if (shear_first) { first[0] = MohrSearch::shear_plane(i1, i2); first[1] = 6 + i1; first[2] = MohrSearch::shear_plane(i2, i3); }
     else {  // sig_i3's tension plane: first the shear planes of i3 and the other in-plane stress (i1 if i3 is zz)
         const int o = i3 == 2 ? i1 : 1 - i3;
-        first[0] = shear_plane(o, i3); first[1] = shear_plane(i3, o);
+        first[0] = MohrSearch::shear_plane(o, i3); first[1] = MohrSearch::shear_plane(i3, o);
     }
-    // The planes to join p0 in a set, in the order tried: first[], then the others.
-    int partner[8], npartner = 0;
-    if (p0 < npl) {
-        for (int u = 0; u < 3; ++u)
-            if (first[u] >= 0 && first[u] < npl && first[u] != p0) partner[npartner++] = first[u];
-        for (int q = 0; q < npl; ++q)
-            if (q != p0 && q != first[0] && q != first[1] && q != first[2]) partner[npartner++] = q;
-    }
-    for (int pass = 0; pass < 2 && !found; ++pass) {
-        if (pass == 1) { ns = np; made = 0; }  // the associated flow rule: the planes made again
-        using One = std::integral_constant<int, 1>;
-        using Two = std::integral_constant<int, 2>;
-        using Three = std::integral_constant<int, 3>;
-        int act[3];
-        // The sets holding p0: pairs, then triples (the apex), each set's planes sorted by index.
-        for (int u = 0; u < npartner && !found; ++u) {
-            act[0] = std::min(p0, partner[u]); act[1] = std::max(p0, partner[u]);
-            found = try_set(act, Two{});
-        }
-        for (int u = 0; u < npartner && !found; ++u)
-            for (int v = u + 1; v < npartner && !found; ++v) {
-                int x = p0, y = partner[u], z = partner[v];  // sorted: x < y < z
-                if (x > y) std::swap(x, y);
-                if (y > z) std::swap(y, z);
-                if (x > y) std::swap(x, y);
-                act[0] = x; act[1] = y; act[2] = z;
-                found = try_set(act, Three{});
-            }
-        if (found) { res.mode = MohrResult::Edge; break; }
-        // The others: single planes, pairs, triples, each in index order.
-        for (act[0] = 0; act[0] < npl && !found; ++act[0]) {
-            if (found = try_set(act, One{}), found) { res.mode = act[0] < 6 ? MohrResult::Shear : MohrResult::Tension; break; }
-        }
-        for (int na = 2; na <= 3 && !found; ++na) {
-            for (act[0] = 0; act[0] < npl && !found; ++act[0])
-                for (act[1] = act[0] + 1; act[1] < npl && !found; ++act[1]) {
-                    if (act[0] == p0 || act[1] == p0) continue;
-                    if (na == 2) { found = try_set(act, Two{}); continue; }
-                    for (act[2] = act[1] + 1; act[2] < npl && !found; ++act[2])
-                        if (act[2] != p0) found = try_set(act, Three{});
-                }
-            if (found) res.mode = MohrResult::Edge;
-        }
-    }
+    const MohrResult::Mode mode = q.run(p0, first);
     // The associated projection always exists, but within about 0.1 degree of phi = 90
     // (N_phi above 1e6) the tolerances fail and no set passes: the trial stress is kept.
-    if (!found) return res;
+    if (mode == MohrResult::Elastic) return res;
+    res.mode = mode;
     // Plastic strains d_eps^p = -sum mu_a m_a (sig = sig_trial - D d_eps^p).
     double ep[3] = {0, 0, 0};
-    for (int u = 0; u < best_na; ++u)
-        for (int t = 0; t < 3; ++t) ep[t] -= best_mu[u] * pl[best_act[u]].m[t];
+    for (int u = 0; u < q.best_na; ++u)
+        for (int c = 0; c < 3; ++c) ep[c] -= q.best_mu[u] * q.pl[q.best_act[u]].m[c];
     res.d_gamma_p = std::max(std::max(ep[0], ep[1]), ep[2]) - std::min(std::min(ep[0], ep[1]), ep[2]);
     res.d_vol_p = ep[0] + ep[1] + ep[2];
-
-    to_xy(best);
+    mohr_to_xy(t, q.best, s);
     return res;
 }
 
