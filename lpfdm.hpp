@@ -8214,6 +8214,12 @@ LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
             }
         }
     if (!unread.grid && !unread.clusters && !unread.fixes) detail::opening_warnings(s, d);
+    // (measured: decks/README's RESERVOIR paragraph; the header's "Pore water and loads")
+    if (s.reservoir.on && s.water.on && s.mapping == Mapping::Smooth && s.advect != Advect::Flip && !unread.mapping) {
+        std::snprintf(b, sizeof b, "with MAPPING SMOOTH and no ADVECT FLIP the reservoir's pressure misses the parts of squares past the material's faces: "
+                                   "drawdown.deck swells there, draws water in and makes 38 %% of its energy; add ADVECT FLIP");
+        warn(s.reservoir.pos);
+    }
     if (!unread.step && s.steps >= 1)
         for (const Output& o : s.outputs)
             if (o.every > s.steps) {

@@ -387,6 +387,19 @@ TEST_CASE("the deck's checks of RESERVOIR and GEOSTATIC") {
         REQUIRE(read_deck("decks/drawdown.deck", dd).empty());
         CHECK(apply_setting(dd, "RESERVOIR.TO", 10) == "");
         CHECK(dd.reservoir.to == 10);
+        // MAPPING SMOOTH without ADVECT FLIP under a reservoir: a warning at the RESERVOIR
+        // card (the faces draw water in: decks/README); with FLIP, or the paper's mapping, none
+        auto flip_warning = [&](Mapping m, Advect a) {
+            Scene w = dd;
+            w.mapping = m;
+            w.advect = a;
+            for (const auto& x : warnings(w))
+                if (x.str().find("add ADVECT FLIP") != std::string::npos) return x.str();
+            return std::string();
+        };
+        CHECK(flip_warning(Mapping::Smooth, Advect::Eq12).find("decks/drawdown.deck:13:1: warning: with MAPPING SMOOTH and no ADVECT FLIP") == 0);
+        CHECK(flip_warning(Mapping::Smooth, Advect::Flip).empty());
+        CHECK(flip_warning(Mapping::Paper, Advect::Eq12).empty());
     }
     const std::string base = "GRID 2 8 0.25\nCLUSTER 1 0 0 0.5 2\nFIX XY 0 0 0.5 0\nSTEP 1E-4 10\nMATERIAL 1 ELASTIC E=1E7 NU=0.3 RHO=2000\n";
     CHECK(water_errors(base + "GRAVITY 0 -9.81\nRESERVOIR 3\n").find("water.deck:7:1: error: RESERVOIR needs a WATER card") != std::string::npos);
