@@ -254,7 +254,7 @@ double undamped_confined(Advect advect, Simulation::Energy& e) {
 // weights, an impact, which loses at most the kinetic energy it gives them: m v^2 / 2 for
 // the material of the top cell row, rho W L v^2 / 2 = 1.25e-3 J/m (measured: 2.3e-4 J/m
 // lost, 28 % of the work done by then; the account within 1 % from the 22nd step on).
-TEST_CASE("energy: ADVECT FLIP, a wall compressing an undamped elastic column: its work is the strain and kinetic energy but its start's impact") {
+TEST_CASE("energy: ADVECT FLIP, a wall compressing an undamped elastic column: its work is the strain and kinetic energy but its start's impact [slow]") {
     Simulation::Energy f, q;
     const double flip = undamped_confined(Advect::Flip, f), eq12 = undamped_confined(Advect::Eq12, q);
     MESSAGE("undamped confined compression: largest |energy_error| " << flip << " (ADVECT FLIP), " << eq12 << " (eq. 12); FLIP's wall work "
@@ -274,7 +274,7 @@ TEST_CASE("energy: ADVECT FLIP, a wall compressing an undamped elastic column: i
 
 // verify_psc.deck with MAPPING SMOOTH and ADVECT FLIP: the account closes within 1 % at
 // every sample and the wall's work goes into plastic dissipation, as with eq. 12 above.
-TEST_CASE("energy: ADVECT FLIP, plane-strain compression: the wall's work into plastic dissipation, the account within 1 %") {
+TEST_CASE("energy: ADVECT FLIP, plane-strain compression: the wall's work into plastic dissipation, the account within 1 % [slow]") {
     Scene s;
     REQUIRE(read_deck("decks/verify_psc.deck", s).empty());
     s.mapping = Mapping::Smooth; s.advect = Advect::Flip;

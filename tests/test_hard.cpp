@@ -264,7 +264,7 @@ TEST_CASE("hard: 0.9 of the stable limit stays bounded for a lone cell of materi
 
 // ------------------------------------------------------ near incompressibility ---
 
-TEST_CASE("hard: nearly incompressible column under gravity, nu = 0.49 and 0.499: no locking, no blow-up") {
+TEST_CASE("hard: nearly incompressible column under gravity, nu = 0.49 and 0.499: no locking, no blow-up [slow]") {
     // decks/column.deck (confined, damped) with a higher Poisson ratio; the step at 0.67 of
     // stable_dt() (below the damped limit 0.745, see above). Reference: sigma_yy = -rho g
     // (H - y), sigma_xx = nu / (1 - nu) sigma_yy, settlement gamma H^2 / 2M.

@@ -339,7 +339,7 @@ long retaining(bool smooth, double cells, double& mass_error) {
 
 }  // namespace
 
-TEST_CASE("a wall moved four cells away from sand: no point passes behind it, rough or smooth") {
+TEST_CASE("a wall moved four cells away from sand: no point passes behind it, rough or smooth [slow]") {
     for (bool smooth : {false, true}) {
         double mass_error = 1;
         const long behind = retaining(smooth, 4, mass_error);
@@ -421,7 +421,7 @@ TEST_CASE("a wall that meets a free block from a distance pushes it off and neve
 
 // With ADVECT FLIP: the same bounds. The wall's force includes its impact, the change of
 // momentum it gives the points of the nodes it takes (flip_transfer).
-TEST_CASE("ADVECT FLIP: a wall that meets a free block pushes it off, never pulls, and makes no energy") {
+TEST_CASE("ADVECT FLIP: a wall that meets a free block pushes it off, never pulls, and makes no energy [slow]") {
     const double v = 0.5;
     for (const int K : {1, 2})
         for (bool smooth : {false, true}) {
@@ -495,7 +495,7 @@ void runouts(Mapping mapping, Motion motion, double& left, double& right, Advect
 
 }  // namespace
 
-TEST_CASE("a symmetric column collapses symmetrically with MOTION CENTRE, and with MAPPING SMOOTH and MOTION BILINEAR") {
+TEST_CASE("a symmetric column collapses symmetrically with MOTION CENTRE, and with MAPPING SMOOTH and MOTION BILINEAR [slow]") {
     for (const auto& choice : {std::pair{Mapping::Paper, Motion::Centre}, std::pair{Mapping::Smooth, Motion::Bilinear}}) {
         // Plain variables, not a structured binding: INFO captures them in a lambda, which
         // C++17 does not allow for bindings (Clang refuses it).
@@ -509,7 +509,7 @@ TEST_CASE("a symmetric column collapses symmetrically with MOTION CENTRE, and wi
     }
 }
 
-TEST_CASE("a symmetric column collapses symmetrically with ADVECT FLIP") {
+TEST_CASE("a symmetric column collapses symmetrically with ADVECT FLIP [slow]") {
     double left = 0, right = 0;
     runouts(Mapping::Smooth, Motion::Bilinear, left, right, Advect::Flip);
     MESSAGE("ADVECT FLIP: left " << left << " m, right " << right << " m");

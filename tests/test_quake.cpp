@@ -92,7 +92,7 @@ TEST_CASE("quake: a shear column on a rigid base rings at its free period 4H/V_s
     CHECK(r.last.w_ground > 0);
 }
 
-TEST_CASE("quake: the ground's motion is its record integrated; BASELINE brings it back to rest where it began") {
+TEST_CASE("quake: the ground's motion is its record integrated; BASELINE brings it back to rest where it began [slow]") {
     Scene s;
     REQUIRE(read_deck("decks/quake_column.deck", s).empty());
     {  // the pulse: velocity 0.1 sin(pi t / 0.1) m/s, which moves the ground 2 (0.1)(0.1) / pi = 6.37 mm
@@ -167,7 +167,7 @@ TEST_CASE("quake: a pulse through a compliant absorbing base leaves the column a
     CHECK(std::fabs(r.last.d_absorb / r.last.w_ground - 1) < 0.01);
 }
 
-TEST_CASE("quake: a layer's transfer function under a sine sweep is |1 / cos(omega H / V_s)| up to the third mode") {
+TEST_CASE("quake: a layer's transfer function under a sine sweep is |1 / cos(omega H / V_s)| up to the third mode [slow]") {
     const ColumnRun r = run_column("decks/quake_layer.deck", 20);
     // Closed form with local damping alpha taken as a damping ratio D = alpha / pi (a complex
     // shear modulus G (1 + 2iD), V_s* = V_s sqrt(1 + 2iD)): |1 / cos(omega H / V_s*)|.
@@ -588,7 +588,7 @@ TEST_CASE("quake: a warning when the ground moves more than a quarter cell (the 
     }
 }
 
-TEST_CASE("quake: with a rigid base, side dashpots act on the motion relative to the ground") {
+TEST_CASE("quake: with a rigid base, side dashpots act on the motion relative to the ground [slow]") {
     // A stiff layer (V_s = 1000 m/s: first frequency V_s / 4H = 50 Hz) on a rigid base
     // shaken by the 2 Hz burst moves with the base as a rigid body. Side dashpots against
     // the ground at rest resisted that rigid motion (force 2 rho c_p H v against the

@@ -174,7 +174,7 @@ TEST_CASE("trapdoor: mass inside + outflow == initial at every step, outflow gro
 //   free in y and the sand beside it falls out of the lattice; the deck draws a warning
 //   naming the edge and the column of cells.
 // With both mappings.
-TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K0's thrust within 3 %, no point parked, with either mapping") {
+TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K0's thrust within 3 %, no point parked, with either mapping [slow]") {
     auto deck = [](const char* fix, const char* wall) {
         return std::string("GRID 40 24 0.25\n"
                            "MATERIAL 1 MOHR E=2E7 NU=0.3 RHO=2000 PHI=30 C=0\n"

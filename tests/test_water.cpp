@@ -288,7 +288,7 @@ TEST_CASE("GEOSTATIC: level ground starts in equilibrium, dry and below a water 
     }
 }
 
-TEST_CASE("RESERVOIR: a submerged block under a metre of water, and a drawdown that fails a slope") {
+TEST_CASE("RESERVOIR: a submerged block under a metre of water, and a drawdown that fails a slope [slow]") {
     SUBCASE("the reservoir's pressure on the top and the drained surface: p hydrostatic to its level") {
         // GEOSTATIC starts the skeleton at its buoyant weight: it has only the reservoir's
         // top pressure to settle, which p takes and the drained top lets go.
