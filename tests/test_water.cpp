@@ -366,7 +366,7 @@ STEP 1.5E-4 5000
         REQUIRE(validate(s).empty());
         Simulation sim(s);
         const double x0 = sim.points().x[std::size_t(sim.slot_of(sim.tracked()[1]))];
-        const long steps = small_runs() ? 600 : std::lround(s.reservoir.start / s.dt_s);  // (the sanitizers': 0.5 s of the 4)
+        const long steps = std::lround(s.reservoir.start / s.dt_s);
         for (long n = 0; n < steps; ++n) sim.step();
         const double moved = sim.points().x[std::size_t(sim.slot_of(sim.tracked()[1]))] - x0;
         MESSAGE("SMOOTH + FLIP, reservoir kept: the face moved " << moved << " m, energy error " << sim.energy().error << ", drained " << sim.drained());
