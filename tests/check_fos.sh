@@ -45,7 +45,7 @@ numbers() { sed -nE 's/^factor of safety: ([0-9.]+) \(stands at ([0-9.]+), fails
 
 coarse=(--set GRID.MX=40 --set GRID.MY=12 --set GRID.L=1 --set STEP.DT=2E-3)
 san=false
-case $(basename "$exe") in *san*) san=true ;; esac
+sanitizer_build "$exe" && san=true
 
 # --- decks/slope.deck ---
 if ! $san; then

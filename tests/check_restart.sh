@@ -19,9 +19,8 @@ set -u
 
 . "$(dirname "$0")/lib.sh"
 need_program restart "$@"
-case $(basename "$exe") in *san*) san=1 ;; *) san=0 ;; esac
 base="fast, 1 thread"  # the stopped run whose state the refusals below edit
-[ "$san" = 0 ] || base="fast to reference"
+sanitizer_build "$exe" && base="fast to reference"
 
 tmp=$(mktemp -d) || exit 2
 trap 'rm -rf "$tmp"' EXIT
@@ -100,7 +99,7 @@ stopped_and_continued() {  # DECK TAG
     # paths (a coverage build: the same lines of lpfdm.cpp and lpfdm.hpp executed by this
     # check with the two as with all five) in a third of the time; the plain build checks
     # every pairing's bytes.
-    if [ "$san" = 1 ]; then
+    if sanitizer_build "$exe"; then
         continued "fast to reference" fast 2 reference 1
         continued "reference to fast, 2 threads" reference 1 fast 2
         return

@@ -1,16 +1,18 @@
 # Shared by the program-level checks (sourced, not run).
 
+# sanitizer_build EXE: true when EXE is a sanitizer build of the program (its name holds
+# "san", as build/lpfdm-san's does).
+sanitizer_build() { case $(basename "${1:-}") in *san*) return 0 ;; *) return 1 ;; esac; }
+
 # plain_build_only LABEL ARG: a check that runs once, for the plain build of the program
 # (its own builds, not the program's): for a sanitizer build, or no program, it says so,
 # counts nothing and exits 0.
 plain_build_only() {
-    case $(basename "${2:-}") in
-        *san* | "")
-            echo "$1: the check runs once, for the plain build of the program; nothing to do for ${2:-(no program)}"
-            echo "$1: 0 passed, 0 failed"
-            exit 0
-            ;;
-    esac
+    if [ -z "${2:-}" ] || sanitizer_build "$2"; then
+        echo "$1: the check runs once, for the plain build of the program; nothing to do for ${2:-(no program)}"
+        echo "$1: 0 passed, 0 failed"
+        exit 0
+    fi
 }
 
 # need_program LABEL ARGS...: the checks take one argument, the program. Sets exe to its
