@@ -1165,8 +1165,13 @@ private:
         }
     };
     void smooth_map(Landing& t);
-    void smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, int j0, int j1, Landing& t);
-    void smear_points(Landing& t);
+    // Which of a cell's sums smear_point adds to: all of them; ADVECT FLIP's first mapping,
+    // whose stress sums no one reads (flip_second_half maps the points again): the mass,
+    // volume, centroids and the cells touched; its second: all but the mass (the first's,
+    // the same terms) and the cells touched.
+    enum class Smear { All, Mass, Stress };
+    template <Smear S> void smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, int j0, int j1, Landing& t);
+    template <Smear S> void smear_points(Landing& t);
     std::vector<long> row_points_;  // by_rows' share of rows between threads
     template <class F> void by_rows(int n, const F& f) { by_rows(n, row_points_, f); }
     template <class F> void by_rows(int n, const std::vector<long>& counts, const F& f);
@@ -4630,7 +4635,8 @@ inline void Simulation::smooth_map(Landing& t) {
         for (std::size_t k = 0; k < p_.size(); ++k) ++row_points_[std::size_t(overlap_[k].b) + 1];
         for (std::size_t j = 1; j < row_points_.size(); ++j) row_points_[j] += row_points_[j - 1];
     }
-    smear_points(t);  // eq. 7, 8
+    if (modes_.advect == Advect::Flip) smear_points<Smear::Mass>(t);  // eq. 7, 8 (the stress's in flip_second_half)
+    else smear_points<Smear::All>(t);  // eq. 7, 8
 }
 
 // eq. 7 and 8 for every point whose square overlap_ holds (smear_point), in point order,
@@ -4638,7 +4644,7 @@ inline void Simulation::smooth_map(Landing& t) {
 // (flip_transfer), the centroids still weighted by V. The fast kernel's threads share the
 // rows of cells out, each adding every point's parts in its own rows in point order: each
 // cell takes the terms it takes on one thread, in the same order.
-inline void Simulation::smear_points(Landing& t) {
+template <Simulation::Smear S> inline void Simulation::smear_points(Landing& t) {
     const bool flip = modes_.advect == Advect::Flip;
     auto rows = [&](int j0, int j1, Landing& u) {
         for (std::size_t k = 0; k < p_.size(); ++k) {
@@ -4646,8 +4652,11 @@ inline void Simulation::smear_points(Landing& t) {
             if (o.b >= j1 || o.b + 1 < j0) continue;  // its square's rows are b and b + 1
             const Group& g = groups_[p_.group[k]];
             const double v = std::min(p_.vol[k], g.vol0);
-            const double r = flip && v > 0 ? g.vol0 / v : 1.0;  // (r * s is s when r is 1)
-            smear_point(o, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], j0, j1, u);
+            if constexpr (S == Smear::Mass) smear_point<S>(o, g.mass, v, 0, 0, 0, j0, j1, u);
+            else {
+                const double r = flip && v > 0 ? g.vol0 / v : 1.0;  // (r * s is s when r is 1)
+                smear_point<S>(o, g.mass, v, r * p_.sxx[k], r * p_.syy[k], r * p_.sxy[k], j0, j1, u);
+            }
         }
     };
     by_rows(my_, [&](int j0, int j1) {
@@ -4698,18 +4707,27 @@ inline void Simulation::reference_points_smooth() {
 // eq. 7 and 8 for a point whose square is o, MAPPING SMOOTH: its mass m and V sigma shared out
 // among the cells its square overlaps, and the moments of both about each cell's centre;
 // the parts in rows j0 .. j1-1 only (smear_points' threads).
-inline void Simulation::smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, int j0, int j1, Landing& t) {
+template <Simulation::Smear S> inline void Simulation::smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, int j0, int j1, Landing& t) {
     const double p = 0.5 * (sxx + syy);
     each_part(o, [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
         if (cj < j0 || cj >= j1) return;
         const std::size_t c = std::size_t(cell(ci, cj));
-        t.cmin = std::min(t.cmin, int(c)); t.cmax = std::max(t.cmax, int(c));
-        t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
-        add_to_cell(c, w * m, w * v, sxx, syy, sxy);
         const double ru = (px - ci * L_) * invL_ - 0.5, rv = (py - cj * L_) * invL_ - 0.5;
         const double wv = w * v;
-        shx_[c] += wv * ((sxx - p) * rv + sxy * ru);
-        shy_[c] += wv * (sxy * rv + (syy - p) * ru);
+        if constexpr (S == Smear::All) add_to_cell(c, w * m, w * v, sxx, syy, sxy);
+        if constexpr (S != Smear::Stress) {
+            t.cmin = std::min(t.cmin, int(c)); t.cmax = std::max(t.cmax, int(c));
+            t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
+        }
+        if constexpr (S == Smear::Mass) { cmass_[c] += w * m; cvol_[c] += wv; }  // as add_to_cell's
+        if constexpr (S == Smear::Stress) {
+            cvol_[c] += wv;  // as add_to_cell's
+            svxx_[c] += wv * sxx; svyy_[c] += wv * syy; svxy_[c] += wv * sxy;
+        }
+        if constexpr (S != Smear::Mass) {
+            shx_[c] += wv * ((sxx - p) * rv + sxy * ru);
+            shy_[c] += wv * (sxy * rv + (syy - p) * ru);
+        }
         smu_[c] += wv * ru;
         smv_[c] += wv * rv;
     });
@@ -4913,9 +4931,11 @@ inline void Simulation::flip_second_half(const Range& nodes, const Range& cells)
     flip_transfer(nodes);
     centroid_traces(cells);
     each_point_consulted([&](std::size_t k, auto trial) { flip_second_strain<decltype(trial)::value>(k); });
-    zero_rows(cells, mx_, {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_, &shx_, &shy_, &smu_, &smv_});
+    // The first mapping's stress sums are zero (smear_points<Smear::Mass>), its masses those
+    // of the points where they still are.
+    zero_rows(cells, mx_, {&cvol_, &smu_, &smv_});
     Landing t;
-    smear_points(t);  // eq. 7, 8 where the points are
+    smear_points<Smear::Stress>(t);  // eq. 7, 8 where the points are
 }
 
 // 3: eq. 13-14 on M_n: each node's change a_n and its own increment b_n + a_n, which the
