@@ -4432,7 +4432,7 @@ inline void Simulation::nodal_kinetic(const Range& nodes) {
 //   points cross the wall's line of nodes). The fast kernel calls the same per-point code
 //   (smooth_move) by threads, its Mohr-Coulomb consult four points at a time
 //   (each_point_consulted), and adds eq. 7, 8 by threads over bands of cell rows
-//   (smear_points): 4-9 times the paper's cost per particle-step on one thread
+//   (smear_points): 3-9 times the paper's cost per particle-step on one thread
 //   (tools/README.md), with limit loads no closer (the footing's +17 % at 4 cells under it,
 //   against +10 %: its stiff points share the soil's cells at its edges), which is why
 //   it is not the default.
