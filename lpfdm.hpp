@@ -4829,6 +4829,7 @@ inline void Simulation::smooth_node_force(int c, bool right, bool left, bool abo
 // (Rows j0 .. j1-1 only: by_rows' bands.)
 template <class F> LPFDM_INLINE inline void Simulation::flip_weights(std::size_t k, const F& f, int j0, int j1) const {
     const detail::Overlap& o = overlap_[k];
+    if (o.b >= j1 || o.b + 2 < j0) return;  // none of its rows b .. b + 2 in the band (another thread's)
     double sx[3], sy[3];
     detail::axis_shape(o.a, o.wx, o.cx, L_, invL_, sx);
     detail::axis_shape(o.b, o.wy, o.cy, L_, invL_, sy);
