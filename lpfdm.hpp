@@ -4714,15 +4714,15 @@ template <Simulation::Smear S> inline void Simulation::smear_point(const detail:
         const std::size_t c = std::size_t(cell(ci, cj));
         const double ru = (px - ci * L_) * invL_ - 0.5, rv = (py - cj * L_) * invL_ - 0.5;
         const double wv = w * v;
-        if constexpr (S == Smear::All) add_to_cell(c, w * m, w * v, sxx, syy, sxy);
         if constexpr (S != Smear::Stress) {
             t.cmin = std::min(t.cmin, int(c)); t.cmax = std::max(t.cmax, int(c));
             t.imin = std::min(t.imin, ci); t.imax = std::max(t.imax, ci);
         }
-        if constexpr (S == Smear::Mass) { cmass_[c] += w * m; cvol_[c] += wv; }  // as add_to_cell's
-        if constexpr (S == Smear::Stress) {
-            cvol_[c] += wv;  // as add_to_cell's
-            svxx_[c] += wv * sxx; svyy_[c] += wv * syy; svxy_[c] += wv * sxy;
+        if constexpr (S == Smear::All) add_to_cell(c, w * m, wv, sxx, syy, sxy);
+        else {  // add_to_cell's terms, less those the mapping leaves out
+            if constexpr (S == Smear::Mass) cmass_[c] += w * m;
+            cvol_[c] += wv;
+            if constexpr (S == Smear::Stress) { svxx_[c] += wv * sxx; svyy_[c] += wv * syy; svxy_[c] += wv * sxy; }
         }
         if constexpr (S != Smear::Mass) {
             shx_[c] += wv * ((sxx - p) * rv + sxy * ru);
