@@ -4,9 +4,9 @@ CXXFLAGS ?= -O2
 OMP      ?= -fopenmp
 WARN      = -std=c++17 -Wall -Wextra -Wpedantic
 EIGEN     = -I/usr/include/eigen3
-# The tests' units all need the kernel's internals: each holds its definitions, inline
-# (lpfdm.hpp's LPFDM_HEADER_ONLY; a program of its own defines LPFDM_IMPLEMENTATION in one unit).
-TEST_DEFS = -DLPFDM_HEADER_ONLY
+# The unit tests see the kernel's declarations and its inline equations and helpers
+# (lpfdm.hpp's LPFDM_INTERNALS) and link against its one implementation unit, tests/kernel.cpp.
+TEST_DEFS = -DLPFDM_INTERNALS
 LIBS      = -lfmt
 OUT      ?= out
 SAN_OPT  ?= -O1
@@ -60,37 +60,38 @@ test-deps:
 lpfdm: lpfdm.cpp lpfdm.hpp | deps
 	$(CXX) $(WARN) $(CXXFLAGS) $(OMP) -o $@ lpfdm.cpp $(LIBS)
 
-# The unit tests build as a few translation units, each including several test files
-# (build/o2/unit.cpp and build/san/unit.cpp, written here): every test file instantiates the whole kernel, and
-# compiling it once per group instead of once per file takes a third of the time.
-# Under the sanitizers the deck reader's tests form their own unit, built without
-# optimisation (they run in a second but take minutes to compile optimised); the
-# kernel's build at -O2, which runs them in 0.68 of -O1's time for a fifth more to compile
-# (a net 170 of make test's core-seconds); the sanitizer program stays at -O1.
-SAN_GROUP = $(filter-out tests/test_deck.cpp,$(TESTS))
-TEST_OBJ  = build/o2/unit.o build/o2/main.o build/o2/alloc_counter.o
-SAN_OBJ   = build/san/unit.o build/san/test_deck.o build/san/main.o build/san/alloc_counter.o
+# The unit tests build as four translation units: the kernel (tests/kernel.cpp, compiled
+# once, optimised: it does the tests' work), the test files but the deck reader's as one
+# unit (build/o2/unit.cpp and build/san/unit.cpp, written here), the deck reader's tests,
+# and doctest's main. The test files' own code runs little and compiles at -O1 (OPT, after
+# CXXFLAGS, which every unit shares: they change what the header declares; -O0 under
+# the sanitizers); the deck reader's 700 checks at -O0 (they run in a second, and took
+# 80 s to compile at -O2). The kernel's sanitizer build is -O1 (SAN_OPT), as the
+# sanitizer program's: at -O2 it took 270 s to compile.
+TEST_GROUP = $(filter-out tests/test_deck.cpp,$(TESTS))
+TEST_OBJ  = build/o2/kernel.o build/o2/unit.o build/o2/test_deck.o build/o2/main.o build/o2/alloc_counter.o
+SAN_OBJ   = build/san/kernel.o build/san/unit.o build/san/test_deck.o build/san/main.o build/san/alloc_counter.o
+build/o2/unit.o: OPT = -O1
+build/o2/test_deck.o: OPT = -O0
+build/san/unit.o build/san/test_deck.o: SAN_OPT = -O0
+build/o2/kernel.o build/o2/test_deck.o build/san/kernel.o build/san/test_deck.o: lpfdm.hpp tests/common.hpp
 define unity
 @mkdir -p $(dir $(1)); printf '#include "../../%s"\n' $(2) > $(1).tmp; \
 cmp -s $(1).tmp $(1) && rm -f $(1).tmp || mv $(1).tmp $(1)
 endef
 .PHONY: FORCE
-build/o2/unit.cpp: FORCE
-	$(call unity,$@,$(TESTS))
-build/san/unit.cpp: FORCE
-	$(call unity,$@,$(SAN_GROUP))
+build/o2/unit.cpp build/san/unit.cpp: FORCE
+	$(call unity,$@,$(TEST_GROUP))
 
-build/o2/unit.o: build/o2/unit.cpp $(TESTS) tests/common.hpp lpfdm.hpp | test-deps
-	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) $(TEST_DEFS) -c -o $@ $<
+build/o2/unit.o: build/o2/unit.cpp $(TEST_GROUP) tests/common.hpp lpfdm.hpp | test-deps
+	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OPT) $(OMP) $(EIGEN) $(TEST_DEFS) -c -o $@ $<
 build/o2/%.o: tests/%.cpp | test-deps
 	@mkdir -p build/o2
-	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OMP) $(EIGEN) $(TEST_DEFS) -c -o $@ $<
+	$(CXX) $(WARN) -Werror $(CXXFLAGS) $(OPT) $(OMP) $(EIGEN) $(TEST_DEFS) -c -o $@ $<
 
-build/san/test_deck.o: SAN_OPT = -O0
-build/san/unit.o: SAN_OPT = -O2
-build/san/unit.o: build/san/unit.cpp $(SAN_GROUP) tests/common.hpp lpfdm.hpp | test-deps
+build/san/unit.o: build/san/unit.cpp $(TEST_GROUP) tests/common.hpp lpfdm.hpp | test-deps
 	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) $(TEST_DEFS) -c -o $@ $<
-build/san/%.o: tests/%.cpp lpfdm.hpp | test-deps
+build/san/%.o: tests/%.cpp | test-deps
 	@mkdir -p build/san
 	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(EIGEN) $(TEST_DEFS) -c -o $@ $<
 

@@ -31,8 +31,10 @@
 //
 // CONFIGURATION (define before including, alike in every unit of a program)
 //   LPFDM_IMPLEMENTATION  this unit holds the definitions (exactly one unit)
-//   LPFDM_HEADER_ONLY     every unit holds them, inline (for programs whose several units
-//                         need the internals: the tests); implies LPFDM_IMPLEMENTATION
+//   LPFDM_HEADER_ONLY     every unit holds them, inline; implies LPFDM_IMPLEMENTATION
+//   LPFDM_INTERNALS       a unit sees the implementation's inline equations and helpers
+//                         (namespace detail) as well, not its out-of-line definitions: the
+//                         unit tests, which link against one LPFDM_IMPLEMENTATION unit
 //   LPFDM_NO_IO           leave out the deck reader and the writers (then no fmt is needed)
 //   LPFDM_NO_WIDE         leave out the AVX2 version (so does any build with -mfma or -mavx512f)
 //
@@ -133,7 +135,7 @@
 // LPFDM_DEF: how the definitions of the public functions are made. By default (stb's
 // pattern) they are defined once, in the unit that defines LPFDM_IMPLEMENTATION; with
 // LPFDM_HEADER_ONLY (which implies it) every unit that includes the header holds them,
-// inline: the tests, whose several units all need the implementation's internals.
+// inline, and compiles the kernel again (no unit need be chosen).
 #if defined(LPFDM_HEADER_ONLY)
 #define LPFDM_DEF inline
 #ifndef LPFDM_IMPLEMENTATION
@@ -1534,7 +1536,10 @@ private:
 }  // namespace lpfdm
 #endif  // LPFDM_HPP
 
-#if defined(LPFDM_IMPLEMENTATION) && !defined(LPFDM_IMPLEMENTATION_DONE)
+// The implementation. With LPFDM_INTERNALS alone, only its inline part: the equations and
+// helpers (namespace detail) that a unit testing them calls, without the out-of-line
+// definitions (each block of those under #if defined(LPFDM_IMPLEMENTATION)).
+#if (defined(LPFDM_IMPLEMENTATION) || defined(LPFDM_INTERNALS)) && !defined(LPFDM_IMPLEMENTATION_DONE)
 #define LPFDM_IMPLEMENTATION_DONE
 #include <chrono>
 #include <cstdlib>
@@ -2289,6 +2294,7 @@ inline MohrResult detail::mohr_coulomb_correct(const MaterialConstants& k, const
     return res;
 }
 
+#if defined(LPFDM_IMPLEMENTATION)  // out-of-line definitions (left out by LPFDM_INTERNALS alone)
 template <bool Own> LPFDM_INLINE inline MohrStrength Simulation::strength_of(const MaterialConstants& mc, std::size_t k) const {
     const double c0 = Own ? p_.c0[k] : mc.c;
     MohrStrength st;
@@ -2339,6 +2345,7 @@ LPFDM_DEF void Simulation::set_user_model(int mat_id, UserModel f) {
         p_.plastic_work.assign(p_.size(), 0.0);
     }
 }
+#endif  // LPFDM_IMPLEMENTATION: the materials' members of Simulation
 
 // ======================================================================================
 // LATTICE AND POINTS
@@ -2575,6 +2582,7 @@ inline void nearest_centre(const std::vector<double>& v, double L, int mx, int m
     }
 }
 }  // namespace detail
+#if defined(LPFDM_IMPLEMENTATION)  // out-of-line definitions (left out by LPFDM_INTERNALS alone)
 
 // Whether the points of scene s hold the arrays of use u (threads: the run has more than
 // one thread).
@@ -5127,6 +5135,7 @@ inline void Simulation::hourglass_node_force(int c, bool right, bool left, bool 
     if (left && below) hg(c - mx_ - 1, 1);
 }
 
+#endif  // LPFDM_IMPLEMENTATION: from the lattice's members to ADVECT POINTS and HOURGLASS
 // ======================================================================================
 // EARTHQUAKES: SHAKE AND ABSORB
 //
@@ -5216,6 +5225,7 @@ inline double ground_excursion(const Shake& k, double dt, long steps) {
     return std::max(most, std::fabs(g.d + g.v * h * double(std::max(0L, steps - n))));
 }
 }  // namespace detail
+#if defined(LPFDM_IMPLEMENTATION)  // out-of-line definitions (left out by LPFDM_INTERNALS alone)
 
 // What is wrong with a SHAKE card's record (an empty string if nothing): at least two
 // samples, finite, times from 0 on and increasing.
@@ -5382,6 +5392,7 @@ inline void Simulation::absorb_increments() {
     es_.h_absorb = ha; es_.h_input = hi; es_.h_held = hh;
 }
 
+#endif  // LPFDM_IMPLEMENTATION: the earthquakes' members of Simulation
 // ======================================================================================
 // THE FAST KERNEL
 //
@@ -5848,6 +5859,7 @@ bool balance(int team, const Was& was, const Seconds& seconds, T* now) {
     return true;
 }
 }  // namespace detail
+#if defined(LPFDM_IMPLEMENTATION)  // out-of-line definitions (left out by LPFDM_INTERNALS alone)
 
 LPFDM_DEF void Simulation::step() {
     if (step_ == 0) start_energy();
@@ -9614,9 +9626,10 @@ LPFDM_DEF Diagnostics read_state(const std::string& path, Simulation& sim, std::
     return {};
 }
 #endif  // LPFDM_NO_IO
+#endif  // LPFDM_IMPLEMENTATION: from the fast kernel's step to the state files
 }  // namespace lpfdm
 
 #if defined(__clang__)
 #pragma float_control(pop)
 #endif
-#endif  // LPFDM_IMPLEMENTATION
+#endif  // LPFDM_IMPLEMENTATION || LPFDM_INTERNALS

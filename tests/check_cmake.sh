@@ -18,11 +18,11 @@
 #      EXE (make's -O2 build) on two Mohr-Coulomb runs; `ctest -N` lists the unit tests
 #      (unit_quick, unit_slow) and one test for every tests/check_*.sh; the quick checks
 #      (labels quick and check: cli and vtu) pass with that program;
-#   5. the unit tests (the rest of cmake --build DIR: one unity translation unit), built
-#      of the two files it runs (LPFDM_TEST_FILES: test_mohr.cpp and test_deck.cpp, the
-#      models' cases and the deck reader's): no warning, and their cases pass. make test
-#      builds and runs every file's cases with its own build (the same sources, at -O2);
-#      every file at -O3 took 150 s of one core, these two 110 s.
+#   5. the unit tests (the rest of cmake --build DIR: the kernel's unit tests/kernel.cpp
+#      and the test files' unity unit), built of the one file it runs (LPFDM_TEST_FILES:
+#      test_mohr.cpp, the models' cases, which call the kernel's inline equations through
+#      LPFDM_INTERNALS): no warning, and its cases pass. make test builds and runs every
+#      file's cases with its own build (the same sources, at -O2 and -O1).
 #   make test runs the other checks and the [slow] unit tests with its own builds. Run by
 #   ctest as the test `cmake` (LPFDM_CMAKE_INSIDE_CTEST set), the check leaves 4 and 5 out:
 #   that ctest run is the full build.
@@ -212,7 +212,7 @@ took 4 $start
 
 # 5. the unit tests of the full build
 start=$SECONDS
-if ! { cmake -S "$src" -B "$full" '-DLPFDM_TEST_FILES=tests/test_mohr.cpp;tests/test_deck.cpp' >"$tmp/unit.log" 2>&1 &&
+if ! { cmake -S "$src" -B "$full" '-DLPFDM_TEST_FILES=tests/test_mohr.cpp' >"$tmp/unit.log" 2>&1 &&
        cmake --build "$full" --parallel "$(nproc)" >>"$tmp/unit.log" 2>&1; }; then
     fail "cmake --build DIR (the unit tests): $(grep -m 3 -iE 'error|warning' "$tmp/unit.log")"
 else
@@ -222,15 +222,15 @@ else
     else
         passed=$((passed + 1))
     fi
-    # make test's own build runs every case; this build's binary holds two files' cases
+    # make test's own build runs every case; this build's binary holds one file's cases
     # (a few seconds): every case it holds must run and pass
     if (OMP_NUM_THREADS=1 "$full/lpfdm_tests" --no-version=1) >"$tmp/unit-run.log" 2>&1 &&
        grep -qE '^\[doctest\] test cases: +[1-9][0-9]* \|' "$tmp/unit-run.log" &&
        ! grep -qE '^\[doctest\] test cases:.* [1-9][0-9]* skipped' "$tmp/unit-run.log"; then
         passed=$((passed + 1))
-        echo "cmake: the unit tests of test_mohr.cpp and test_deck.cpp: $(grep -E '^\[doctest\] test cases:' "$tmp/unit-run.log")"
+        echo "cmake: the unit tests of test_mohr.cpp: $(grep -E '^\[doctest\] test cases:' "$tmp/unit-run.log")"
     else
-        fail "the unit tests of the full build (test_mohr.cpp, test_deck.cpp): $(grep -E 'ERROR|test cases:' "$tmp/unit-run.log" | head -n 5)"
+        fail "the unit tests of the full build (test_mohr.cpp): $(grep -E 'ERROR|test cases:' "$tmp/unit-run.log" | head -n 5)"
     fi
 fi
 took 5 $start

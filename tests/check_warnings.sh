@@ -4,8 +4,9 @@
 # check_cmake.sh's full CMake build, -O3, must give none). About 20 s in all:
 #   1. lpfdm.cpp compiled by clang++ -O3 -fopenmp: the optimiser's own warnings come only
 #      from a real compile at -O3 (such as a loop under `omp simd` it could not vectorise);
-#   2. the unit tests, as one translation unit, and tools/embed_example.cpp (LPFDM_NO_IO)
-#      and lpfdm.cpp without the AVX2 version (LPFDM_NO_WIDE, and -mfma)
+#   2. the unit tests, as one translation unit (LPFDM_INTERNALS), lpfdm.cpp with
+#      LPFDM_HEADER_ONLY, tools/embed_example.cpp (LPFDM_NO_IO) and lpfdm.cpp without the
+#      AVX2 version (LPFDM_NO_WIDE, and -mfma)
 #      checked by clang++ -fsyntax-only: Clang's other warnings and what it refuses where
 #      GCC accepts (a structured binding captured by a lambda, as INFO does, is not C++17).
 #
@@ -54,7 +55,8 @@ compile() {
 }
 compile "lpfdm.cpp at -O3" -O3 "${omp[@]}" -c lpfdm.cpp -o "$tmp/lpfdm.o"
 printf '#include "%s"\n' "$PWD"/tests/test_*.cpp >"$tmp/unit.cpp"
-compile "the unit tests (-fsyntax-only)" -O3 "${omp[@]}" -DLPFDM_HEADER_ONLY -I. -I/usr/include/eigen3 -fsyntax-only "$tmp/unit.cpp"
+compile "the unit tests (LPFDM_INTERNALS, as make test builds them; -fsyntax-only)" -O3 "${omp[@]}" -DLPFDM_INTERNALS -I. -I/usr/include/eigen3 -fsyntax-only "$tmp/unit.cpp"
+compile "lpfdm.cpp with LPFDM_HEADER_ONLY (-fsyntax-only)" -O3 "${omp[@]}" -DLPFDM_HEADER_ONLY -fsyntax-only lpfdm.cpp
 compile "tools/embed_example.cpp with LPFDM_NO_IO (-fsyntax-only)" -O3 -DLPFDM_NO_IO -I. -fsyntax-only tools/embed_example.cpp
 # The builds without the AVX2 version: LPFDM_NO_WIDE, and any build with fused multiply-add
 # (-mfma, -march=native), which leaves it out too (lpfdm.hpp, LPFDM_WIDE).

@@ -1635,7 +1635,7 @@ TEST_CASE("restart: a state file whose points do not fit the scene is refused, c
     auto refused = [&](const std::function<void(std::string&)>& edit, const std::string& phrase) {
         std::string b = written;
         edit(b);
-        const std::uint64_t sum = lpfdm::detail::fnv1a(b.data(), b.size() - 8);
+        const std::uint64_t sum = lpfdm::fnv1a64(b.substr(0, b.size() - 8));  // (its checksum: FNV-1a of the bytes before it)
         std::memcpy(&b[b.size() - 8], &sum, 8);
         std::ofstream(bad, std::ios::binary) << b;
         lpfdm::Simulation fresh(s);
