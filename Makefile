@@ -66,15 +66,15 @@ lpfdm: lpfdm.cpp lpfdm.hpp | deps
 # and doctest's main. The test files' own code runs little and compiles at -O1 (OPT, after
 # CXXFLAGS, which every unit shares: they change what the header declares; -O0 under
 # the sanitizers); the deck reader's 700 checks at -O0 (they run in a second, and took
-# 80 s to compile at -O2). The kernel's sanitizer build is -O1 (SAN_OPT), as the
-# sanitizer program's: at -O2 it took 270 s to compile.
+# 80 s to compile at -O2). The kernel's sanitizer build is -O1 (SAN_OPT; at -O2 it took
+# 270 s to compile), and the sanitizer program links against it too.
 TEST_GROUP = $(filter-out tests/test_deck.cpp,$(TESTS))
 TEST_OBJ  = build/o2/kernel.o build/o2/unit.o build/o2/test_deck.o build/o2/main.o build/o2/alloc_counter.o
 SAN_OBJ   = build/san/kernel.o build/san/unit.o build/san/test_deck.o build/san/main.o build/san/alloc_counter.o
 build/o2/unit.o: OPT = -O1
 build/o2/test_deck.o: OPT = -O0
 build/san/unit.o build/san/test_deck.o: SAN_OPT = -O0
-build/o2/kernel.o build/o2/test_deck.o build/san/kernel.o build/san/test_deck.o: lpfdm.hpp tests/common.hpp
+build/o2/kernel.o build/o2/test_deck.o build/san/test_deck.o: lpfdm.hpp tests/common.hpp
 define unity
 @mkdir -p $(dir $(1)); printf '#include "../../%s"\n' $(2) > $(1).tmp; \
 cmp -s $(1).tmp $(1) && rm -f $(1).tmp || mv $(1).tmp $(1)
@@ -101,9 +101,16 @@ build/tests: $(TEST_OBJ)
 build/tests-san: $(SAN_OBJ)
 	$(CXX) $(SAN) $(OMP) -o $@ $^ $(LIBS)
 
-build/lpfdm-san: lpfdm.cpp lpfdm.hpp | deps
-	@mkdir -p build
-	$(CXX) $(WARN) -Werror $(SAN) $(OMP) -o $@ lpfdm.cpp $(LIBS)
+# The sanitizer program: lpfdm.cpp's main alone (LPFDM_KERNEL_APART) linked against the
+# unit tests' sanitizer kernel, compiled once for both (it needs fmt only).
+build/san/kernel.o: tests/kernel.cpp lpfdm.hpp | deps
+	@mkdir -p build/san
+	$(CXX) $(WARN) -Werror $(SAN) $(OMP) $(TEST_DEFS) -c -o $@ $<
+build/san/lpfdm-main.o: lpfdm.cpp lpfdm.hpp | deps
+	@mkdir -p build/san
+	$(CXX) $(WARN) -Werror $(SAN) $(OMP) -DLPFDM_KERNEL_APART -c -o $@ lpfdm.cpp
+build/lpfdm-san: build/san/lpfdm-main.o build/san/kernel.o
+	$(CXX) $(SAN) $(OMP) -o $@ $^ $(LIBS)
 
 # tests/run.sh installs the packages (test-deps) and builds the four programs as jobs of its
 # queue, beside the checks that need only ./lpfdm.

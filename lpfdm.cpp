@@ -1,6 +1,11 @@
 // lpfdm — command-line program: reads a deck, runs the LPFDM cycle, writes point
 // tables and histories for gnuplot. Usage: lpfdm [options] DECK (see --help).
-#define LPFDM_IMPLEMENTATION  // this unit holds the kernel's definitions (lpfdm.hpp, USE)
+// This unit holds the kernel's definitions (lpfdm.hpp, USE), unless LPFDM_KERNEL_APART is
+// defined: then it is main alone, linked against an implementation unit built apart
+// (make test's sanitizer program shares the unit tests', tests/kernel.cpp).
+#ifndef LPFDM_KERNEL_APART
+#define LPFDM_IMPLEMENTATION
+#endif
 #include "lpfdm.hpp"
 
 #include <algorithm>
@@ -12,6 +17,10 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <getopt.h>
@@ -173,7 +182,7 @@ bool take_option(int c, const char* arg, Options& opt, std::vector<std::string>&
     case kFos: opt.fos = true; break;
     case kFosTol: {
         double x = 0;
-        if (!lpfdm::detail::parse_real(arg, x) || !(x >= 1e-4 && x <= 1)) cli_errors.push_back(std::string("--fos-tol needs a number from 1e-4 to 1, not '") + arg + "'");
+        if (!lpfdm::read_number(arg, x) || !(x >= 1e-4 && x <= 1)) cli_errors.push_back(std::string("--fos-tol needs a number from 1e-4 to 1, not '") + arg + "'");
         else opt.fos_tol = x;
         break;
     }
@@ -213,7 +222,7 @@ bool take_option(int c, const char* arg, Options& opt, std::vector<std::string>&
         const std::string kv = arg;
         const std::size_t eq = kv.find('=');
         double x = 0;
-        if (eq == std::string::npos || !lpfdm::detail::parse_real(kv.substr(eq + 1), x)) {
+        if (eq == std::string::npos || !lpfdm::read_number(kv.substr(eq + 1), x)) {
             cli_errors.push_back("--set needs CARD.PARAM=VALUE with a finite number, e.g. --set MATERIAL1.C=12000, not '" + kv + "'");
         } else {
             opt.settings.push_back({kv.substr(0, eq), x});
@@ -385,7 +394,9 @@ std::uint64_t scene_digest(const Options& opt, const lpfdm::Scene& scene, const 
     std::string scene_options = fmt::format("refine {} seed {}", opt.refine, opt.seed);
     for (const auto& kv : opt.settings) scene_options += fmt::format(" set {}={:.17g}", kv.first, kv.second);
     for (const auto& k : scene.shakes) {  // the records (a motion file edited between the runs is another scene)
-        const std::uint64_t h = lpfdm::detail::fnv1a(k.a.data(), k.a.size() * sizeof(double), lpfdm::detail::fnv1a(k.t.data(), k.t.size() * sizeof(double)));
+        std::string bytes(reinterpret_cast<const char*>(k.t.data()), k.t.size() * sizeof(double));  // the times' bytes, then the values'
+        bytes.append(reinterpret_cast<const char*>(k.a.data()), k.a.size() * sizeof(double));
+        const std::uint64_t h = lpfdm::fnv1a64(bytes);
         scene_options += fmt::format(" motion {:016x}", h);
     }
     return lpfdm::state_digest(text, scene_options);

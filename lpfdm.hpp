@@ -890,6 +890,9 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
 LPFDM_DEF Diagnostics read_deck_text(const std::string& text, const std::string& file, Scene& sc);
 LPFDM_DEF Diagnostics read_deck(const std::string& path, Scene& sc);
 LPFDM_DEF std::uint64_t fnv1a64(const std::string& text);
+// A number as a deck writes one (a Fortran real: 12000, 1.5E-3, 2D7; no nan or inf): false
+// when text is not one, or does not fit a double.
+LPFDM_DEF bool read_number(const std::string& text, double& out);
 LPFDM_DEF void write_provenance(std::FILE* f, const Simulation& sim, const RunInfo& r);
 LPFDM_DEF std::string history_columns(const Simulation& sim);
 LPFDM_DEF void write_points_header(std::FILE* f, const Simulation& sim, const std::string& deck, const RunInfo* run = nullptr);
@@ -9130,6 +9133,7 @@ LPFDM_DEF std::uint64_t fnv1a64(const std::string& text) {
     for (unsigned char ch : text) { h ^= ch; h *= 1099511628211ull; }
     return h;
 }
+LPFDM_DEF bool read_number(const std::string& text, double& out) { return detail::parse_real(text, out); }
 
 
 // The provenance lines of each output file (after its names line), each beginning "# run: ": the version, the deck

@@ -34,7 +34,14 @@ job() {
     case $kind in
         # each target by one make, so that no two write the same file
         # (the test builds wait for the packages' job, so that two apt-get never run at once)
-        build) case $arg in build/tests*) built test-deps ;; esac && make --no-print-directory "$arg"; rc=$?
+        # (the sanitizer kernel, build/san/kernel.o, is build/lpfdm-san's: its job makes it,
+        # and the sanitizer tests' job makes their own units first, then waits for it)
+        build) case $arg in build/tests*) built test-deps ;; esac &&
+               case $arg in
+                   build/tests-san) make --no-print-directory build/san/unit.o build/san/test_deck.o build/san/main.o build/san/alloc_counter.o &&
+                                    built build/lpfdm-san && make --no-print-directory build/tests-san ;;
+                   *) make --no-print-directory "$arg" ;;
+               esac; rc=$?
                echo $rc >"$dir/built.${arg//\//_}"; [ $rc = 0 ] ;;
         # the cases tagged [verify] are make verify's: a case without it checks the same at a coarser size
         unit-o2) built build/tests && OMP_NUM_THREADS=1 build/tests --no-version=1 --test-case-exclude='*[verify]*' ;;
