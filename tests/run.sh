@@ -57,6 +57,11 @@ job() {
 }
 export -f job built
 export dir t0=$(date +%s)
+# Two jobs run at once on a two-core machine, so a run's second OpenMP thread shares a core
+# with another job: threads that wait at a barrier sleep instead of spinning through the
+# time slice the thread they wait for needs (check_threads.sh under the sanitizers beside
+# a busy core: 35 s instead of 43). It changes when a thread runs, never a number.
+export OMP_WAIT_POLICY=passive
 
 # The Debian packages. The program's (fmt) first, alone. The tests' (Eigen, doctest, Clang,
 # CMake, gnuplot, Python's readers) are the queue's first job, `make test-deps`, when this
