@@ -74,7 +74,8 @@ SAN_OBJ   = build/san/kernel.o build/san/unit.o build/san/test_deck.o build/san/
 build/o2/unit.o: OPT = -O1
 build/o2/test_deck.o: OPT = -O0
 build/san/unit.o build/san/test_deck.o: SAN_OPT = -O0
-build/o2/kernel.o build/o2/test_deck.o build/san/test_deck.o: lpfdm.hpp tests/common.hpp
+build/o2/kernel.o: lpfdm.hpp
+build/o2/test_deck.o build/san/test_deck.o: lpfdm.hpp tests/common.hpp
 define unity
 @mkdir -p $(dir $(1)); printf '#include "../../%s"\n' $(2) > $(1).tmp; \
 cmp -s $(1).tmp $(1) && rm -f $(1).tmp || mv $(1).tmp $(1)
@@ -100,6 +101,10 @@ build/tests: $(TEST_OBJ)
 
 build/tests-san: $(SAN_OBJ)
 	$(CXX) $(SAN) $(OMP) -o $@ $^ $(LIBS)
+# The sanitizer tests' units but the kernel (tests/run.sh makes these while the sanitizer
+# program's job makes the kernel, then links).
+.PHONY: san-test-units
+san-test-units: $(filter-out build/san/kernel.o,$(SAN_OBJ))
 
 # The sanitizer program: lpfdm.cpp's main alone (LPFDM_KERNEL_APART) linked against the
 # unit tests' sanitizer kernel, compiled once for both (it needs fmt only).

@@ -23,7 +23,7 @@ built() {
     local mark=$dir/built.${t//\//_} since
     since=$(date +%s)
     while [ ! -e "$mark" ]; do sleep 1; done
-    waited=$(($(date +%s) - since))  # (the job's core idle meanwhile: run.sh's last lines)
+    waited=$((waited + $(date +%s) - since))  # (the job's core idle meanwhile, all its waits: run.sh's last lines)
     [ "$(cat "$mark")" = 0 ] || { echo "the build of $1 failed (its log is printed below)"; return 1; }
 }
 # job N KIND ARG: KIND build (ARG a make target), unit-o2, unit-san, or check (ARG "SCRIPT
@@ -38,7 +38,7 @@ job() {
         # and the sanitizer tests' job makes their own units first, then waits for it)
         build) case $arg in build/tests*) built test-deps ;; esac &&
                case $arg in
-                   build/tests-san) make --no-print-directory build/san/unit.o build/san/test_deck.o build/san/main.o build/san/alloc_counter.o &&
+                   build/tests-san) make --no-print-directory san-test-units &&
                                     built build/lpfdm-san && make --no-print-directory build/tests-san ;;
                    *) make --no-print-directory "$arg" ;;
                esac; rc=$?
