@@ -1136,6 +1136,12 @@ private:
     void known_overlaps();
     void centroid_traces(const Range& cells);
     void cell_centroid(std::size_t c, double& u, double& v) const;  // from the centre, in cells
+    // MAPPING SMOOTH: after eq. 13-14 and the supports, each node of `nodes` that only the
+    // edges of points' squares reach (no point in any of its cells) moved again, in each
+    // direction no support sets, with the part of its eq. 10 mass that its material's
+    // position does not give it following the material beside it (its section).
+    void follow_material(const Range& nodes);
+    std::vector<std::uint8_t> holds_point_;  // MAPPING SMOOTH: per cell, 1 when a point lies in it (follow_material's scratch)
     // MAPPING SMOOTH: cell c's moments (shx, shy) made ready for the nodal forces, after
     // eq. 8 scaled its sums V sigma: the transpose of smooth_strain's variation across the
     // cell, times 2L (the forces divide by L, the sums were divided by 2L).
@@ -2706,6 +2712,7 @@ inline void Simulation::setup() {
     spans(my_, rows_);
     if (modes_.hourglass) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
     if (modes_.mapping == Mapping::Smooth) for (auto* v : {&shx_, &shy_, &smu_, &smv_, &centroid_trace_}) v->assign(cells, 0.0);
+    if (modes_.mapping == Mapping::Smooth) holds_point_.assign(cells, 0);
     if (modes_.advect == Advect::Points)
         carried_.assign(cells, Carried{});
     for (const auto& m : sc_.materials) consts_.push_back(constants_of(m));
@@ -4396,6 +4403,7 @@ inline void Simulation::reference_integrate() {
     integrated_ = {0, mx_ + 1, 0, my_ + 1};
     if (modes_.dynamic) absorb_increments();  // the dashpots of ABSORB
     impose_supports();
+    if (modes_.mapping == Mapping::Smooth) follow_material({0, mx_ + 1, 0, my_ + 1});  // MAPPING SMOOTH: the nodes beyond the material (its section)
     for (int j = 0; j <= my_; ++j) energy_row_terms(j, 0, mx_ + 1, std::false_type{});
     tally_energy(0, my_ + 1);
     nodal_kinetic({0, mx_ + 1, 0, my_ + 1});
@@ -4439,7 +4447,7 @@ inline void Simulation::nodal_kinetic(const Range& nodes) {
 //   taken at the centroid of the cell's material (B-bar: with 2 x 2 points per cell the
 //   gradients at the points locked the near-incompressible plastic flow, q 10 % high).
 //   Without gravity the wall of a plane-strain compression then reads the base reaction
-//   within 2.3 % at every sample (the paper's mapping: spikes of 16 % each time the cap's
+//   within 2.8 % at every sample (the paper's mapping: spikes of 16 % each time the cap's
 //   points cross the wall's line of nodes). The fast kernel calls the same per-point code
 //   (smooth_move) by threads, its Mohr-Coulomb consult four points at a time
 //   (each_point_consulted), and adds eq. 7, 8 by threads over bands of cell rows
@@ -4447,6 +4455,11 @@ inline void Simulation::nodal_kinetic(const Range& nodes) {
 //   (tools/README.md), with limit loads no closer (the footing's +17 % at 4 cells under it,
 //   against +10 %: its stiff points share the soil's cells at its edges), which is why
 //   it is not the default.
+// * A node none of whose cells holds a point (only the edges of squares reach it) has
+//   eq. 10's mass but the share of stress the slivers' position gives it: it keeps the
+//   weight that position gives it, and the rest of its mass follows the material beside
+//   it (follow_material). Left alone, such nodes beside cohesionless sand at rest fell
+//   for as long as the run went on.
 // ======================================================================================
 
 inline detail::Overlap Simulation::overlap_of(double x0, double y0, double l) const {
@@ -4542,6 +4555,74 @@ LPFDM_DEF void Simulation::centroid_traces(const Range& cells) {
             cell_centroid(c, cu, cv);
             const StrainIncrement g = bilinear_gradient(ux, uy, 0.5 + cu, 0.5 + cv, invL_);
             centroid_trace_[c] = g.xx + g.yy;
+        }
+}
+
+// MAPPING SMOOTH: the nodes that only the edges of points' squares reach. A point's square
+// reaches up to half a cell past the cell holding it, and the cells it reaches take their
+// share of its mass; eq. 10 gives each node a quarter of each of its cells' masses wherever
+// the material lies in the cell, while the forces on it (the squares' moments) follow the
+// material. A node none of whose cells holds a point (only slivers of squares reach it)
+// then carries a quarter of the slivers' weight but only the share of their stress that
+// their position gives it. Beside cohesionless sand at rest, whose points near the surface
+// carry almost no stress, such nodes behind a smooth wall's face (2e-5 of a full node's
+// mass) fell at (1 - alpha) g for as long as the run went on (eq. 12 carries a node's
+// increment and found no strain in the empty cell above to compensate it with): the
+// unbalanced-force ratio stayed at 4e-5, gravity's work on them showed as energy created
+// (3 % by 20 s; 23 % on the same wall moved away 12 mm), and at 64 s one moved half a cell
+// in a step, which the health check takes for an instability.
+// So each such node is moved again, after eq. 13-14 and the supports, in each direction
+// that no FIX, SHAKE or wall sets: of its mass m (eq. 10) the part m_w that its material's
+// position gives it (the bilinear weights at the centroid of each of its cells' material,
+// cell_centroid; the consistent load) keeps its weight, and the rest follows the material
+// beside it, taking the mean acceleration a of its neighbours that a point's cell touches
+// (by their mass, after their eq. 13-14 and supports) in place of g:
+//   F' = F + (m - m_w) (a - g), then eq. 13-14 from the increment the step began with.
+// At rest (a = 0) the node's weight is m_w g, which the slivers' stress carries; in free
+// fall (a = g, no stress) F' = m g and it falls with the material at exactly g; without
+// gravity it moves by its own forces as before, so a free surface keeps its load
+// (verify_psc.deck's plateau moves by 1e-4). It reads those neighbours only and writes
+// these nodes only, so the order does not matter. Each node of eq. 10's mass keeps it (the
+// inertia; the consistent mass is unstable at the time step the material allows).
+LPFDM_DEF void Simulation::follow_material(const Range& nodes) {
+    std::fill(holds_point_.begin(), holds_point_.end(), std::uint8_t(0));
+    for (std::size_t k = 0; k < p_.size(); ++k)
+        if (p_.cell[k] >= 0) holds_point_[std::size_t(p_.cell[k])] = 1;
+    auto holds = [&](int a, int b) { return a >= 0 && b >= 0 && a < mx_ && b < my_ && holds_point_[std::size_t(cell(a, b))]; };
+    auto touched = [&](int i, int j) { return holds(i - 1, j - 1) || holds(i, j - 1) || holds(i - 1, j) || holds(i, j); };
+    const double dt2 = sc_.dt_s * sc_.dt_s;
+    for (int j = nodes.j0; j < nodes.j1; ++j)
+        for (int i = nodes.i0; i < nodes.i1; ++i) {
+            const std::size_t n = std::size_t(node(i, j));
+            const double m = nmass_[n];
+            if (m == 0 || touched(i, j)) continue;
+            // its weight as the material's position gives it: the bilinear weights at the
+            // centroid of each of its cells' material
+            double mg = 0;
+            auto weight = [&](int a, int b, double su, double sv) {
+                if (a < 0 || b < 0 || a >= mx_ || b >= my_) return;
+                const std::size_t c = std::size_t(cell(a, b));
+                if (!(cmass_[c] > 0)) return;
+                double u, v;
+                cell_centroid(c, u, v);
+                mg += cmass_[c] * (0.5 + su * u) * (0.5 + sv * v);
+            };
+            weight(i, j, -1, -1); weight(i - 1, j, 1, -1); weight(i, j - 1, -1, 1); weight(i - 1, j - 1, 1, 1);
+            // the material's acceleration: its neighbours' that a point's cell touches
+            double ax = 0, ay = 0, msum = 0;
+            for (int b = std::max(0, j - 1); b <= std::min(my_, j + 1); ++b)
+                for (int a = std::max(0, i - 1); a <= std::min(mx_, i + 1); ++a) {
+                    const std::size_t q = std::size_t(node(a, b));
+                    if (q == n || nmass_[q] == 0 || !touched(a, b)) continue;
+                    ax += nmass_[q] * (dux_[q] - dux_old_[q]); ay += nmass_[q] * (duy_[q] - duy_old_[q]); msum += nmass_[q];
+                }
+            if (!(msum > 0)) continue;
+            ax /= msum * dt2; ay /= msum * dt2;
+            const double excess = m - mg;
+            const double fx = fx_[n] + excess * (ax - sc_.gravity_x), fy = fy_[n] + excess * (ay - sc_.gravity_y);
+            const std::uint8_t held = std::uint8_t(fixed_[n] | driven_[n]);
+            if (!(held & kFixX)) { fx_[n] = fx; damped_increment(dux_old_[n], fx, m, dt2, sc_.damping, dux_[n]); }  // eq. 13, 14
+            if (!(held & kFixY)) { fy_[n] = fy; damped_increment(duy_old_[n], fy, m, dt2, sc_.damping, duy_[n]); }
         }
 }
 
@@ -7333,7 +7414,8 @@ LPFDM_DEF void Simulation::integrate() {
     // later sets the same zeros again and takes the reactions, and the rows where a wall
     // drove a node are made again after it. The same numbers as eq. 13's pass, the supports
     // and then every row's terms (step_reference), one pass over the nodes fewer.
-    const bool fused = !modes_.dynamic;
+    const bool smooth = modes_.mapping == Mapping::Smooth;
+    const bool fused = !modes_.dynamic && !smooth;  // (MAPPING SMOOTH: follow_material between the supports and the rows' terms)
     const std::int32_t *fixed_at = fixed_nodes_.data(), *fixed_row = fixed_rows_.data();
     const std::uint8_t* fixed = fixed_.data();
     auto hold_row = [&](int j) LPFDM_INLINE {
@@ -7364,6 +7446,7 @@ LPFDM_DEF void Simulation::integrate() {
     integrated_ = nr;
     if (modes_.dynamic) absorb_increments();  // the dashpots of ABSORB
     const Range wall_nodes = impose_supports();
+    if (smooth) follow_material(nr);  // MAPPING SMOOTH: the nodes beyond the material (its section)
     const int e0 = fused ? std::max(nr.j0, wall_nodes.j0) : nr.j0, e1 = fused ? std::min(nr.j1, wall_nodes.j1) : nr.j1;
     if (e0 < e1) by_rows(kEnergyRows, e0, e1, long(e1 - e0) * (nr.i1 - nr.i0), [&](int j) { each_row(energy_row, j); });
     for (int j = nr.j0; j < nr.j1; ++j) {
