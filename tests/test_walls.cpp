@@ -223,6 +223,29 @@ TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K
     CHECK(w[0].str().find("falls out through the lattice's BOTTOM edge under gravity: 1 column of cells (the first 8 to 8, x = 2 to 2.25 m)") != std::string::npos);
 }
 
+namespace {
+
+// Wall 1 of sim held for `settle` steps (if any), then moved away from the sand at 1 mm/s
+// (-x) for `steps` steps: the least and the most of its thrust over `ref`, read every 500
+// steps from step 3000 (3 to 12 mm of travel in 12 000 steps of 1 ms).
+void retreat(Simulation& sim, long settle, long steps, double ref, double& lo, double& hi) {
+    if (settle) {
+        sim.set_wall_velocity(1, 0, 0);
+        for (long n = 0; n < settle; ++n) sim.step();
+        sim.set_wall_velocity(1, -0.001, 0);
+    }
+    lo = 1e300; hi = 0;
+    for (long n = 1; n <= steps; ++n) {
+        sim.step();
+        if (n >= 3000 && n % 500 == 0) {
+            const double r = std::fabs(sim.walls()[0].fx) / ref;
+            lo = std::min(lo, r); hi = std::max(hi, r);
+        }
+    }
+}
+
+}  // namespace
+
 // The same sand and smooth wall written the natural way, the wall moved away from the sand
 // at 1 mm/s from the first step (gravity and the wall's motion at once) and after the
 // sand has settled against it (3 s held): by 3 mm of travel (0.08 % of H) the sand behind
@@ -254,19 +277,8 @@ TEST_CASE("a SMOOTH wall moved away from sand at 1 mm/s, from the first step and
             REQUIRE(read_deck_text(deck, "retreat.deck", s).empty());
             s.mapping = mapping;
             Simulation sim(s);
-            if (settle) {
-                sim.set_wall_velocity(1, 0, 0);
-                for (long n = 0; n < settle; ++n) sim.step();
-                sim.set_wall_velocity(1, -0.001, 0);
-            }
-            double lo = 1e300, hi = 0;
-            for (long n = 1; n <= s.steps; ++n) {
-                sim.step();
-                if (n >= 3000 && n % 500 == 0) {
-                    const double r = std::fabs(sim.walls()[0].fx) / rankine;
-                    lo = std::min(lo, r); hi = std::max(hi, r);
-                }
-            }
+            double lo, hi;
+            retreat(sim, settle, s.steps, rankine, lo, hi);
             MESSAGE(std::string(mapping == Mapping::Paper ? "MAPPING PAPER" : "MAPPING SMOOTH") << std::string(settle ? ", settled first" : ", from the first step")
                     << ": thrust " << lo << " to " << hi << " of Rankine's from 3 to 12 mm of travel (" << -sim.walls()[0].dx * 1e3 << " mm), parked " << sim.parked()
                     << ", energy_error " << sim.energy().error << ", packing " << sim.packing());
@@ -336,19 +348,8 @@ TEST_CASE("a rough wall moved away from sand at 1 mm/s: Coulomb's thrust on a ro
                 REQUIRE(read_deck_text(deck(c.base, c.wall), "rough_wall.deck", s).empty());
                 s.mapping = mapping;
                 Simulation sim(s);
-                if (settle) {
-                    sim.set_wall_velocity(1, 0, 0);
-                    for (long n = 0; n < settle; ++n) sim.step();
-                    sim.set_wall_velocity(1, -0.001, 0);
-                }
-                double lo = 1e300, hi = 0;
-                for (long n = 1; n <= s.steps; ++n) {
-                    sim.step();
-                    if (n >= 3000 && n % 500 == 0) {
-                        const double r = std::fabs(sim.walls()[0].fx) / c.ref;
-                        lo = std::min(lo, r); hi = std::max(hi, r);
-                    }
-                }
+                double lo, hi;
+                retreat(sim, settle, s.steps, c.ref, lo, hi);
                 MESSAGE(std::string(c.name) << std::string(mapping == Mapping::Paper ? ", MAPPING PAPER" : ", MAPPING SMOOTH")
                         << std::string(settle ? ", settled first" : ", from the first step") << ": thrust " << lo << " to " << hi
                         << " of it from 3 to 12 mm of travel, fy / fx " << std::fabs(sim.walls()[0].fy / sim.walls()[0].fx) << ", parked " << sim.parked()
