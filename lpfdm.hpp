@@ -4596,16 +4596,16 @@ LPFDM_DEF void Simulation::follow_material(const Range& nodes) {
             const std::size_t n = std::size_t(node(i, j));
             const double m = nmass_[n];
             if (m == 0 || touched(i, j)) continue;
-            // its weight as the material's position gives it: the bilinear weights at the
-            // centroid of each of its cells' material
-            double mg = 0;
+            // m_w: its weight as the material's position gives it, the bilinear weights at the
+            // centroid of each of its cells' material (cell_centroid)
+            double mw = 0;
             auto weight = [&](int a, int b, double su, double sv) {
                 if (a < 0 || b < 0 || a >= mx_ || b >= my_) return;
                 const std::size_t c = std::size_t(cell(a, b));
                 if (!(cmass_[c] > 0)) return;
                 double u, v;
                 cell_centroid(c, u, v);
-                mg += cmass_[c] * (0.5 + su * u) * (0.5 + sv * v);
+                mw += cmass_[c] * (0.5 + su * u) * (0.5 + sv * v);
             };
             weight(i, j, -1, -1); weight(i - 1, j, 1, -1); weight(i, j - 1, -1, 1); weight(i - 1, j - 1, 1, 1);
             // the material's acceleration: its neighbours' that a point's cell touches
@@ -4618,7 +4618,7 @@ LPFDM_DEF void Simulation::follow_material(const Range& nodes) {
                 }
             if (!(msum > 0)) continue;
             ax /= msum * dt2; ay /= msum * dt2;
-            const double excess = m - mg;
+            const double excess = m - mw;  // the part of eq. 10's mass its material's position does not give it
             const double fx = fx_[n] + excess * (ax - sc_.gravity_x), fy = fy_[n] + excess * (ay - sc_.gravity_y);
             const std::uint8_t held = std::uint8_t(fixed_[n] | driven_[n]);
             if (!(held & kFixX)) { fx_[n] = fx; damped_increment(dux_old_[n], fx, m, dt2, sc_.damping, dux_[n]); }  // eq. 13, 14
