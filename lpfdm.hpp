@@ -104,6 +104,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 
@@ -1146,7 +1147,8 @@ private:
     // direction no support sets, with the part of its eq. 10 mass that its material's
     // position does not give it following the material beside it (its section).
     void follow_material(const Range& nodes);
-    std::vector<std::uint8_t> holds_point_;  // MAPPING SMOOTH: per cell, 1 when a point lies in it (follow_material's scratch)
+    std::vector<std::uint8_t> holds_point_;  // MAPPING SMOOTH: per cell, 1 when a point lies in it (set by smooth_map for follow_material)
+    std::pair<int, int> marked_{0, 0};       // the cells c with first <= c < second among which smooth_map set holds_point_
     // MAPPING SMOOTH: cell c's moments (shx, shy) made ready for the nodal forces, after
     // eq. 8 scaled its sums V sigma: the transpose of smooth_strain's variation across the
     // cell, times 2L (the forces divide by L, the sums were divided by 2L).
@@ -4612,9 +4614,6 @@ LPFDM_DEF void Simulation::centroid_traces(const Range& cells) {
 // these nodes only, so the order does not matter. Each node of eq. 10's mass keeps it (the
 // inertia; the consistent mass is unstable at the time step the material allows).
 LPFDM_DEF void Simulation::follow_material(const Range& nodes) {
-    std::fill(holds_point_.begin(), holds_point_.end(), std::uint8_t(0));
-    for (std::size_t k = 0; k < p_.size(); ++k)
-        if (p_.cell[k] >= 0) holds_point_[std::size_t(p_.cell[k])] = 1;
     auto holds = [&](int a, int b) { return a >= 0 && b >= 0 && a < mx_ && b < my_ && holds_point_[std::size_t(cell(a, b))]; };
     auto touched = [&](int i, int j) { return holds(i - 1, j - 1) || holds(i, j - 1) || holds(i - 1, j) || holds(i, j); };
     const double dt2 = sc_.dt_s * sc_.dt_s;
@@ -4737,10 +4736,18 @@ inline void Simulation::smooth_map(Landing& t) {
         p_.cell[k] = cell_holding(x, y);
         overlap_[k] = p_.cell[k] >= 0 ? overlap_of(x, y, groups_[p_.group[k]].half) : detail::Overlap{};
     });
-    for (std::size_t k = 0; k < p_.size(); ++k) {  // the mass inside, in point order
-        if (p_.cell[k] < 0) ++t.departed;
-        else t.mass += groups_[p_.group[k]].mass;
+    // The mass inside, in point order, and follow_material's flags: the cells holding a
+    // point (cleared first where the last step's flags were).
+    std::fill(holds_point_.begin() + marked_.first, holds_point_.begin() + marked_.second, std::uint8_t(0));
+    int lo = int(holds_point_.size()), hi = -1;
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const int c = p_.cell[k];
+        if (c < 0) { ++t.departed; continue; }
+        t.mass += groups_[p_.group[k]].mass;
+        holds_point_[std::size_t(c)] = 1;
+        lo = std::min(lo, c); hi = std::max(hi, c);
     }
+    marked_ = hi < 0 ? std::pair<int, int>{0, 0} : std::pair<int, int>{lo, hi + 1};
     if (t.departed) {  // the squares kept as remove_departed keeps the points
         std::size_t w = 0;
         for (std::size_t k = 0; k < p_.size(); ++k)
