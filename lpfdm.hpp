@@ -104,7 +104,6 @@
 #include <functional>
 #include <limits>
 #include <string>
-#include <utility>
 #include <vector>
 
 
@@ -1148,7 +1147,6 @@ private:
     // position does not give it following the material beside it (its section).
     void follow_material(const Range& nodes);
     std::vector<std::uint8_t> holds_point_;  // MAPPING SMOOTH: per cell, 1 when a point lies in it (set by smooth_map for follow_material)
-    std::pair<int, int> marked_{0, 0};       // the cells c with first <= c < second among which smooth_map set holds_point_
     // MAPPING SMOOTH: cell c's moments (shx, shy) made ready for the nodal forces, after
     // eq. 8 scaled its sums V sigma: the transpose of smooth_strain's variation across the
     // cell, times 2L (the forces divide by L, the sums were divided by 2L).
@@ -3161,8 +3159,11 @@ inline void Simulation::stop_at_edges(int c, double x0, double y0, double& x, do
 // ... of cell (ci, cj) with fixed edges fe (fixed_edges_).
 LPFDM_INLINE inline void Simulation::stop_at_edges(int ci, int cj, std::uint8_t fe, double x0, double y0, double& x, double& y) const {
     const double xi = ci * L_, yj = cj * L_;
-    const bool across_y = ((fe & kEdgeBottom) && y < yj) || ((fe & kEdgeTop) && y >= (cj + 1) * L_);
-    const bool across_x = ((fe & kEdgeLeft) && x < xi) || ((fe & kEdgeRight) && x >= (ci + 1) * L_);
+    auto below = [&] { return (fe & kEdgeBottom) && y < yj; };
+    auto above = [&] { return (fe & kEdgeTop) && y >= (cj + 1) * L_; };
+    auto left = [&] { return (fe & kEdgeLeft) && x < xi; };
+    auto right = [&] { return (fe & kEdgeRight) && x >= (ci + 1) * L_; };
+    const bool across_x = left() || right(), across_y = below() || above();
     if (across_x || across_y) {  // across the edge, the lattice's own motion, which its fixed nodes hold
         double ux[4], uy[4], xb, yb, dx, dy;
         gather_nodes(node(ci, cj), ux, uy);
@@ -3171,11 +3172,11 @@ LPFDM_INLINE inline void Simulation::stop_at_edges(int ci, int cj, std::uint8_t 
         if (across_y) y = yb;
         holding_.add();
     }
-    bool stopped = false;
-    if ((fe & kEdgeBottom) && y < yj) { y = edge_above(cj); stopped = true; }
-    if ((fe & kEdgeTop) && y >= (cj + 1) * L_) { y = edge_below(cj + 1); stopped = true; }
-    if ((fe & kEdgeLeft) && x < xi) { x = edge_above(ci); stopped = true; }
-    if ((fe & kEdgeRight) && x >= (ci + 1) * L_) { x = edge_below(ci + 1); stopped = true; }
+    bool stopped = false;  // the last guard
+    if (below()) { y = edge_above(cj); stopped = true; }
+    if (above()) { y = edge_below(cj + 1); stopped = true; }
+    if (left()) { x = edge_above(ci); stopped = true; }
+    if (right()) { x = edge_below(ci + 1); stopped = true; }
     if (fe & kEdgeWall) stopped |= hold_by_walls(x0, y0, x, y);
     if (stopped) parking_.add();  // (parked())
 }
@@ -4741,18 +4742,14 @@ inline void Simulation::smooth_map(Landing& t) {
         p_.cell[k] = cell_holding(x, y);
         overlap_[k] = p_.cell[k] >= 0 ? overlap_of(x, y, groups_[p_.group[k]].half) : detail::Overlap{};
     });
-    // The mass inside, in point order, and follow_material's flags: the cells holding a
-    // point (cleared first where the last step's flags were).
-    std::fill(holds_point_.begin() + marked_.first, holds_point_.begin() + marked_.second, std::uint8_t(0));
-    int lo = int(holds_point_.size()), hi = -1;
+    // The mass inside, in point order, and follow_material's flags: the cells holding a point.
+    std::fill(holds_point_.begin(), holds_point_.end(), std::uint8_t(0));
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const int c = p_.cell[k];
         if (c < 0) { ++t.departed; continue; }
         t.mass += groups_[p_.group[k]].mass;
         holds_point_[std::size_t(c)] = 1;
-        lo = std::min(lo, c); hi = std::max(hi, c);
     }
-    marked_ = hi < 0 ? std::pair<int, int>{0, 0} : std::pair<int, int>{lo, hi + 1};
     if (t.departed) {  // the squares kept as remove_departed keeps the points
         std::size_t w = 0;
         for (std::size_t k = 0; k < p_.size(); ++k)

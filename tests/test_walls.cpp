@@ -142,8 +142,9 @@ TEST_CASE("compression test with the paper's scatter and softening: a peak, then
 }
 
 // The floor beside the opening holds by its nodes: the points that MOTION CENTRE's affine
-// move would carry through it (the flow converging on the opening) move with the lattice's
-// bilinear field there, which the fixed nodes hold; none is clamped on the floor (parked).
+// move would carry through it (the flow converging on the opening) take their move across
+// it from the lattice's bilinear field there, which the fixed nodes hold; none is clamped
+// on the floor (parked).
 TEST_CASE("trapdoor: mass inside + outflow == initial at every step, outflow grows, values stay finite, the floor holds by its nodes [slow]") {
     Scene s;
     REQUIRE(read_deck("decks/trapdoor.deck", s).empty());
