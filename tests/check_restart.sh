@@ -127,6 +127,10 @@ stopped_and_continued "$tmp/rr.deck" "reorder: "
 # would not be tested).
 sed 's/^END/MAPPING SMOOTH\nADVECT FLIP\nDAMPING 0.4\nEND/' "$tmp/r.deck" >"$tmp/rf.deck"
 stopped_and_continued "$tmp/rf.deck" "flip: "
+# DAMPING WINDOW: each node's mean increment is state (with MAPPING SMOOTH, whose nodes
+# beyond the material read it again)
+sed 's/^END/MAPPING SMOOTH\nDAMPING 0.4 WINDOW=0.004\nEND/' "$tmp/r.deck" >"$tmp/rd.deck"
+stopped_and_continued "$tmp/rd.deck" "window: "
 # WATER, DRAIN, LOAD, RESERVOIR (falling from step 25 to 75), GEOSTATIC: each point's pore
 # pressure, the volume it last took, the force it carries; the water drained, the flow's
 # dissipation and the loads' work are state; the reservoir's level follows the time.

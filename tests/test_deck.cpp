@@ -875,6 +875,27 @@ TEST_CASE("deck error: dt above the stable limit; the message gives the limit") 
                     "above the stable limit 0.00045607 s");
 }
 
+// DAMPING WINDOW=t (damped_increment): the base scene's slowest elastic period 4 W / c_p,
+// W = 4 m, c_p = sqrt(M / rho) = 183.5 m/s: 0.0872 s.
+TEST_CASE("deck: DAMPING alpha WINDOW=t; a window shorter than dt is an error at the card, one shorter than the slowest elastic period a warning") {
+    const Scene s = read_ok(plus("DAMPING 0.8 WINDOW=0.1"));
+    CHECK(s.damping == 0.8);
+    CHECK(s.damping_window == 0.1);
+    CHECK(lpfdm::warnings(s).empty());
+    CHECK(read_ok(plus("DAMPING 0.5")).damping_window == 0);
+    CHECK_ONE_ERROR(plus("DAMPING 0.8 WINDOW=5E-5"), 5, 1, "DAMPING WINDOW=5e-05 s is shorter than the time step dt = 0.0001 s");
+    CHECK_ONE_ERROR(plus("DAMPING 0.8 WINDOW=-1"), 5, 20, "WINDOW must be >= 0");
+    const Diagnostics w = lpfdm::warnings(read_ok(plus("DAMPING 0.8 WINDOW=0.05")));
+    INFO(listing(w));
+    REQUIRE(w.size() == 1);
+    CHECK(w[0].pos.line == 5);
+    CHECK(has(w[0].message, "shorter than 4 W / c_p = 0.0872 s"));
+    CHECK(lpfdm::warnings(read_ok(plus("DAMPING 0 WINDOW=0.05"))).empty());  // nothing to damp
+    Scene a = read_ok(plus("DAMPING 0.8"));
+    CHECK(lpfdm::apply_setting(a, "DAMPING.WINDOW", 0.2).empty());
+    CHECK(a.damping_window == 0.2);
+}
+
 TEST_CASE("deck error: walls that select no node, set a direction another card sets at a node they share, or move too fast") {
     CHECK_ONE_ERROR(plus("WALL 1 0.2 0.2 0.8 0.8 0 0"), 5, 1, "the WALL box holds no node");
     CHECK_ONE_ERROR(plus("WALL 1 4 3 4 1 -1 0"), 5, 1, "the box needs x0 <= x1 and y0 <= y1");

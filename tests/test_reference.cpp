@@ -212,6 +212,26 @@ TEST_CASE("MAPPING SMOOTH with ADVECT FLIP, walls, softening, points leaving, SH
     }
 }
 
+// DAMPING WINDOW (eq. 14 about each node's mean increment, damped_increment): the means
+// are advanced where eq. 13 is, in the reference cycle over the whole lattice, in the fast
+// kernel over its boxes and by threads, with ADVECT FLIP in its own step 5, and read again
+// by the nodes beyond the material (follow_material), an embedded wall's pair of lines and
+// the energy account. psc.deck (a wall embedded in a cap on a Mohr-Coulomb specimen) with
+// each mapping, twice as fine (12 800 points: the threaded passes).
+TEST_CASE("DAMPING WINDOW with each mapping and ADVECT FLIP, an embedded wall, by threads: the same bits") {
+    for (int mode = 0; mode < 3; ++mode) {
+        Scene s;
+        REQUIRE(read_deck("decks/psc.deck", s).empty());
+        s.damping_window = 1e-3;
+        if (mode > 0) s.mapping = Mapping::Smooth;
+        if (mode > 1) s.advect = Advect::Flip;
+        refine(s, 2);
+        REQUIRE(validate(s).empty());
+        REQUIRE(count_points(s) > 4096);
+        compare_kernels(std::string("decks/psc.deck DAMPING WINDOW=1E-3") + (mode == 0 ? "" : mode == 1 ? " MAPPING SMOOTH" : " MAPPING SMOOTH ADVECT FLIP") + ", twice as fine", s, steps_for(s));
+    }
+}
+
 // Modes: read once from the scene; the kernel asked for runs it, and where its point pass
 // goes one point at a time or on one thread, the reason is named.
 TEST_CASE("modes: what a scene switches on, and which kernel runs it, and why") {
