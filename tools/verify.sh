@@ -27,6 +27,9 @@
 #                    column, PSC and footing both ways, for the work-precision diagram)
 #   VERIFY_ADVECT=FLIP  and with ADVECT FLIP (needs VERIFY_MAPPING=SMOOTH); the rows'
 #                    cases end in _smooth_flip (make verify runs those three cases so too)
+#   VERIFY_WINDOW=t  run each deck with --set DAMPING.WINDOW=t (local damping about each
+#                    node's mean motion); the rows' cases end in _window (make verify runs
+#                    the compression so, in each mode)
 # A run is timed from the program's own summary line (the time of the steps and of the
 # output written during them, without start-up); the cut's time is the sum of its
 # bisection runs, each timed once; the hopper's the sum of its four slot widths.
@@ -43,7 +46,8 @@ root=$(cd "$here/.." && pwd)
 decks=$root/decks
 mapping=${VERIFY_MAPPING:-PAPER}
 advect=${VERIFY_ADVECT:-EQ12}
-suffix=$([ "$mapping" = PAPER ] || echo "_$(tr 'A-Z' 'a-z' <<<"$mapping")")$([ "$advect" = EQ12 ] || echo "_$(tr 'A-Z' 'a-z' <<<"$advect")")
+window=${VERIFY_WINDOW:-}
+suffix=$([ "$mapping" = PAPER ] || echo "_$(tr 'A-Z' 'a-z' <<<"$mapping")")$([ "$advect" = EQ12 ] || echo "_$(tr 'A-Z' 'a-z' <<<"$advect")")${window:+_window}
 ladders=$out/verify
 work=$out/verify$suffix
 mkdir -p "$work" "$ladders"
@@ -70,7 +74,7 @@ run() {
         deck=$dir/$(basename "$deck")
     fi
     for ((k = 0; k < times; k++)); do
-        { time "$exe" --threads "$threads" -o "$dir" "$@" "$deck" >"$dir/stdout.txt" 2>"$dir/stderr.txt"; } 2>"$dir/time.txt"
+        { time "$exe" --threads "$threads" -o "$dir" ${window:+--set DAMPING.WINDOW=$window} "$@" "$deck" >"$dir/stdout.txt" 2>"$dir/stderr.txt"; } 2>"$dir/time.txt"
         line=$(grep '^lpfdm: [0-9]* steps' "$dir/stdout.txt")
         if [ -z "$line" ]; then
             echo "verify: run failed: $exe -o $dir $* $deck" >&2

@@ -7,12 +7,15 @@ if (!exists("out")) out = 'verify_convergence.png'
 if (!exists("orders")) orders = ''
 o = ' '.orders
 ord(c) = (pos = strstrt(o, ' '.c.'='), pos > 0 ? ' (p = '.word(o[pos + 1:], 1)[strlen(c) + 2:].')' : '')
-# A case and its variants (_smooth: MAPPING SMOOTH, _smooth_flip: and ADVECT FLIP) share a
-# colour, the colour of the case's first word in `cases`; the variant sets line and point.
+# A case and its variants (_smooth: MAPPING SMOOTH, _smooth_flip: and ADVECT FLIP; _window:
+# DAMPING WINDOW, a thick line) share a colour, the colour of the case's first word in
+# `cases`; the variant sets line and point.
 colours = '#1f77b4 #d62728 #2ca02c #ff7f0e #9467bd #8c564b #e377c2 #17becf #bcbd22 #000000 #7f7f7f #aec7e8'
 do for [vi = 1:words(colours)] { set linetype vi lc rgb word(colours, vi) }
 set linetype cycle words(colours)
-variant_base(c) = (vb = strstrt(c, '_smooth'), vb > 0 ? c[1:vb - 1] : c)
+variant_cut(c) = (va = strstrt(c, '_smooth'), vw = strstrt(c, '_window'), va > 0 && (vw == 0 || va < vw) ? va : vw)
+variant_base(c) = (vb = variant_cut(c), vb > 0 ? c[1:vb - 1] : c)
+variant_width(c) = strstrt(c, '_window') > 0 ? 4 : 2
 variant_colour(c) = sum [vi = 1:words(cases)] (word(cases, vi) eq variant_base(c) ? vi : 0)
 variant_dash(c) = strstrt(c, '_flip') > 0 ? 3 : (strstrt(c, '_smooth') > 0 ? 2 : 1)
 variant_point(c) = strstrt(c, '_flip') > 0 ? 4 : (strstrt(c, '_smooth') > 0 ? 6 : 7)
@@ -25,6 +28,6 @@ set xlabel 'cell size / characteristic length [-]'
 set ylabel '|relative error| [-]'
 set key outside right top
 set grid
-plot for [c in cases] dir.'/ladder_'.c.'.dat' using (1.0 / $2):4 with linespoints lw 2 lc variant_colour(c) dt variant_dash(c) pt variant_point(c) title c.ord(c) noenhanced, \
+plot for [c in cases] dir.'/ladder_'.c.'.dat' using (1.0 / $2):4 with linespoints lw variant_width(c) lc variant_colour(c) dt variant_dash(c) pt variant_point(c) title c.ord(c) noenhanced, \
      [0.01:0.3] 0.3 * x with lines dt 2 lc 'gray' title 'slope 1', \
      [0.01:0.3] 1.0 * x**2 with lines dt 3 lc 'gray' title 'slope 2'
