@@ -2730,7 +2730,9 @@ inline void Simulation::setup() {
     mx_ = sc_.mx; my_ = sc_.my; L_ = sc_.cell_m; invL_ = 1 / L_;
     const std::size_t nodes = std::size_t(mx_ + 1) * (my_ + 1), cells = std::size_t(mx_) * my_;
     for (auto* v : {&dux_, &duy_, &fx_, &fy_, &nmass_, &nmass_prev_, &dux_old_, &duy_old_}) v->assign(nodes, 0.0);
-    if (sc_.damping_window > 0) {  // DAMPING WINDOW=t
+    double damps = sc_.damping;  // (from a SHAKE's START on, its DAMPING)
+    for (const Shake& k : sc_.shakes) damps = std::max(damps, k.damping);
+    if (sc_.damping_window > 0 && damps > 0) {  // DAMPING WINDOW=t
         for (auto* v : {&mean_ux_, &mean_uy_}) v->assign(nodes, 0.0);
         mean_beta_ = sc_.dt_s / sc_.damping_window;
     }
@@ -4470,7 +4472,11 @@ inline void Simulation::reference_integrate() {
     keep_increments({0, mx_ + 1, 0, my_ + 1});  // for the energy account
     const bool window = !mean_ux_.empty();
     for (std::size_t n = 0; n < nmass_.size(); ++n) {
-        if (nmass_[n] == 0) { dux_[n] = duy_[n] = 0; continue; }
+        if (nmass_[n] == 0) {  // no mass, no motion (and no mean motion: DAMPING WINDOW)
+            dux_[n] = duy_[n] = 0;
+            if (window) mean_ux_[n] = mean_uy_[n] = 0;
+            continue;
+        }
         if (window) { follow_mean(dux_[n], mean_beta_, mean_ux_[n]); follow_mean(duy_[n], mean_beta_, mean_uy_[n]); }  // DAMPING WINDOW
         damped_increment(dux_[n], fx_[n], nmass_[n], dt2, sc_.damping, dux_[n], mean_at(mean_ux_, n));  // eq. 13, 14
         damped_increment(duy_[n], fy_[n], nmass_[n], dt2, sc_.damping, duy_[n], mean_at(mean_uy_, n));
@@ -5123,6 +5129,8 @@ inline void Simulation::flip_changes(const Range& nodes) {
                 damped_increment(duy_[n], fy_[n], M, dt2, sc_.damping, cy, mean_at(mean_uy_, n));
                 ax = cx - dux_[n];  // a held direction's is replaced in flip_return
                 ay = cy - duy_[n];
+            } else if (!mean_ux_.empty()) {
+                mean_ux_[n] = mean_uy_[n] = 0;  // DAMPING WINDOW: no mass, no mean motion
             }
             flip_ax_[n] = ax; flip_ay_[n] = ay;
             dux_[n] = M > 0 ? dux_[n] + ax : 0.0;
@@ -7411,8 +7419,9 @@ LPFDM_DEF void Simulation::compensate() {
     by_rows(kShiftRows, nr.j0, nr.j1, nr.size(), [&](int j) { each_row(shift_row, j); });
 }
 
-// eq. 13-14: du(t + dt/2) = du(t - dt/2) + dt^2/m (F - D), D = alpha |F| sgn(du).
-// Then fixed directions, then moving walls (their reaction is what they exert).
+// eq. 13-14: du(t + dt/2) = du(t - dt/2) + dt^2/m (F - D), D = alpha |F| sgn(du) (sgn(du -
+// mean) with DAMPING WINDOW). Then fixed directions, then moving walls (their reaction is
+// what they exert).
 LPFDM_DEF void Simulation::integrate() {
     const Range nodes_now{occupied_.i0, occupied_.empty() ? 0 : occupied_.i1 + 1, occupied_.j0, occupied_.empty() ? 0 : occupied_.j1 + 1};
     const Range nr = nodes_now.unite(live_nodes_);
@@ -7440,17 +7449,20 @@ LPFDM_DEF void Simulation::integrate() {
         detail::store(ux_old + n, ux0); detail::store(uy_old + n, uy0);
         detail::load(nm + n, m);
         if constexpr (one)
-            if (m == 0) { ux_n[n] = uy_n[n] = 0; return; }  // no mass, no motion
+            if (m == 0) {  // no mass, no motion (and no mean motion: DAMPING WINDOW)
+                ux_n[n] = uy_n[n] = 0;
+                if (mxm) mxm[n] = mym[n] = 0;
+                return;
+            }
         detail::load(fxn + n, fx); detail::load(fyn + n, fy);
         T ux, uy, rx{}, ry{};
-        if (mxm) {  // DAMPING WINDOW: the means (a node without mass keeps its own)
-            T ox, oy;
-            detail::load(mxm + n, ox); detail::load(mym + n, oy);
-            rx = ox; ry = oy;
+        if (mxm) {  // DAMPING WINDOW: the means (0 at a node without mass)
+            detail::load(mxm + n, rx); detail::load(mym + n, ry);
             follow_mean(ux0, beta, rx); follow_mean(uy0, beta, ry);
             if constexpr (!one) {
+                const T zero{};
                 const auto moving = m != 0;
-                rx = moving ? rx : ox; ry = moving ? ry : oy;
+                rx = moving ? rx : zero; ry = moving ? ry : zero;
             }
             detail::store(mxm + n, rx); detail::store(mym + n, ry);
         }
@@ -7525,6 +7537,7 @@ LPFDM_DEF void Simulation::integrate() {
             const int n = n0 + i;
             ux_old[n] = ux_n[n]; uy_old[n] = uy_n[n];
             nm[n] = 0; fxn[n] = fyn[n] = 0; ux_n[n] = uy_n[n] = 0;
+            if (mxm) mxm[n] = mym[n] = 0;  // DAMPING WINDOW
         };
         for (int i = nr.i0; i < ia; ++i) idle(i);
         detail::sweep(n0 + ia, n0 + ib, wide, advance);
@@ -8272,10 +8285,15 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
             err(s.step_pos, buf);
         }
     }
-    // DAMPING WINDOW=t: each step takes dt / t of the way to the new increment (a mean that
-    // overshoots is none)
-    if (!unread.step && s.damping_window > 0 && s.dt_s > s.damping_window)
-        err(s.damping_pos, "DAMPING WINDOW=" + shortest(s.damping_window) + " s is shorter than the time step dt = " + shortest(s.dt_s) + " s");
+    // DAMPING WINDOW=t: each step takes dt / t of the way to the new increment. Over less
+    // than two steps the mean all but follows the increment, and the damping's sign, taken
+    // about it, is rounding (a window of dt pushed psc.deck until a node jumped).
+    // (Without any damping the window has nothing to act on and is not asked about.)
+    double damps = s.damping;
+    for (const Shake& k : s.shakes) damps = std::max(damps, k.damping);
+    if (!unread.step && damps > 0 && s.damping_window > 0 && s.dt_s > 0.5 * s.damping_window)
+        err(s.damping_pos.line > 0 || s.shakes.empty() ? s.damping_pos : s.shakes.front().pos,
+            "DAMPING WINDOW=" + shortest(s.damping_window) + " s is shorter than two time steps, 2 dt = " + shortest(2 * s.dt_s) + " s");
     return d;
 }
 
@@ -8419,7 +8437,9 @@ LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
             warn(s.step_pos);
         }
     }
-    if (!unread.grid && s.cell_m > 0 && s.damping > 0 && s.damping_window > 0 && !s.materials.empty()) {
+    double damps = s.damping;  // the damping from the start, or from a SHAKE's START on
+    for (const Shake& k : s.shakes) damps = std::max(damps, k.damping);
+    if (!unread.grid && s.cell_m > 0 && damps > 0 && s.damping_window > 0 && !s.materials.empty()) {
         // DAMPING WINDOW: a mean over less than the slowest elastic period follows that
         // vibration, and eq. 14 about it no longer damps it (decks/column.deck with 0.03 s,
         // a tenth of its period: still moving after 6000 steps)
