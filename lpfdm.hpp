@@ -823,6 +823,13 @@ class Simulation;
 LPFDM_DEF void sort_diagnostics(std::vector<Diagnostic>& d);
 LPFDM_DEF Diagnostics one_error(const std::string& file, int line, int col, std::string message);
 LPFDM_DEF double stable_dt(const Scene& s);
+// The largest local damping alpha the scene uses: DAMPING's, or a SHAKE's DAMPING= from
+// its START on (stable_dt, DAMPING WINDOW).
+inline double largest_damping(const Scene& s) {
+    double alpha = std::max(0.0, s.damping);
+    for (const Shake& k : s.shakes) alpha = std::max(alpha, k.damping);
+    return alpha;
+}
 LPFDM_DEF double estimate_bytes(const Scene& s, double points);
 LPFDM_DEF double count_points(const Scene& s);
 LPFDM_DEF void refine(Scene& s, int k);
@@ -2730,9 +2737,7 @@ inline void Simulation::setup() {
     mx_ = sc_.mx; my_ = sc_.my; L_ = sc_.cell_m; invL_ = 1 / L_;
     const std::size_t nodes = std::size_t(mx_ + 1) * (my_ + 1), cells = std::size_t(mx_) * my_;
     for (auto* v : {&dux_, &duy_, &fx_, &fy_, &nmass_, &nmass_prev_, &dux_old_, &duy_old_}) v->assign(nodes, 0.0);
-    double damps = sc_.damping;  // (from a SHAKE's START on, its DAMPING)
-    for (const Shake& k : sc_.shakes) damps = std::max(damps, k.damping);
-    if (sc_.damping_window > 0 && damps > 0) {  // DAMPING WINDOW=t
+    if (sc_.damping_window > 0 && largest_damping(sc_) > 0) {  // DAMPING WINDOW=t
         for (auto* v : {&mean_ux_, &mean_uy_}) v->assign(nodes, 0.0);
         mean_beta_ = sc_.dt_s / sc_.damping_window;
     }
@@ -7910,8 +7915,7 @@ LPFDM_DEF std::string deck_help() {
 // Measured (tests/test_hard.cpp): the limit at alpha = 0.8 is 0.74-0.75 of L / c_p,
 // predicted 0.745; a lone cell at nu = 0.25 0.866, predicted sqrt(3/4).
 LPFDM_DEF double stable_dt(const Scene& s) {
-    double dt = std::numeric_limits<double>::infinity(), alpha = std::max(0.0, s.damping);
-    for (const Shake& k : s.shakes) alpha = std::max(alpha, k.damping);  // the damping from START on
+    double dt = std::numeric_limits<double>::infinity(), alpha = largest_damping(s);
     for (const auto& m : s.materials) {
         const double K = m.bulk() + (s.water.on && m.porosity > 0 ? s.water.kw / m.porosity : 0.0);  // WATER: Kw / n
         const double G = m.shear(), M = K + 4 * G / 3, lam = K - 2 * G / 3;
@@ -8141,6 +8145,29 @@ inline void water_checks(const Scene& s, const Unread& unread, Diagnostics& d) {
 }
 }  // namespace detail
 
+namespace detail {
+// validate's time step: at most the stable limit (stable_dt), and DAMPING WINDOW=t at least
+// two steps: each step takes dt / t of the way to the new increment, and over less the mean
+// all but follows the increment and the damping's sign, taken about it, is rounding (a
+// window of dt pushed psc.deck until a node jumped). Without any damping the window has
+// nothing to act on and is not asked about.
+inline void time_step_checks(const Scene& s, const Unread& unread, Diagnostics& d) {
+    auto err = [&](const Pos& p, std::string m) { d.push_back({p, std::move(m)}); };
+    if (unread.step || !(s.dt_s > 0)) return;
+    if (!s.materials.empty()) {
+        const double lim = stable_dt(s);
+        if (s.dt_s > lim) {
+            char buf[160];
+            std::snprintf(buf, sizeof buf, "time step %.6g s is above the stable limit %.6g s (L sqrt(rho / ((M + lambda)(1 + damping))) of the stiffest material)", s.dt_s, lim);
+            err(s.step_pos, buf);
+        }
+    }
+    if (largest_damping(s) > 0 && s.damping_window > 0 && s.dt_s > 0.5 * s.damping_window)
+        err(s.damping_pos.line > 0 || s.shakes.empty() ? s.damping_pos : s.shakes.front().pos,
+            "DAMPING WINDOW=" + shortest(s.damping_window) + " s is shorter than two time steps, 2 dt = " + shortest(2 * s.dt_s) + " s");
+}
+}  // namespace detail
+
 LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
     Diagnostics d;
     auto err = [&](const Pos& p, std::string m) { d.push_back({p, std::move(m)}); };
@@ -8277,23 +8304,7 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
         // Measured (tests/README.md): the ground's and the dashpots' changes reach the points
         // through the transfer's weights, and the account loses 2 % of the ground's work.
     }
-    if (lattice && !unread.step && !s.materials.empty() && s.dt_s > 0) {
-        const double lim = stable_dt(s);
-        if (s.dt_s > lim) {
-            char buf[160];
-            std::snprintf(buf, sizeof buf, "time step %.6g s is above the stable limit %.6g s (L sqrt(rho / ((M + lambda)(1 + damping))) of the stiffest material)", s.dt_s, lim);
-            err(s.step_pos, buf);
-        }
-    }
-    // DAMPING WINDOW=t: each step takes dt / t of the way to the new increment. Over less
-    // than two steps the mean all but follows the increment, and the damping's sign, taken
-    // about it, is rounding (a window of dt pushed psc.deck until a node jumped).
-    // (Without any damping the window has nothing to act on and is not asked about.)
-    double damps = s.damping;
-    for (const Shake& k : s.shakes) damps = std::max(damps, k.damping);
-    if (!unread.step && damps > 0 && s.damping_window > 0 && s.dt_s > 0.5 * s.damping_window)
-        err(s.damping_pos.line > 0 || s.shakes.empty() ? s.damping_pos : s.shakes.front().pos,
-            "DAMPING WINDOW=" + shortest(s.damping_window) + " s is shorter than two time steps, 2 dt = " + shortest(2 * s.dt_s) + " s");
+    if (lattice) detail::time_step_checks(s, unread, d);  // the stable limit, DAMPING WINDOW
     return d;
 }
 
@@ -8437,14 +8448,12 @@ LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
             warn(s.step_pos);
         }
     }
-    double damps = s.damping;  // the damping from the start, or from a SHAKE's START on
-    for (const Shake& k : s.shakes) damps = std::max(damps, k.damping);
-    if (!unread.grid && s.cell_m > 0 && damps > 0 && s.damping_window > 0 && !s.materials.empty()) {
+    if (!unread.grid && s.cell_m > 0 && largest_damping(s) > 0 && s.damping_window > 0 && !s.materials.empty()) {
         // DAMPING WINDOW: a mean over less than the slowest elastic period follows that
         // vibration, and eq. 14 about it no longer damps it (decks/column.deck with 0.03 s,
         // a tenth of its period: still moving after 6000 steps)
         double cp = std::numeric_limits<double>::infinity();
-        for (const auto& m : s.materials) cp = std::min(cp, std::sqrt((m.bulk() + 4 * m.shear() / 3) / m.rho));
+        for (const auto& m : s.materials) cp = std::min(cp, m.p_wave_speed());
         const double period = 4 * std::max(s.mx, s.my) * s.cell_m / cp;
         if (s.damping_window < period) {
             std::snprintf(b, sizeof b, "DAMPING WINDOW=%g s is shorter than 4 W / c_p = %.3g s, the slowest elastic period the lattice holds (W its longer side, c_p the slowest material's): the scene may not come to rest",
