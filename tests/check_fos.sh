@@ -11,6 +11,8 @@
 #     files; --set is applied before the search (twice the cohesion: a larger factor); a
 #     wider --fos-tol takes fewer trials;
 #   - a scene that fails even at the smallest factor: exit status 3, and it says so;
+#   - a cohesionless slope drawn across the lattice: a factor, and a warning at its
+#     slanted edge (the staircase's factor); --strict refuses it;
 #   - refused before any trial, exit status 2, "FILE:LINE:COL: error: ..." at the card
 #     concerned and no output: a deck without a MOHR material, one with SHAKE, one with a
 #     moving wall, an undamped one (never at rest), --fos-tol out of range, --restart.
@@ -115,6 +117,30 @@ else
     fail fall "exit status $rc (3 expected): $(tail -n 1 "$tmp/fall.out") $(head -n 1 "$tmp/fall.err")"
 fi
 
+# a cohesionless 2:1 slope drawn across the lattice: searched, with a warning at the first
+# vertex of its slanted edge (the staircase's factor, not the slope's); --strict refuses it
+cat >"$tmp/dry.deck" <<'EOF'
+GRID     20 8 1.0
+MATERIAL 1 MOHR E=2E7 NU=0.3 RHO=2000 PHI=35 C=0
+CLUSTER  1 POLYGON 5 0 20 0 20 5 15 5
+FIX XY   0 0 20 0
+FIX X    20 0 20 8
+GRAVITY  0 -9.81
+DAMPING  0.8
+STEP     4E-3 2000
+END
+EOF
+run dry "$tmp/h" -q --fos "$tmp/dry.deck"
+if [ "$rc" = 0 ] && grep -q '^factor of safety: ' "$tmp/dry.out" &&
+   grep -qF "$tmp/dry.deck:3:34: warning: --fos: MATERIAL 1 has no cohesion, and this CLUSTER's edge from (15, 5) to (5, 0) m crosses the lattice" "$tmp/dry.err"; then
+    pass
+else
+    fail dry "exit status $rc, no factor or no warning at 3:34: $(head -n 2 "$tmp/dry.err")"
+fi
+run drystrict "$tmp/i" -q --strict --fos "$tmp/dry.deck"
+if [ "$rc" = 2 ] && grep -qF "$tmp/dry.deck:3:34: error: --fos: MATERIAL 1 has no cohesion" "$tmp/drystrict.err" && [ ! -e "$tmp/i" ]; then pass; else
+    fail drystrict "--strict: exit status $rc (2 expected), stderr: $(head -n 1 "$tmp/drystrict.err")"
+fi
 # refused: the card named, exit status 2, nothing written
 refused() {  # NAME PATTERN ARGS...
     local name=$1 pattern=$2
