@@ -668,8 +668,8 @@ lpfdm::RunInfo run_info(const lpfdm::Simulation& sim, const Options& opt, const 
 }
 
 // --fos: what keeps the deck's scene from having a factor of safety (a scene that cannot
-// come to rest, or has no strength to reduce), at the cards concerned; and, as a warning,
-// a cohesionless face drawn across the lattice.
+// come to rest, or has no strength to reduce), at the cards concerned; and, as warnings,
+// where its factor is not verified (lpfdm::fos_warnings).
 lpfdm::Diagnostics fos_problems(const lpfdm::Scene& scene) {
     lpfdm::Diagnostics d;
     bool mohr = false;
@@ -682,28 +682,8 @@ lpfdm::Diagnostics fos_problems(const lpfdm::Scene& scene) {
     const lpfdm::Reservoir& r = scene.reservoir;
     if (r.on && r.to > -std::numeric_limits<double>::infinity() && r.to != r.level)
         d.push_back({r.pos, "--fos finds the factor of safety of a scene at rest, and the RESERVOIR's level moves (for the state after a drawdown: the reservoir at its last level, TO= left out)"});
-    // A warning: a cohesionless polygon's edge across the lattice is a staircase of cells,
-    // whose risers stand at no strength (tests/README.md, "Factor of safety": a 2:1 face
-    // with phi = 35 degrees reads 0.47 with the paper's mapping, 1.18 with MAPPING SMOOTH,
-    // against 1.40).
-    for (const auto& k : scene.clusters) {
-        const lpfdm::Material* m = nullptr;
-        for (const auto& q : scene.materials) if (q.id == k.mat) m = &q;
-        if (!m || m->model != lpfdm::Model::MohrCoulomb || m->c > 0) continue;
-        const std::size_t n = k.polygon.size() / 2;
-        for (std::size_t v = 0; v < n; ++v) {
-            const std::size_t w = (v + 1) % n;
-            const double x0 = k.polygon[2 * v], y0 = k.polygon[2 * v + 1], x1 = k.polygon[2 * w], y1 = k.polygon[2 * w + 1];
-            if (x0 == x1 || y0 == y1) continue;
-            d.push_back({k.polygon_pos.size() > 2 * v ? k.polygon_pos[2 * v] : k.pos,
-                         fmt::format("--fos: MATERIAL {} has no cohesion, and this CLUSTER's edge from ({}, {}) to ({}, {}) m crosses the lattice: a face "
-                                     "there is a staircase of cells whose risers stand at no strength, and the factor found is the staircase's, "
-                                     "below the slope's (draw a cohesionless face along the lattice: decks/verify_dry_slope.deck)",
-                                     k.mat, lpfdm::shortest(x0), lpfdm::shortest(y0), lpfdm::shortest(x1), lpfdm::shortest(y1)),
-                         true});
-            break;  // one warning a cluster
-        }
-    }
+    const lpfdm::Diagnostics w = lpfdm::fos_warnings(scene);  // (warnings: what is not verified)
+    d.insert(d.end(), w.begin(), w.end());
     return d;
 }
 
