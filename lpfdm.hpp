@@ -7760,7 +7760,8 @@ LPFDM_DEF FosResult factor_of_safety(const Scene& s, const FosOptions& o, const 
 // A face drawn across the lattice (a CLUSTER POLYGON's edge neither level nor upright) is
 // a staircase of cells. Where the soil is too weak for a riser of one cell to stand (a
 // vertical cut stands to 4 c tan(45 + phi/2) / (rho g), Rankine's, below L), --fos reads
-// such a face far below its slope's factor, for a reason not traced: a 2:1 face of dry
+// such a face far below its slope's factor (points carried over the steps' risers come to
+// lie alone in cells above the face, whose upper nodes nothing holds): a 2:1 face of dry
 // cohesionless soil with phi = psi = 35 degrees reads 0.74, 0.88 and 1.18 with the paper's
 // mapping, MAPPING SMOOTH and ADVECT FLIP, against 1.40 (tests/README.md, "Factor of
 // safety"). Warned at the edge's first vertex, once a cluster, where the edge is a free
