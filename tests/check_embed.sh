@@ -157,7 +157,8 @@ case $(basename "$exe") in
         fi
     fi
     # The whole public API, the deck reader and the writers included, from a unit without
-    # the define: it compiles as fast against the implementation unit with I/O, and links.
+    # the define: it compiles in at most 1/8 of the implementation unit's time, and links
+    # against the implementation unit with I/O.
     cat >"$split/api.cpp" <<'API'
 #include "lpfdm.hpp"
 #include <cstdio>
@@ -196,15 +197,20 @@ int main() {
     return d.empty() ? 0 : 0;
 }
 API
+    # (the implementation unit with I/O is compiled at -O0: only linked here, not timed; the
+    # whole-API unit's time is held against the implementation unit without I/O, -O2,
+    # the smaller of the two: at -O2 the one with I/O took 17.6 s, 6 more than without)
     printf '#define LPFDM_IMPLEMENTATION\n#include "lpfdm.hpp"\n' >"$split/impl_io.cpp"
+    o2=(-std=c++17 -O0 -Wall -Wextra -Wpedantic)
+    t_impl_io=$(compile impl_io)
     o2=(-std=c++17 -O2 -Wall -Wextra -Wpedantic)
-    t_api=$(compile api) t_impl_io=$(compile impl_io)
-    if [ "$t_api" = fail ] || [ "$t_impl_io" = fail ]; then
+    t_api=$(compile api)
+    if [ "$t_api" = fail ] || [ "$t_impl_io" = fail ] || [ "$t_impl" = fail ]; then
         fail "the whole public API from a unit without LPFDM_IMPLEMENTATION (-O2, with I/O) does not compile: $(grep -m 3 -E 'error|warning' "$split/log" | tr '\n' ' ')"
     else
-        echo "embed: -O2 compile (processor time), with I/O: a unit using the whole public API $t_api s, the implementation unit $t_impl_io s"
-        if eighth "$t_api" "$t_impl_io"; then pass; else
-            fail "the unit using the whole public API took $t_api s, more than 1/8 of the implementation unit's $t_impl_io s"; fi
+        echo "embed: -O2 compile (processor time), with I/O: a unit using the whole public API $t_api s (the implementation unit without I/O: $t_impl s)"
+        if eighth "$t_api" "$t_impl"; then pass; else
+            fail "the unit using the whole public API took $t_api s, more than 1/8 of the implementation unit's $t_impl s (without I/O)"; fi
         if (cd "$split" && "$cxx" api.o impl_io.o -o api -lfmt) >>"$split/log" 2>&1 && "$split/api" 2>&1 | grep -q 'api: ok'; then
             pass
         else
