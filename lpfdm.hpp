@@ -2520,6 +2520,18 @@ inline void cluster_cells(const Cluster& c, double L, int mx, int my, const F& f
     }
 }
 
+// Which cluster fills each cell of an mx x my lattice, cell (i, j) at j mx + i: the index
+// in `clusters` of the last that fills it (a later cluster replaces an earlier one), -1 for
+// none.
+inline std::vector<int> cluster_owners(const std::vector<Cluster>& clusters, double L, int mx, int my) {
+    std::vector<int> owner(std::size_t(mx) * std::size_t(my), -1);
+    for (std::size_t ci = 0; ci < clusters.size(); ++ci)
+        cluster_cells(clusters[ci], L, mx, my, [&](int i0, int i1, int j) {
+            for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = int(ci);
+        });
+    return owner;
+}
+
 // What is wrong with the shape of a polygon (its vertices x1 y1 x2 y2 ...), or "" if
 // nothing; `at` is the index in v of the coordinate to report it at (v.size(): the polygon
 // as a whole). In this order: x y pairs, at least 3 and at most kMaxPolygonVertices of
@@ -2682,11 +2694,7 @@ LPFDM_DEF double count_points(const Scene& s) {
         }
         return n;
     }
-    std::vector<int> owner(std::size_t(cells), -1);
-    for (std::size_t ci = 0; ci < s.clusters.size(); ++ci)
-        detail::cluster_cells(s.clusters[ci], s.cell_m, s.mx, s.my, [&](int i0, int i1, int j) {
-            for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * s.mx + i] = int(ci);
-        });
+    const std::vector<int> owner = detail::cluster_owners(s.clusters, s.cell_m, s.mx, s.my);
     for (int o : owner) if (o >= 0) n += double(s.clusters[o].ppc) * s.clusters[o].ppc;
     return n;
 }
@@ -2847,11 +2855,7 @@ inline void Simulation::setup() {
 }
 
 inline void Simulation::create_points() {
-    std::vector<int> owner(std::size_t(mx_) * my_, -1);
-    for (std::size_t ci = 0; ci < sc_.clusters.size(); ++ci)
-        detail::cluster_cells(sc_.clusters[ci], L_, mx_, my_, [&](int i0, int i1, int j) {
-            for (int i = i0; i <= i1; ++i) owner[std::size_t(cell(i, j))] = int(ci);
-        });
+    const std::vector<int> owner = detail::cluster_owners(sc_.clusters, L_, mx_, my_);  // (index cell(i, j))
     // Groups: one per (material, ppc); masses quantised so that sums are exact.
     std::vector<std::pair<int, int>> keys;  // (material index, ppc)
     std::vector<double> count;
@@ -7772,11 +7776,7 @@ LPFDM_DEF Diagnostics fos_warnings(const Scene& s) {
     const double L = s.cell_m, g = std::hypot(s.gravity_x, s.gravity_y);
     if (!(s.mx > 0 && s.my > 0 && L > 0 && g > 0 && double(s.mx) * s.my <= 5e7)) return d;
     const int mx = s.mx, my = s.my;
-    std::vector<int> owner(std::size_t(mx) * std::size_t(my), -1);
-    for (std::size_t ci = 0; ci < s.clusters.size(); ++ci)
-        detail::cluster_cells(s.clusters[ci], L, mx, my, [&](int i0, int i1, int j) {
-            for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = int(ci);
-        });
+    const std::vector<int> owner = detail::cluster_owners(s.clusters, L, mx, my);
     auto owner_at = [&](double x, double y) {  // -1: no cluster; -2: outside the lattice
         const double i = std::floor(x / L), j = std::floor(y / L);
         if (!(i >= 0 && j >= 0 && i < mx && j < my)) return -2;
@@ -7784,8 +7784,7 @@ LPFDM_DEF Diagnostics fos_warnings(const Scene& s) {
     };
     for (std::size_t ci = 0; ci < s.clusters.size(); ++ci) {
         const Cluster& k = s.clusters[ci];
-        const Material* m = nullptr;
-        for (const Material& q : s.materials) if (q.id == k.mat) m = &q;
+        const Material* m = s.material(k.mat);
         if (!m || m->model != Model::MohrCoulomb || k.polygon.size() < 6) continue;
         const double cut = 4 * m->c * std::tan((45 + 0.5 * m->phi_deg) * detail::kPi / 180) / (m->rho * g);
         if (!(cut < L)) continue;
@@ -8381,11 +8380,7 @@ namespace detail {
 inline void opening_warnings(const Scene& s, Diagnostics& d) {
     if (!(s.mx > 0 && s.my > 0 && s.cell_m > 0 && double(s.mx) * s.my <= 5e7)) return;
     const int mx = s.mx, my = s.my;
-    std::vector<int> owner(std::size_t(mx) * std::size_t(my), -1);
-    for (std::size_t ci = 0; ci < s.clusters.size(); ++ci)
-        cluster_cells(s.clusters[ci], s.cell_m, mx, my, [&](int i0, int i1, int j) {
-            for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = int(ci);
-        });
+    const std::vector<int> owner = cluster_owners(s.clusters, s.cell_m, mx, my);
     std::vector<std::uint8_t> held(std::size_t(mx + 1) * std::size_t(my + 1), 0);
     auto hold = [&](int i0, int i1, int j0, int j1, int dirs) {
         for (int j = std::max(j0, 0); j <= std::min(j1, my); ++j)
