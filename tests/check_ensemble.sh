@@ -13,10 +13,14 @@
 #     line by line as a Slurm array would, then --summarise: the same table;
 #   - the cliff's --jobs-only of the Slurm section (500 seeds): jobs.txt and index.tsv,
 #     nothing run; --summarise of it reports the runs as not finished (exit status 1);
-#   - every shipped deck (decks/*.deck) accepted by --jobs-only with a sweep of gravity;
+#   - every shipped deck (decks/*.deck) accepted by --jobs-only with a sweep of gravity
+#     and a measure it can give (runout, or last:ke where it writes no point table); the
+#     two that write nothing (the speed benchmarks) refused, naming OUTPUT POINTS;
 #   - refusals with exit status 2, nothing written: an unknown key and a value out of
 #     range (the message names the value), options after -- that lpfdm refuses, -o after
-#     --; a --strict after -- still accepted (the one-step probe leaves it out).
+#     --, a measure the deck's outputs cannot give (runout without a point table, outflow
+#     without a history, a history column it does not have); a --strict after -- still
+#     accepted (the one-step probe leaves it out).
 #
 # Runs once, for the plain build (plain_build_only): what is tested is the script, and
 # the runs it makes are short runs of shipped decks, which the other checks already run
@@ -180,11 +184,21 @@ else
     fi
 fi
 
-# --- every shipped deck accepted (one step of each value, warnings and all) ---
+# --- every shipped deck accepted (one step of each value, warnings and all), with a
+# measure it can give: runout where it writes a point table, else last:ke of its history;
+# a deck that writes neither (the speed benchmarks) is refused, naming the card ---
 refused=""
 for deck in decks/*.deck; do
     name=$(basename "$deck" .deck)
-    ens "deck_$name" --jobs-only -o "$tmp/decks/$name" --sweep GRAVITY.GY=-9.81,-9 "$deck"
+    m=runout
+    grep -q '^OUTPUT *POINTS' "$deck" || m=last:ke
+    if ! grep -q '^OUTPUT' "$deck"; then
+        ens "deck_$name" --jobs-only -o "$tmp/decks/$name" --sweep GRAVITY.GY=-9.81,-9 "$deck"
+        [ $rc -eq 2 ] && grep -q 'writes no point table.*OUTPUT POINTS' "$tmp/deck_$name.err" && [ ! -e "$tmp/decks/$name" ] ||
+            refused="$refused $name (writes nothing to measure, but exit $rc: $(said "deck_$name"))"
+        continue
+    fi
+    ens "deck_$name" --jobs-only --measure "$m" -o "$tmp/decks/$name" --sweep GRAVITY.GY=-9.81,-9 "$deck"
     [ $rc -eq 0 ] && [ "$(wc -l <"$tmp/decks/$name/jobs.txt" 2>/dev/null)" = 2 ] || refused="$refused $name (exit $rc: $(said "deck_$name"))"
 done
 if [ -z "$refused" ]; then ok; else fail "shipped decks refused by --jobs-only --sweep GRAVITY.GY=-9.81,-9" "$refused"; fi
@@ -203,6 +217,9 @@ refused badvalue "--set MATERIAL1.PHI=95" --sweep MATERIAL1.PHI=20,95 decks/cut_
 refused badopt "FOO.X" --seeds 2 decks/cliff.deck -- --set FOO.X=1
 refused outdir "not '-o' after --" --seeds 2 decks/cliff.deck -- -o elsewhere
 refused twice "given twice" --sweep MATERIAL1.C=1,2 --sweep material1.c=3 decks/cut_high.deck
+refused nopoints "writes no point table" --sweep GRAVITY.GY=-9.81,-9 decks/verify_psc.deck
+refused nohistory "writes no history" --sweep GRAVITY.GY=-9.81,-9 --measure outflow decks/verify_taylor.deck
+refused nocolumn "has no column 'nope'" --sweep GRAVITY.GY=-9.81,-9 --measure max:nope decks/column.deck
 ens strict --jobs-only -o "$tmp/strict" --sweep MATERIAL1.RHO=1000,2000 decks/column.deck -- --strict
 if [ $rc -eq 0 ] && grep -q -- '--strict' "$tmp/strict/jobs.txt"; then ok; else fail "-- --strict" "exit $rc, refused by the probe: $(said strict)"; fi
 
