@@ -9,7 +9,9 @@
 #     with lists of unequal length refused;
 #   - rung 5 of decks/README.md, its command as the document prints it, with `-- --steps
 #     1000`: accepted although a short run draws warnings, heights 2 to 8 m, the 2 m cut
-#     standing and the 8 m one moving; the same ensemble as --jobs-only, its jobs.txt run
+#     standing and the 8 m one moving; the same runs measured again (--summarize) by
+#     height, outflow and min:e_grav (a taller cut settles more and loses more potential
+#     energy, nothing leaves); the same ensemble as --jobs-only, its jobs.txt run
 #     line by line as a Slurm array would, then --summarise: the same table;
 #   - the cliff's --jobs-only of the Slurm section (500 seeds): jobs.txt and index.tsv,
 #     nothing run; --summarise of it reports the runs as not finished (exit status 1);
@@ -159,6 +161,19 @@ else
     else
         fail "rung 5 --jobs-only" "exit $rc, jobs.txt '${jobs:-none}' should have 7 lines and no run made: $(said array)"
     fi
+    # the same runs measured again with the other measures (and the other spelling of
+    # --summarise): a taller cut settles more and loses more potential energy (the loss of
+    # height 0.13 to 5.2 mm at 1000 steps, e_grav's least -32 to -37 000 J/m), nothing
+    # leaves the lattice
+    for m in height outflow min:e_grav; do
+        (cd "$tmp/reader" && timeout 60 tools/ensemble --summarize -o "$(dirname "${table#"$tmp/reader/"}")" --measure "$m") >"$tmp/remeasure.out" 2>"$tmp/remeasure.err"
+        rc=$?
+        got=$(rows "$table" | awk -F'\t' -v m="$m" '{ v = $3 } $3 == "NA" { bad = 1 } NR > 1 && m == "height" && v <= prev { bad = 1 }
+            NR > 1 && m == "min:e_grav" && v >= prev { bad = 1 } m == "outflow" && v != 0 { bad = 1 } m == "min:e_grav" && v >= 0 { bad = 1 }
+            NR == 1 && m == "height" && v >= 0.001 { bad = 1 } { prev = v; all = all " " $3 } END { print (bad ? "wrong:" : "ok") all }')
+        if [ $rc -eq 0 ] && [ "$(header "$table" | cut -f 3)" = "$m" ] && [ "${got%% *}" = ok ]; then ok; else
+            fail "rung 5 --summarize --measure $m" "exit $rc, column '$(header "$table" | cut -f 3)', values $got: $(said remeasure)"; fi
+    done
 fi
 
 # --- the Slurm section's --jobs-only of the cliff, as printed (nothing is run) ---
