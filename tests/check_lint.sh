@@ -6,7 +6,9 @@
 #      comparison goes through approx() of tests/common.hpp (scale 0: relative), and a
 #      floor, where a value may be zero, is written with .scale(s) at the comparison.
 #      doctest::Approx, an Approx( of the doctest namespace, and a `using` of it are
-#      refused outside tests/common.hpp;
+#      refused outside tests/common.hpp; and a floor is a rounding's size, a number
+#      written out below 1e-5 (`.scale(1)` would make approx() doctest's Approx again:
+#      an absolute tolerance that is not a check of its own is refused);
 #   2. `make lpfdm` installs only what the program needs (fmt): the recipe of `deps`, as
 #      `make -n` prints it, checks for and installs libfmt-dev alone.
 # The rules are tested on themselves: a line of each kind written into a copy must be
@@ -44,6 +46,26 @@ printf '%s\n' 'CHECK(x == approx(1e-3).epsilon(0.01));' '// doctest::Approx(v) i
 n_bad=$(bare_approx "$tmp/bad.cpp" | wc -l) n_good=$(bare_approx "$tmp/good.cpp" | wc -l)
 if [ "$n_bad" -eq 3 ] && [ "$n_good" -eq 0 ]; then passed=$((passed + 1)); else
     fail "the Approx rule finds $n_bad of 3 bad lines and $n_good good ones"
+fi
+
+# a floor larger than a rounding's: .scale( holding anything but 0 or a number written
+# out below 1e-5, one digit and an exponent of -6 or less (1e-6, 1E-9, 1e-300).
+big_scale() {
+    grep -HnoE '\.scale[[:space:]]*\([^)]*\)' "$@" | grep -vE '^[^:]*:[0-9]+:\.scale[[:space:]]*\([[:space:]]*(0(\.0*)?|[0-9](\.[0-9]*)?[eE]-([6-9]|[1-9][0-9]+))[[:space:]]*\)$'
+}
+# shellcheck disable=SC2086
+found=$(big_scale $files)
+if [ -z "$found" ]; then passed=$((passed + 1)); else
+    fail "a floor of approx() of 1e-5 or more, or not a number (an absolute tolerance: check it on its own):"
+    echo "$found" | sed 's/^/  /'
+fi
+printf '%s\n' 'CHECK(x == approx(v).scale(1));' 'CHECK(x == approx(v).scale(1e-3));' 'CHECK(x == approx(v).scale(tol));' \
+    'CHECK(x == approx(v).scale(5e-5));' >"$tmp/bad_scale.cpp"
+printf '%s\n' 'CHECK(x == approx(v).scale(1e-6));' 'CHECK(x == approx(v).epsilon(1e-15).scale(1e-300));' \
+    'CHECK(x == approx(0.0).scale(1E-12));' 'CHECK(x == approx(v).scale(0));' >"$tmp/good_scale.cpp"
+n_bad=$(big_scale "$tmp/bad_scale.cpp" | wc -l) n_good=$(big_scale "$tmp/good_scale.cpp" | wc -l)
+if [ "$n_bad" -eq 4 ] && [ "$n_good" -eq 0 ]; then passed=$((passed + 1)); else
+    fail "the floor rule finds $n_bad of 4 bad lines and $n_good good ones"
 fi
 
 # deps_of MAKEFILE: the packages the recipe of its `deps` (what `make lpfdm` runs first)
