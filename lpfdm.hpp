@@ -2523,6 +2523,13 @@ inline void cluster_cells(const Cluster& c, double L, int mx, int my, const F& f
 // Which cluster fills each cell of an mx x my lattice, cell (i, j) at j mx + i: the index
 // in `clusters` of the last that fills it (a later cluster replaces an earlier one), -1 for
 // none.
+// The warnings that read this map (opening_warnings, fos_warnings) skip a lattice of more
+// cells than kWarnCells (its 4 bytes a cell, 200 MB, for a warning), as they skip one
+// without a size.
+constexpr double kWarnCells = 5e7;
+inline bool warn_map_fits(const Scene& s) {
+    return s.mx > 0 && s.my > 0 && s.cell_m > 0 && double(s.mx) * s.my <= kWarnCells;
+}
 inline std::vector<int> cluster_owners(const std::vector<Cluster>& clusters, double L, int mx, int my) {
     std::vector<int> owner(std::size_t(mx) * std::size_t(my), -1);
     for (std::size_t ci = 0; ci < clusters.size(); ++ci)
@@ -7764,8 +7771,9 @@ LPFDM_DEF FosResult factor_of_safety(const Scene& s, const FosOptions& o, const 
 // A face drawn across the lattice (a CLUSTER POLYGON's edge neither level nor upright) is
 // a staircase of cells. Where the soil is too weak for a riser of one cell to stand (a
 // vertical cut stands to 4 c tan(45 + phi/2) / (rho g), Rankine's, below L), --fos reads
-// such a face far below its slope's factor (points carried over the steps' risers come to
-// lie alone in cells above the face, whose upper nodes nothing holds): a 2:1 face of dry
+// such a face far below its slope's factor (the steps' corners keep moving at every cell
+// size, and points carried over the risers come to lie alone in cells above the face: the nodes
+// above them, which nothing stiff holds, keep the unbalanced force up): a 2:1 face of dry
 // cohesionless soil with phi = psi = 35 degrees reads 0.74, 0.88 and 1.18 with the paper's
 // mapping, MAPPING SMOOTH and ADVECT FLIP, against 1.40 (tests/README.md, "Factor of
 // safety"). Warned at the edge's first vertex, once a cluster, where the edge is a free
@@ -7774,7 +7782,7 @@ LPFDM_DEF FosResult factor_of_safety(const Scene& s, const FosOptions& o, const 
 LPFDM_DEF Diagnostics fos_warnings(const Scene& s) {
     Diagnostics d;
     const double L = s.cell_m, g = std::hypot(s.gravity_x, s.gravity_y);
-    if (!(s.mx > 0 && s.my > 0 && L > 0 && g > 0 && double(s.mx) * s.my <= 5e7)) return d;
+    if (!detail::warn_map_fits(s) || !(g > 0)) return d;
     const int mx = s.mx, my = s.my;
     const std::vector<int> owner = detail::cluster_owners(s.clusters, L, mx, my);
     auto owner_at = [&](double x, double y) {  // -1: no cluster; -2: outside the lattice
@@ -8378,7 +8386,7 @@ namespace detail {
 // lattice's edge, falls out through that edge (held: fixed or walled in the direction of
 // gravity; an ABSORB edge counts as held). OUTFLOW names the edges it is meant to leave by.
 inline void opening_warnings(const Scene& s, Diagnostics& d) {
-    if (!(s.mx > 0 && s.my > 0 && s.cell_m > 0 && double(s.mx) * s.my <= 5e7)) return;
+    if (!warn_map_fits(s)) return;
     const int mx = s.mx, my = s.my;
     const std::vector<int> owner = cluster_owners(s.clusters, s.cell_m, mx, my);
     std::vector<std::uint8_t> held(std::size_t(mx + 1) * std::size_t(my + 1), 0);
