@@ -142,6 +142,10 @@ stopped_and_continued "$tmp/rw.deck" "water: "
 printf '# t a\n0 0\n0.01 20\n0.02 -30\n0.03 10\n0.05 0\n' >"$tmp/m.txt"
 sed 's/^END/SHAKE X FILE=m.txt START=0.012 DAMPING=0.1 BASELINE\nABSORB BOTTOM\nEND/' "$tmp/r.deck" >"$tmp/rq.deck"
 stopped_and_continued "$tmp/rq.deck" "quake: "
+# The same ground under ADVECT FLIP on the rigid base: the slip at the shaken nodes is
+# state (the account's d_slip)
+sed 's/^END/MAPPING SMOOTH\nADVECT FLIP\nSHAKE X FILE=m.txt START=0.012 DAMPING=0.1 BASELINE\nEND/' "$tmp/r.deck" >"$tmp/rqf.deck"
+stopped_and_continued "$tmp/rqf.deck" "quake, flip: "
 
 # --- 2. SIGINT: the state of the interrupted step, continued ---
 cat >"$tmp/long.deck" <<'EOF'
@@ -188,7 +192,7 @@ cp "$good" "$tmp/corrupt.state"
 printf '\x55' | dd of="$tmp/corrupt.state" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
 cmp -s "$good" "$tmp/corrupt.state" && printf '\xaa' | dd of="$tmp/corrupt.state" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
 cp "$good" "$tmp/version.state"
-printf '\x04' | dd of="$tmp/version.state" bs=1 seek=12 conv=notrunc 2>/dev/null
+printf '\x05' | dd of="$tmp/version.state" bs=1 seek=12 conv=notrunc 2>/dev/null
 echo "x y sxx" >"$tmp/text.state"
 sed 's/^SEED 7/SEED 8/' "$tmp/r.deck" >"$tmp/other.deck"
 mkdir -p "$tmp/dir.state"
@@ -206,7 +210,7 @@ refused() {
 refused "truncated" "truncated" "$tmp/truncated.state" "$tmp/r.deck"
 refused "shorter than a header" "truncated" "$tmp/short.state" "$tmp/r.deck"
 refused "corrupt" "checksum" "$tmp/corrupt.state" "$tmp/r.deck"
-refused "other format version" "version 4" "$tmp/version.state" "$tmp/r.deck"
+refused "other format version" "version 5" "$tmp/version.state" "$tmp/r.deck"
 refused "not a state file" "not an lpfdm state file" "$tmp/text.state" "$tmp/r.deck"
 refused "a directory" "directory" "$tmp/dir.state" "$tmp/r.deck"
 refused "missing" "cannot open" "$tmp/none.state" "$tmp/r.deck"

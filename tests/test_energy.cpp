@@ -264,7 +264,8 @@ TEST_CASE("energy: ADVECT FLIP, a wall compressing an undamped elastic column: i
     Simulation::Energy f, q;
     const double flip = undamped_confined(Advect::Flip, f), eq12 = undamped_confined(Advect::Eq12, q);
     MESSAGE("undamped confined compression: largest |energy_error| " << flip << " (ADVECT FLIP), " << eq12 << " (eq. 12); FLIP's wall work "
-            << f.w_walls << " J/m, strain " << f.strain << ", kinetic " << f.kinetic << ", energy_error at the end " << f.error);
+            << f.w_walls << " J/m, strain " << f.strain << ", kinetic " << f.kinetic << ", the slip where the wall stopped " << f.d_slip
+            << ", energy_error at the end " << f.error);
     CHECK(eq12 < 0.01);
     CHECK(f.w_walls > 0);
     CHECK(f.d_damping == 0.0);
