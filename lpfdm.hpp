@@ -8612,6 +8612,17 @@ LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
             }
         }
     if (!unread.grid && !unread.clusters && !unread.fixes) detail::opening_warnings(s, d);
+    // ADVECT FLIP with one point a cell: a centred point's square is its cell, its weights a
+    // quarter at each corner, so a checkerboard of the points' increments sums to nothing
+    // at every node; the lattice and its damping never see it, and as the points move it
+    // feeds the lattice (tests/test_energy.cpp: column.deck never comes to rest)
+    if (s.advect == Advect::Flip && !unread.clusters)
+        for (const Cluster& c : s.clusters)
+            if (c.ppc == 1) {
+                std::snprintf(b, sizeof b, "ADVECT FLIP with PPC=1: a checkerboard of the points' increments is invisible to the lattice and to damping, and rings on "
+                                           "(column.deck: unbalanced ratio 0.01 after 6000 steps, 3e-6 with PPC=2; the footing's q/c 22 %% high): use PPC=2 or more");
+                warn(c.pos);
+            }
     // (measured: decks/README's RESERVOIR paragraph; the header's "Pore water and loads")
     if (s.reservoir.on && s.water.on && s.mapping == Mapping::Smooth && s.advect != Advect::Flip && !unread.mapping) {
         std::snprintf(b, sizeof b, "with MAPPING SMOOTH and no ADVECT FLIP the reservoir's pressure misses the parts of squares past the material's faces: "

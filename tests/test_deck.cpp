@@ -1570,6 +1570,22 @@ TEST_CASE("deck warnings: a time step above 0.95 of the stable limit; an output 
     CHECK(has(w[0].message, "EVERY 11 is more than the 10 steps of the run: only the first and last frames are written"));
 }
 
+// ADVECT FLIP with one point a cell (test_energy.cpp shows why): at the cluster's card,
+// whichever cluster it is; none with two or more, or without FLIP.
+TEST_CASE("deck warnings: ADVECT FLIP with PPC=1") {
+    const std::string flip = "MAPPING SMOOTH\nADVECT FLIP\n";
+    Diagnostics w = lpfdm::warnings(read_ok(kGrid + kMaterial + "CLUSTER 1 0 0 2 2 PPC=1\n" + kStep + flip));
+    INFO(listing(w));
+    REQUIRE(w.size() == 1);
+    CHECK(w[0].pos.line == 3);
+    CHECK(has(w[0].message, "ADVECT FLIP with PPC=1: a checkerboard of the points' increments is invisible to the lattice"));
+    w = lpfdm::warnings(read_ok(kBase + "CLUSTER 1 2 2 4 4 PPC=1\n" + flip));
+    REQUIRE(w.size() == 1);
+    CHECK(w[0].pos.line == 5);
+    CHECK(lpfdm::warnings(read_ok(kGrid + kMaterial + "CLUSTER 1 0 0 2 2 PPC=2\n" + kStep + flip)).empty());
+    CHECK(lpfdm::warnings(read_ok(kGrid + kMaterial + "CLUSTER 1 0 0 2 2 PPC=1\n" + kStep + "MAPPING SMOOTH\n")).empty());
+}
+
 // The shipped decks are meant as written: none draws a warning.
 TEST_CASE("deck warnings: none for the decks in decks/") {
     for (const auto& e : std::filesystem::directory_iterator("decks")) {
