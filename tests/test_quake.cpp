@@ -274,6 +274,17 @@ double ground_account(Scene s, double& slip) {
     slip = sim.energy().d_slip / ground;
     return worst / ground;
 }
+
+// The deck's scene under MAPPING SMOOTH and ADVECT FLIP, without its outputs.
+Scene flip_deck(const char* deck) {
+    Scene s;
+    REQUIRE(read_deck(deck, s).empty());
+    s.mapping = Mapping::Smooth;
+    s.advect = Advect::Flip;
+    s.outputs.clear();
+    REQUIRE(validate(s).empty());
+    return s;
+}
 }  // namespace
 
 // ADVECT FLIP with SHAKE (the rigid base's pulse, quake_column.deck) and with ABSORB (the
@@ -289,12 +300,7 @@ double ground_account(Scene s, double& slip) {
 // back, absorb_work; on eq. 13's it missed 0.63 % and 0.13 %).
 TEST_CASE("quake: ADVECT FLIP takes SHAKE and ABSORB; its account closes to 0.5 % of the ground's work, the slip at the shaken nodes named [slow]") {
     for (const char* deck : {"decks/quake_column.deck", "decks/quake_column_compliant.deck"}) {
-        Scene s;
-        REQUIRE(read_deck(deck, s).empty());
-        s.mapping = Mapping::Smooth;
-        s.advect = Advect::Flip;
-        s.outputs.clear();
-        REQUIRE(validate(s).empty());
+        Scene s = flip_deck(deck);
         const bool rigid = std::string(deck) == "decks/quake_column.deck";
         double slip_coarse, slip_fine;
         const double coarse = ground_account(s, slip_coarse);
@@ -323,12 +329,7 @@ TEST_CASE("quake: ADVECT FLIP takes SHAKE and ABSORB; its account closes to 0.5 
 // that, tests/README.)
 TEST_CASE("quake: ADVECT FLIP's account on the shaken layer and slope decks closes to 0.5 % of the ground's work [slow]") {
     for (const char* deck : {"decks/quake_layer.deck", "decks/quake_slope.deck"}) {
-        Scene s;
-        REQUIRE(read_deck(deck, s).empty());
-        s.mapping = Mapping::Smooth;
-        s.advect = Advect::Flip;
-        s.outputs.clear();
-        REQUIRE(validate(s).empty());
+        Scene s = flip_deck(deck);
         double slip;
         const double residual = ground_account(s, slip);
         MESSAGE(std::string(deck) << " with ADVECT FLIP: the account's residual " << 100 * residual << " % of the ground's work, the slip " << 100 * slip << " %");
