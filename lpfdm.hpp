@@ -5244,7 +5244,10 @@ inline void Simulation::flip_return(const Range& nodes) {
 // support and the material beside it. Nonzero where a support changes speed: SHAKE's
 // ground (the rigid base's shaken column: 1.7 % of the ground's work at 20 cells over H,
 // 0.44 % at 40) and a wall given a new velocity; 0 for a fixed node and a wall at a
-// steady speed (a = 0), and for a node a wall takes for the first time (b_s = b_p).
+// steady speed (a = 0), and for a node a wall takes for the first time (b_s = b_p). It is
+// first order in the change: an impact (a wall taking nodes, or stopped in one step) also
+// loses (sum_n M_n a_n^2 - sum_p m_p g_p^2) / 2 dt^2 through the weights, which is not
+// named (over SHAKE's small changes the lag it leaves is in the next step's b_p).
 inline void Simulation::flip_slip() {
     double slip = 0;
     for (const HeldStart& h : flip_held_) {
