@@ -71,7 +71,7 @@
 //   the cycle  steps 1-5 in order                                Simulation::step_reference
 //   boundaries fixed directions, moving walls (section 3)        Simulation::impose_supports
 //   earthquakes ground motion (SHAKE), absorbing edges (ABSORB)   Simulation::ground_step,
-//              (not in the paper)                               dynamics_begin, absorb_increments
+//              (not in the paper)                               dynamics_begin, absorb_increments, absorb_work
 //
 // THE REFERENCE CYCLE, one step (Simulation::step_reference; its section reads top to bottom)
 //   1 reference_cell_strains  eq. 5 in every cell with mass, and its rotation
@@ -5126,6 +5126,9 @@ inline void Simulation::flip_transfer(const Range& nodes) {
         if (const std::uint8_t dirs = fixed_[std::size_t(u)] & (kFixX | kFixY)) flip_held_.push_back({u, dirs, dux_[std::size_t(u)], duy_[std::size_t(u)]});
     for (const std::int32_t u : driven_nodes_)
         if (const std::uint8_t dirs = driven_[std::size_t(u)] & ~fixed_[std::size_t(u)] & (kFixX | kFixY)) flip_held_.push_back({u, dirs, dux_[std::size_t(u)], duy_[std::size_t(u)]});
+    // In node order: the walls list their nodes in the order they took them, a restart in
+    // node order, and flip_slip's sum must not depend on which (std::sort: in place)
+    std::sort(flip_held_.begin(), flip_held_.end(), [](const HeldStart& p, const HeldStart& q) { return p.node != q.node ? p.node < q.node : p.dirs < q.dirs; });
     for (const std::int32_t u : fixed_nodes_) {
         if (fixed_[std::size_t(u)] & kFixX) dux_[std::size_t(u)] = flip_sx_[std::size_t(u)];
         if (fixed_[std::size_t(u)] & kFixY) duy_[std::size_t(u)] = flip_sy_[std::size_t(u)];
@@ -5243,8 +5246,10 @@ inline void Simulation::flip_return(const Range& nodes) {
 // difference, sum_n M_n a_n (b_s - b_p) / dt^2, is the force on the slip between the
 // support and the material beside it. Nonzero where a support changes speed: SHAKE's
 // ground (the rigid base's shaken column: 1.7 % of the ground's work at 20 cells over H,
-// 0.44 % at 40) and a wall given a new velocity; 0 for a fixed node and a wall at a
-// steady speed (a = 0), and for a node a wall takes for the first time (b_s = b_p). It is
+// 0.44 % at 40), a wall given a new velocity, an embedded wall's two lines of nodes (its
+// increments there change as it crosses the cell) and a node a wall lets go; 0 for a fixed
+// node and a wall at a steady speed on its line of nodes (a = 0), and for a node a wall
+// takes for the first time (b_s = b_p). It can be negative (a wall stopped at once). It is
 // first order in the change: an impact (a wall taking nodes, or stopped in one step) also
 // loses (sum_n M_n a_n^2 - sum_p m_p g_p^2) / 2 dt^2 through the weights, which is not
 // named (over SHAKE's small changes the lag it leaves is in the next step's b_p).
@@ -8448,8 +8453,6 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
         if (s.mapping != Mapping::Smooth && !unread.mapping) err(s.advect_pos, "ADVECT FLIP needs MAPPING SMOOTH: the points' increments go to the lattice, and its change back, by their squares' weights");
         if (s.motion != Motion::Bilinear && s.motion != Motion::Default)
             err(s.advect_pos, "ADVECT FLIP needs MOTION BILINEAR (the default with MAPPING SMOOTH): the points move by the field their increments are interpolated from");
-        // Measured (tests/README.md): the ground's and the dashpots' changes reach the points
-        // through the transfer's weights, and the account loses 2 % of the ground's work.
     }
     if (lattice) detail::time_step_checks(s, unread, d);  // the stable limit, DAMPING WINDOW
     return d;
@@ -8623,7 +8626,7 @@ LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
         for (const Cluster& c : s.clusters)
             if (c.ppc == 1) {
                 std::snprintf(b, sizeof b, "ADVECT FLIP with PPC=1: a checkerboard of the points' increments is invisible to the lattice and to damping, and rings on "
-                                           "(column.deck: unbalanced ratio 0.01 after 6000 steps, 3e-6 with PPC=2; the footing's q/c 22 %% high): use PPC=2 or more");
+                                           "(column.deck: unbalanced ratio 0.01 after 6000 steps, 3e-6 with PPC=2; the footing's q/c 22-29 %% high): use PPC=2 or more");
                 warn(c.pos);
             }
     // (measured: decks/README's RESERVOIR paragraph; the header's "Pore water and loads")

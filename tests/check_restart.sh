@@ -142,10 +142,16 @@ stopped_and_continued "$tmp/rw.deck" "water: "
 printf '# t a\n0 0\n0.01 20\n0.02 -30\n0.03 10\n0.05 0\n' >"$tmp/m.txt"
 sed 's/^END/SHAKE X FILE=m.txt START=0.012 DAMPING=0.1 BASELINE\nABSORB BOTTOM\nEND/' "$tmp/r.deck" >"$tmp/rq.deck"
 stopped_and_continued "$tmp/rq.deck" "quake: "
-# The same ground under ADVECT FLIP on the rigid base: the slip at the shaken nodes is
-# state (the account's d_slip)
-sed 's/^END/MAPPING SMOOTH\nADVECT FLIP\nSHAKE X FILE=m.txt START=0.012 DAMPING=0.1 BASELINE\nEND/' "$tmp/r.deck" >"$tmp/rqf.deck"
+# The same ground and dashpots under ADVECT FLIP: the slip at the shaken nodes is state
+# (the account's d_slip), the dashpots' work is counted after the points' change
+# (absorb_work); and a wall embedded in the block (a pair of node lines, whose increments
+# change every step), whose nodes a restart lists in node order where the run listed them
+# in the order the wall took them: the slip is summed in node order either way
+sed 's/^END/MAPPING SMOOTH\nADVECT FLIP\nSHAKE X FILE=m.txt START=0.012 DAMPING=0.1 BASELINE\nABSORB BOTTOM\nEND/' "$tmp/r.deck" >"$tmp/rqf.deck"
 stopped_and_continued "$tmp/rqf.deck" "quake, flip: "
+sed 's/^WALL 1 5.5 3 6.5 3 0 -2$/WALL 1 5.5 2.5 6.5 2.5 0 -2/; s/^END/MAPPING SMOOTH\nADVECT FLIP\nSHAKE X FILE=m.txt BASELINE\nEND/' "$tmp/r.deck" >"$tmp/rqe.deck"
+grep -q "^WALL 1 5.5 2.5 6.5 2.5 0 -2$" "$tmp/rqe.deck" || { echo "check_restart.sh: the embedded wall's deck was not made" >&2; exit 1; }
+stopped_and_continued "$tmp/rqe.deck" "embedded wall, flip: "
 
 # --- 2. SIGINT: the state of the interrupted step, continued ---
 cat >"$tmp/long.deck" <<'EOF'

@@ -99,6 +99,16 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
     CHECK(news_in_steps(s, 200) == 0);
     CHECK(news_in_steps(s, 20, true) == 0);
     CHECK(news_in_steps(s, 50, false, Kernel::Reference) == 0);
+    // ADVECT FLIP with walls (the compression test's embedded cap: flip_transfer's list of
+    // held nodes, sorted) and with the ground's motion and absorbing edges (absorb_work)
+    for (const Case c : {Case{"decks/psc.deck", 100}, Case{"tests/decks/good_quake.deck", 100}}) {
+        Scene f = deck(c.deck, c.steps);
+        f.mapping = Mapping::Smooth;
+        f.advect = Advect::Flip;
+        INFO(c.deck);
+        CHECK(news_in_steps(f, c.steps) == 0);
+        CHECK(news_in_steps(f, 20, false, Kernel::Reference) == 0);
+    }
 }
 
 TEST_CASE("no allocation inside the time step when points leave the lattice") {

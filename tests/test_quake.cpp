@@ -310,13 +310,11 @@ TEST_CASE("quake: ADVECT FLIP takes SHAKE and ABSORB; its account closes to 0.5 
                                   << " % at L / 2; the slip " << 100 * slip_coarse << " % and " << 100 * slip_fine << " %");
         CHECK(coarse < 0.005);
         CHECK(fine < 0.005);
-        CHECK(fine < coarse);
         if (rigid) {
-            CHECK(slip_coarse > 0.01);                 // the mechanism is there, and it is the slip ...
+            CHECK(fine < coarse);                       // the remainder falls with L
+            CHECK(slip_coarse > 0.01);                  // the mechanism is there, and it is the slip ...
             CHECK(slip_fine / slip_coarse > 0.25 / 1.2);  // ... falling as L^2 (4 times, within 20 %)
             CHECK(slip_fine / slip_coarse < 0.25 * 1.2);
-        } else {
-            CHECK(slip_coarse == 0);  // no support changes speed
         }
     }
 }
@@ -324,7 +322,8 @@ TEST_CASE("quake: ADVECT FLIP takes SHAKE and ABSORB; its account closes to 0.5 
 // The two other shaken decks that run in seconds, under ADVECT FLIP: the layer shaken at its
 // base through 30 s (damped, elastic) and the slope shaken past its yield (Mohr-Coulomb,
 // local damping, the burst from 2 s on): the account within 0.5 % of the ground's work
-// (measured 1.1e-5 and 1.1e-3; the paper's mapping 1.1e-6 and 5.2e-3). (quake_cliff.deck's
+// (measured 1.1e-5 and 1.1e-3; the paper's mapping 1.1e-6 and 5.2e-3), and below half of
+// the slip it names (0.26 % and 0.49 %): unnamed, the slip would be the residual. (quake_cliff.deck's
 // collapse frees twenty times the ground's work from gravity: its account is a fraction of
 // that, tests/README.)
 TEST_CASE("quake: ADVECT FLIP's account on the shaken layer and slope decks closes to 0.5 % of the ground's work [slow]") {
@@ -334,6 +333,7 @@ TEST_CASE("quake: ADVECT FLIP's account on the shaken layer and slope decks clos
         const double residual = ground_account(s, slip);
         MESSAGE(std::string(deck) << " with ADVECT FLIP: the account's residual " << 100 * residual << " % of the ground's work, the slip " << 100 * slip << " %");
         CHECK(residual < 0.005);
+        CHECK(residual < 0.5 * slip);
     }
 }
 
