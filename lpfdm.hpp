@@ -1568,6 +1568,10 @@ private:
     void ground_step(long n);
     void replay_ground();
     void dynamics_begin();
+    // The directions (kFixX, kFixY) in which a rigid SHAKE moves the fixed nodes.
+    std::uint8_t shaken_dirs() const {
+        return std::uint8_t(((ground_[0].spec && !ground_[0].spec->compliant) ? kFixX : 0) | ((ground_[1].spec && !ground_[1].spec->compliant) ? kFixY : 0));
+    }
     void absorb_increments();
     void absorb_work();
     long step_ = 0;
@@ -3272,7 +3276,7 @@ inline Range Simulation::impose_supports() {
     // SHAKE (rigid): the nodes fixed in a shaken direction move with the ground (those
     // with mass: a node without it touches no material), and the reaction is the force
     // that moves them, m (c - b) / dt^2 - F; their work is the ground's.
-    const bool shake_x = ground_[0].spec && !ground_[0].spec->compliant, shake_y = ground_[1].spec && !ground_[1].spec->compliant;
+    const bool shake_x = shaken_dirs() & kFixX, shake_y = shaken_dirs() & kFixY;
     const double dt2 = sc_.dt_s * sc_.dt_s;
     double hg = 0;
     auto shaken = [&](std::size_t u, double& du, double b, double f, double g, double& r, double& rf) {
@@ -5120,23 +5124,23 @@ inline void Simulation::flip_transfer(const Range& nodes) {
     // last increment, 0 at a fixed node (the ground's under SHAKE) and the wall's at a
     // node a wall drove in the last step. (A node a wall takes for the first time starts
     // from the points' increment, and the points take the change to the wall's: an impact.)
-    // The points' own increment there is kept for the account (flip_slip).
+    // The points' own increment there is kept for the account (flip_slip), where the
+    // support can change speed: a shaken direction of a fixed node, a wall's (a fixed
+    // direction at rest has a = 0 - 0, no term).
     flip_held_.clear();  // capacity reserved at set-up: no allocation
-    for (const std::int32_t u : fixed_nodes_)
-        if (const std::uint8_t dirs = fixed_[std::size_t(u)] & (kFixX | kFixY)) flip_held_.push_back({u, dirs, dux_[std::size_t(u)], duy_[std::size_t(u)]});
-    for (const std::int32_t u : driven_nodes_)
-        if (const std::uint8_t dirs = driven_[std::size_t(u)] & ~fixed_[std::size_t(u)] & (kFixX | kFixY)) flip_held_.push_back({u, dirs, dux_[std::size_t(u)], duy_[std::size_t(u)]});
-    // In node order: the walls list their nodes in the order they took them, a restart in
-    // node order, and flip_slip's sum must not depend on which (std::sort: in place)
-    std::sort(flip_held_.begin(), flip_held_.end(), [](const HeldStart& p, const HeldStart& q) { return p.node != q.node ? p.node < q.node : p.dirs < q.dirs; });
-    for (const std::int32_t u : fixed_nodes_) {
-        if (fixed_[std::size_t(u)] & kFixX) dux_[std::size_t(u)] = flip_sx_[std::size_t(u)];
-        if (fixed_[std::size_t(u)] & kFixY) duy_[std::size_t(u)] = flip_sy_[std::size_t(u)];
-    }
-    for (const std::int32_t u : driven_nodes_) {
-        if (driven_[std::size_t(u)] & kFixX) dux_[std::size_t(u)] = flip_sx_[std::size_t(u)];
-        if (driven_[std::size_t(u)] & kFixY) duy_[std::size_t(u)] = flip_sy_[std::size_t(u)];
-    }
+    const std::uint8_t shaken = shaken_dirs();
+    auto start_from_support = [&](std::int32_t u, std::uint8_t dirs, std::uint8_t kept) {
+        const std::size_t n = std::size_t(u);
+        if (kept) flip_held_.push_back({u, kept, dux_[n], duy_[n]});
+        if (dirs & kFixX) dux_[n] = flip_sx_[n];
+        if (dirs & kFixY) duy_[n] = flip_sy_[n];
+    };
+    for (const std::int32_t u : fixed_nodes_) start_from_support(u, fixed_[std::size_t(u)], fixed_[std::size_t(u)] & shaken);
+    const std::size_t walls_from = flip_held_.size();
+    for (const std::int32_t u : driven_nodes_) start_from_support(u, driven_[std::size_t(u)], driven_[std::size_t(u)] & ~fixed_[std::size_t(u)] & (kFixX | kFixY));
+    // The walls' in node order (fixed_nodes_ is): a wall lists its nodes in the order it
+    // took them, a restart in node order, and flip_slip's sum must not depend on which
+    std::sort(flip_held_.begin() + long(walls_from), flip_held_.end(), [](const HeldStart& p, const HeldStart& q) { return p.node != q.node ? p.node < q.node : p.dirs < q.dirs; });
 }
 
 // Point k's second half of strain from b where it is now (with MAPPING SMOOTH's B-bar
