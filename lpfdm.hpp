@@ -238,6 +238,11 @@ struct Cluster {
     // of an edge in x and in y, as a box's centre may lie L/1000 past the box.
     std::vector<double> polygon = {};
     std::vector<Pos> polygon_pos = {};  // each coordinate's field in the deck (for messages)
+    // FILL=POINTS: of the PPC x PPC points of each cell, those whose own positions lie in
+    // the box or polygon (by the rule above, on the lattice of the points, spacing L / PPC),
+    // so that a face across the lattice is not a staircase of whole cells; FILL=CELLS (the
+    // default): all of them, in the cells whose centres lie in it (detail::made_points).
+    bool fill_points = false;
 };
 
 enum : int { kFixX = 1, kFixY = 2 };
@@ -2536,6 +2541,82 @@ inline void cluster_cells(const Cluster& c, double L, int mx, int my, const F& f
     }
 }
 
+// The points the clusters make, in the order they are made: f(i, j, k, si, sj) for the
+// point (si, sj) of the PPC x PPC of cluster k in cell (i, j), at ((i + (si + 0.5) / PPC) L,
+// (j + (sj + 0.5) / PPC) L); cells row by row upwards, in a cell the clusters in deck order,
+// then sj, si. A FILL=CELLS cluster makes all PPC^2 in each cell whose centre it holds
+// (cluster_cells); a FILL=POINTS cluster those whose own positions it holds (cluster_cells
+// on the lattice of its points, spacing L / PPC). A later cluster replaces an earlier one
+// where it holds a point's place: a FILL=CELLS cluster in its cells, whole; a FILL=POINTS
+// cluster at the positions it holds on the earlier point's own lattice (so that two
+// polygons of one PPC sharing an edge make each point once, and none is lost).
+template <class F>
+inline void made_points(const std::vector<Cluster>& cs, double L, int mx, int my, const F& f) {
+    const int nc = int(cs.size());
+    std::vector<int> whole(std::size_t(mx) * std::size_t(my), -1);  // the last FILL=CELLS cluster of each cell
+    for (int k = 0; k < nc; ++k)
+        if (!cs[std::size_t(k)].fill_points)
+            cluster_cells(cs[std::size_t(k)], L, mx, my, [&](int i0, int i1, int j) {
+                for (int i = i0; i <= i1; ++i) whole[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = k;
+            });
+    // held[k][n]: the positions of the lattice of spacing L / n that the FILL=POINTS cluster k
+    // holds, as runs of columns a row (row j's runs first[j] .. first[j + 1]), for each n a
+    // cluster up to k uses
+    struct Runs {
+        std::vector<std::size_t> first;
+        std::vector<std::pair<int, int>> run;
+        bool holds(int i, int j) const {
+            for (std::size_t r = first[std::size_t(j)]; r < first[std::size_t(j) + 1]; ++r)
+                if (run[r].first <= i && i <= run[r].second) return true;
+            return false;
+        }
+    };
+    std::vector<std::vector<Runs>> held(cs.size());
+    bool any_points = false;
+    for (int k = 0; k < nc; ++k) {
+        const Cluster& c = cs[std::size_t(k)];
+        if (!c.fill_points) continue;
+        any_points = true;
+        held[std::size_t(k)].resize(33);
+        for (int e = 0; e <= k; ++e) {
+            const int n = cs[std::size_t(e)].ppc;
+            if (n < 1 || n > 32 || !held[std::size_t(k)][std::size_t(n)].first.empty()) continue;
+            Runs& h = held[std::size_t(k)][std::size_t(n)];
+            h.first.assign(std::size_t(my) * std::size_t(n) + 1, 0);
+            cluster_cells(c, L / n, mx * n, my * n, [&](int i0, int i1, int j) {
+                h.run.push_back({i0, i1});
+                h.first[std::size_t(j) + 1] = h.run.size();  // (rows come upwards)
+            });
+            for (std::size_t j = 1; j < h.first.size(); ++j) h.first[j] = std::max(h.first[j], h.first[j - 1]);
+        }
+    }
+    for (int j = 0; j < my; ++j)
+        for (int i = 0; i < mx; ++i) {
+            const int w = whole[std::size_t(j) * std::size_t(mx) + std::size_t(i)];
+            if (!any_points) {  // (every cluster fills cells: the last one holding the centre)
+                if (w < 0) continue;
+                const int n = cs[std::size_t(w)].ppc;
+                for (int sj = 0; sj < n; ++sj)
+                    for (int si = 0; si < n; ++si) f(i, j, w, si, sj);
+                continue;
+            }
+            for (int k = std::max(w, 0); k < nc; ++k) {
+                const Cluster& c = cs[std::size_t(k)];
+                const int n = c.ppc;
+                if ((c.fill_points ? w > k : w != k) || n < 1 || n > 32) continue;
+                for (int sj = 0; sj < n; ++sj)
+                    for (int si = 0; si < n; ++si) {
+                        const int pi = i * n + si, pj = j * n + sj;  // the point's place on the lattice of spacing L / n
+                        if (c.fill_points && !held[std::size_t(k)][std::size_t(n)].holds(pi, pj)) continue;
+                        bool replaced = false;
+                        for (int later = k + 1; later < nc && !replaced; ++later)
+                            replaced = cs[std::size_t(later)].fill_points && held[std::size_t(later)][std::size_t(n)].holds(pi, pj);
+                        if (!replaced) f(i, j, k, si, sj);
+                    }
+            }
+        }
+}
+
 // Which cluster fills each cell of an mx x my lattice, cell (i, j) at j mx + i: the index
 // in `clusters` of the last that fills it (a later cluster replaces an earlier one), -1 for
 // none.
@@ -2709,6 +2790,12 @@ LPFDM_DEF double count_points(const Scene& s) {
     if (cells > 50'000'000L) {  // too large to scan; an upper bound is enough for the memory check
         for (const auto& c : s.clusters) {
             double cells_in = (c.box.x1 - c.box.x0) * (c.box.y1 - c.box.y0) / (s.cell_m * s.cell_m);
+            if (c.fill_points && c.ppc >= 1) {  // its points, one a cell of the lattice of spacing L / PPC
+                double in = 0;
+                detail::cluster_cells(c, s.cell_m / c.ppc, s.mx * c.ppc, s.my * c.ppc, [&](int i0, int i1, int) { in += i1 - i0 + 1; });
+                n += in;
+                continue;
+            }
             if (!c.polygon.empty()) {
                 cells_in = 0;
                 detail::cluster_cells(c, s.cell_m, s.mx, s.my, [&](int i0, int i1, int) { cells_in += i1 - i0 + 1; });
@@ -2717,8 +2804,7 @@ LPFDM_DEF double count_points(const Scene& s) {
         }
         return n;
     }
-    const std::vector<int> owner = detail::cluster_owners(s.clusters, s.cell_m, s.mx, s.my);
-    for (int o : owner) if (o >= 0) n += double(s.clusters[o].ppc) * s.clusters[o].ppc;
+    detail::made_points(s.clusters, s.cell_m, s.mx, s.my, [&](int, int, int, int, int) { n += 1; });
     return n;
 }
 
@@ -2881,22 +2967,25 @@ inline void Simulation::setup() {
 }
 
 inline void Simulation::create_points() {
-    const std::vector<int> owner = detail::cluster_owners(sc_.clusters, L_, mx_, my_);  // (index cell(i, j))
     // Groups: one per (material, ppc); masses quantised so that sums are exact.
     std::vector<std::pair<int, int>> keys;  // (material index, ppc)
     std::vector<double> count;
+    std::vector<int> group_of(sc_.clusters.size(), -1);  // each cluster's group
     std::size_t npoints = 0;
-    for (int o : owner) {
-        if (o < 0) continue;
-        const auto& c = sc_.clusters[std::size_t(o)];
-        int mi = 0;
-        while (sc_.materials[std::size_t(mi)].id != c.mat) ++mi;
-        const std::pair<int, int> key{mi, c.ppc};
-        auto it = std::find(keys.begin(), keys.end(), key);
-        if (it == keys.end()) { keys.push_back(key); count.push_back(0); it = keys.end() - 1; }
-        count[std::size_t(it - keys.begin())] += double(c.ppc) * c.ppc;
-        npoints += std::size_t(c.ppc) * std::size_t(c.ppc);
-    }
+    detail::made_points(sc_.clusters, L_, mx_, my_, [&](int, int, int k, int, int) {
+        int& g = group_of[std::size_t(k)];
+        if (g < 0) {
+            const auto& c = sc_.clusters[std::size_t(k)];
+            int mi = 0;
+            while (sc_.materials[std::size_t(mi)].id != c.mat) ++mi;
+            const std::pair<int, int> key{mi, c.ppc};
+            auto it = std::find(keys.begin(), keys.end(), key);
+            if (it == keys.end()) { keys.push_back(key); count.push_back(0); it = keys.end() - 1; }
+            g = int(it - keys.begin());
+        }
+        count[std::size_t(g)] += 1;
+        ++npoints;
+    });
     double total = 0;
     for (std::size_t g = 0; g < keys.size(); ++g) {
         const double h = L_ / keys[g].second;
@@ -2918,41 +3007,34 @@ inline void Simulation::create_points() {
     p_.each_array([&](const char*, auto& v, Points::Use u, bool state) { if (state && uses(sc_, u, false)) v.reserve(npoints); });
 
     Random rng(sc_.seed);
-    for (int j = 0; j < my_; ++j)
-        for (int i = 0; i < mx_; ++i) {
-            const int o = owner[std::size_t(cell(i, j))];
-            if (o < 0) continue;
-            const auto& c = sc_.clusters[std::size_t(o)];
-            int mi = 0;
-            while (sc_.materials[std::size_t(mi)].id != c.mat) ++mi;
-            const std::uint16_t g = std::uint16_t(std::find(keys.begin(), keys.end(), std::pair<int, int>{mi, c.ppc}) - keys.begin());
-            const Material& mat = sc_.materials[std::size_t(mi)];
-            for (int sj = 0; sj < c.ppc; ++sj)
-                for (int si = 0; si < c.ppc; ++si) {
-                    p_.x.push_back((i + (si + 0.5) / c.ppc) * L_);
-                    p_.y.push_back((j + (sj + 0.5) / c.ppc) * L_);
-                    for (auto* v : {&p_.sxx, &p_.syy, &p_.sxy, &p_.szz}) v->push_back(0.0);
-                    p_.vol.push_back(groups_[g].mass / mat.rho);
-                    p_.cell.push_back(cell(i, j));
-                    p_.id.push_back(std::int32_t(p_.id.size()));
-                    p_.group.push_back(g);
-                    if (plastic) { p_.plastic_shear.push_back(0.0); p_.yielded.push_back(0); p_.plastic_work.push_back(0.0); }
-                    if (flip) { p_.flip_ux.push_back(0.0); p_.flip_uy.push_back(0.0); }  // at rest
-                    if (water) { p_.pw.push_back(hydrostatic(mat, p_.x.back(), p_.y.back())); p_.wvol.push_back(p_.vol.back()); }
-                    if (loaded) { p_.load_x.push_back(0.0); p_.load_y.push_back(0.0); p_.load_axis.push_back(0); }
-                    if (!scatter) continue;
-                    if (mat.scatter > 0) {
-                        const double cc = rng.truncated_normal(mat.c, mat.scatter * mat.c, 0, std::numeric_limits<double>::infinity(), false);
-                        const double ph = mat.phi_deg > 0 ? rng.truncated_normal(mat.phi_deg, mat.scatter * mat.phi_deg, 0, 90, true) : 0.0;
-                        p_.c0.push_back(cc);
-                        p_.n_phi.push_back(detail::flow_number(ph));
-                    } else {
-                        p_.c0.push_back(consts_[std::size_t(mi)].c);
-                        p_.n_phi.push_back(consts_[std::size_t(mi)].n_phi);
-                    }
-                    p_.sqrt_n_phi.push_back(std::sqrt(p_.n_phi.back()));
-                }
+    detail::made_points(sc_.clusters, L_, mx_, my_, [&](int i, int j, int k, int si, int sj) {
+        const auto& c = sc_.clusters[std::size_t(k)];
+        const std::uint16_t g = std::uint16_t(group_of[std::size_t(k)]);
+        const int mi = keys[g].first;
+        const Material& mat = sc_.materials[std::size_t(mi)];
+        p_.x.push_back((i + (si + 0.5) / c.ppc) * L_);
+        p_.y.push_back((j + (sj + 0.5) / c.ppc) * L_);
+        for (auto* v : {&p_.sxx, &p_.syy, &p_.sxy, &p_.szz}) v->push_back(0.0);
+        p_.vol.push_back(groups_[g].mass / mat.rho);
+        p_.cell.push_back(cell(i, j));
+        p_.id.push_back(std::int32_t(p_.id.size()));
+        p_.group.push_back(g);
+        if (plastic) { p_.plastic_shear.push_back(0.0); p_.yielded.push_back(0); p_.plastic_work.push_back(0.0); }
+        if (flip) { p_.flip_ux.push_back(0.0); p_.flip_uy.push_back(0.0); }  // at rest
+        if (water) { p_.pw.push_back(hydrostatic(mat, p_.x.back(), p_.y.back())); p_.wvol.push_back(p_.vol.back()); }
+        if (loaded) { p_.load_x.push_back(0.0); p_.load_y.push_back(0.0); p_.load_axis.push_back(0); }
+        if (!scatter) return;
+        if (mat.scatter > 0) {
+            const double cc = rng.truncated_normal(mat.c, mat.scatter * mat.c, 0, std::numeric_limits<double>::infinity(), false);
+            const double ph = mat.phi_deg > 0 ? rng.truncated_normal(mat.phi_deg, mat.scatter * mat.phi_deg, 0, 90, true) : 0.0;
+            p_.c0.push_back(cc);
+            p_.n_phi.push_back(detail::flow_number(ph));
+        } else {
+            p_.c0.push_back(consts_[std::size_t(mi)].c);
+            p_.n_phi.push_back(consts_[std::size_t(mi)].n_phi);
         }
+        p_.sqrt_n_phi.push_back(std::sqrt(p_.n_phi.back()));
+    });
     mass0_ = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) mass0_ += groups_[p_.group[k]].mass;
     made_ = p_.size();
@@ -5523,14 +5605,13 @@ inline void Simulation::setup_dynamics() {
         shake_step_ = g.first = detail::start_step(k, dt);
         if (k.baseline) detail::baseline_trend(k, dt, g.c0, g.c1);
     }
-    // The material each edge cell's points were made of (the last cluster holding its centre).
+    // The material each edge cell's points were made of (of two, the later cluster's).
     std::vector<const Material*> made_of;  // per cell, for the edges that absorb
     if (edges) {
         made_of.assign(std::size_t(mx_) * my_, nullptr);
-        for (const Cluster& c : sc_.clusters)
-            detail::cluster_cells(c, L_, mx_, my_, [&](int i0, int i1, int j) {
-                for (int i = i0; i <= i1; ++i) made_of[std::size_t(cell(i, j))] = sc_.material(c.mat);
-            });
+        detail::made_points(sc_.clusters, L_, mx_, my_, [&](int i, int j, int k, int, int) {
+            made_of[std::size_t(cell(i, j))] = sc_.material(sc_.clusters[std::size_t(k)].mat);
+        });
     }
     auto material_of = [&](int i, int j) { return made_of[std::size_t(cell(i, j))]; };
     std::vector<std::int32_t> slot_of(std::size_t(mx_ + 1) * (my_ + 1), -1);
@@ -7852,8 +7933,8 @@ LPFDM_DEF FosResult factor_of_safety(const Scene& s, const FosOptions& o, const 
     return r;
 }
 
-// A face drawn across the lattice (a CLUSTER POLYGON's edge neither level nor upright) is
-// a staircase of cells. Where the soil is too weak for a riser of one cell to stand (a
+// A face drawn across the lattice (a CLUSTER POLYGON's edge neither level nor upright) and
+// filled by cells is a staircase of cells. Where the soil is too weak for a riser of one cell to stand (a
 // vertical cut stands to 4 c tan(45 + phi/2) / (rho g), Rankine's, below L), --fos reads
 // such a face far below its slope's factor (the steps' corners keep moving at every cell
 // size, and points carried over the risers come to lie alone in cells above the face: the nodes
@@ -7862,7 +7943,11 @@ LPFDM_DEF FosResult factor_of_safety(const Scene& s, const FosOptions& o, const 
 // mapping, MAPPING SMOOTH and ADVECT FLIP, against 1.40 (tests/README.md, "Factor of
 // safety"). Warned at the edge's first vertex, once a cluster, where the edge is a free
 // face: at some point along it the cell a cell's width inside is the cluster's own and the
-// cell as far outside holds no cluster (a buried interface is not warned of).
+// cell as far outside holds no cluster (a buried interface is not warned of). Not warned
+// of: a cluster drawn with FILL=POINTS under MAPPING SMOOTH, whose cells along the face are
+// partly full (decks/verify_drawn_slope.deck: 1.48, 1.46, 1.44 at 10, 20, 40 cells over H);
+// FILL=POINTS under the paper's mapping still reads 0.74 (its points along the face come to
+// lie alone above it as before).
 LPFDM_DEF Diagnostics fos_warnings(const Scene& s) {
     Diagnostics d;
     const double L = s.cell_m, g = std::hypot(s.gravity_x, s.gravity_y);
@@ -7878,6 +7963,7 @@ LPFDM_DEF Diagnostics fos_warnings(const Scene& s) {
         const Cluster& k = s.clusters[ci];
         const Material* m = s.material(k.mat);
         if (!m || m->model != Model::MohrCoulomb || k.polygon.size() < 6) continue;
+        if (k.fill_points && s.mapping == Mapping::Smooth) continue;  // verified (tests/README.md, "Factor of safety")
         const double cut = 4 * m->c * std::tan((45 + 0.5 * m->phi_deg) * detail::kPi / 180) / (m->rho * g);
         if (!(cut < L)) continue;
         const std::size_t n = k.polygon.size() / 2;
@@ -7901,7 +7987,7 @@ LPFDM_DEF Diagnostics fos_warnings(const Scene& s) {
                          "--fos does not verify a free face across the lattice in soil too weak for a riser of one cell to stand: this edge, (" + shortest(ax) +
                              ", " + shortest(ay) + ") to (" + shortest(bx) + ", " + shortest(by) + ") m, of MATERIAL " + std::to_string(k.mat) +
                              " (a vertical cut stands to 4 c tan(45 + phi/2) / (rho g) = " + shortest(cut) + " m, L = " + shortest(L) +
-                             " m); such a face reads far below its slope's factor (decks/README.md, \"Factor of safety\")",
+                             " m); such a face reads far below its slope's factor unless drawn with FILL=POINTS under MAPPING SMOOTH (decks/README.md, \"Factor of safety\")",
                          true});
             break;
         }
@@ -8019,7 +8105,8 @@ LPFDM_DEF std::vector<std::string> card_names() {
     return v;
 }
 
-// A card's synopsis from the table: "CLUSTER mat x0 y0 x1 y1 [PPC=2]".
+// A card's synopsis from the table: "CLUSTER mat x0 y0 x1 y1 [PPC=2]" (deck_help adds a
+// CLUSTER's FILL=, whose value is a word).
 LPFDM_DEF std::string card_synopsis(const DeckCard& c) {
     std::string out = c.name;
     auto word = [&](const std::string& w) { if (!w.empty()) out += " " + w; };
@@ -8045,13 +8132,17 @@ LPFDM_DEF std::string card_synopsis(const DeckCard& c) {
 LPFDM_DEF std::string deck_help() {
     std::string out = "deck cards (decks/README.md explains each):\n";
     for (const DeckCard& c : kDeckCards) {
-        std::string line = "  " + card_synopsis(c);
+        const bool cluster = std::strcmp(c.name, "CLUSTER") == 0;
+        std::string line = "  " + card_synopsis(c) + (cluster ? " [FILL=CELLS]" : "");  // (a word's value: read by read_cluster)
         line.resize(std::max<std::size_t>(line.size() + 1, 58), ' ');
         out += line + c.meaning + "\n";
-        if (std::strcmp(c.name, "CLUSTER") == 0) {  // its second form, read by the deck reader
-            line = "  CLUSTER mat POLYGON x1 y1 x2 y2 x3 y3 ... [PPC=2]";
+        if (cluster) {  // its second form and FILL=POINTS, read by the deck reader
+            line = "  CLUSTER mat POLYGON x1 y1 x2 y2 x3 y3 ... [PPC=2] [FILL=CELLS]";
             line.resize(std::max<std::size_t>(line.size() + 1, 58), ' ');
             out += line + "the same in the polygon (a centre on an edge counts; & continues the card)\n";
+            line = "  ... FILL=POINTS";
+            line.resize(std::max<std::size_t>(line.size() + 1, 58), ' ');
+            out += line + "only the points whose own places lie in the box or polygon: a face across the lattice is not a staircase of cells\n";
         }
     }
     out += "--set keys (CARD.KEY; MATERIAL and WALL by id, CLUSTER, FIX, SHAKE and OUTPUT by order from 1):\n";
@@ -8180,15 +8271,18 @@ inline std::string cluster_place_problem(const Scene& s, const Cluster& c, Pos& 
         where = poly ? coord_pos(first_out) : c.pos;
         return std::string("the cluster ") + what + " reaches outside the lattice: " + past + " (the lattice is [0, " + ten(X) + "] x [0, " + ten(Y) + "] m)";
     }
+    // FILL=POINTS: the points' places, the centres of the lattice of spacing L / PPC
+    const int n = c.fill_points ? std::clamp(c.ppc, 1, 32) : 1;
     bool any = false;
-    detail::cluster_cells(c, s.cell_m, s.mx, s.my, [&](int, int, int) { any = true; });
+    detail::cluster_cells(c, s.cell_m / n, s.mx * n, s.my * n, [&](int, int, int) { any = true; });
     if (!any) {
         double cx = 0, cy = 0, dist = 0;
-        detail::nearest_centre(corners, s.cell_m, s.mx, s.my, cx, cy, dist);
+        detail::nearest_centre(corners, s.cell_m / n, s.mx * n, s.my * n, cx, cy, dist);
         char b[64];
         std::snprintf(b, sizeof b, "%.3g", dist);
         where = c.pos;
-        return std::string("the cluster ") + what + " holds no cell centre: the nearest is (" + shortest(cx) + ", " + shortest(cy) + ") m, " + b + " m from it";
+        return std::string("the cluster ") + what + (c.fill_points ? " holds no point's place (FILL=POINTS, PPC=" + std::to_string(c.ppc) + ")" : std::string(" holds no cell centre")) +
+               ": the nearest is (" + shortest(cx) + ", " + shortest(cy) + ") m, " + b + " m from it";
     }
     return "";
 }
@@ -9108,19 +9202,49 @@ inline void read_material(CardReader& r, Scene& sc, const Pos& kp) {
     }
     if (!r.ok()) sc.materials.pop_back();
 }
-// CLUSTER mat x0 y0 x1 y1 [PPC=n], or CLUSTER mat POLYGON x1 y1 ... [PPC=n]
-inline void read_cluster(CardReader& r, Scene& sc, const Pos& kp, const std::vector<Token>& toks) {
+// CLUSTER mat x0 y0 x1 y1 [PPC=n] [FILL=CELLS|POINTS], or CLUSTER mat POLYGON x1 y1 ...
+// [PPC=n] [FILL=CELLS|POINTS]: FILL=, whose value is a word, taken out of the card's tokens
+// (r: the card's reader, for its own errors) and the rest read by a reader of its own.
+// False when the card failed.
+inline bool read_cluster(CardReader& r, Diagnostics& d, Scene& sc, const Pos& kp, const std::vector<Token>& toks) {
+    std::vector<Token> kept;
+    const Token* fill = nullptr;
+    for (std::size_t t = 0; t < toks.size(); ++t) {
+        if (!(t > 0 && upper(toks[t].text) == "FILL" && t + 1 < toks.size() && toks[t + 1].text == "=")) { kept.push_back(toks[t]); continue; }
+        if (fill) { r.fail(toks[t].pos, "parameter FILL given twice"); break; }
+        if (t + 2 >= toks.size() || toks[t + 2].text == "=") { r.fail(toks[t + 1].pos, "missing value after FILL="); break; }
+        fill = &toks[t + 2];
+        t += 2;
+    }
+    bool points = false;
+    if (r.ok() && fill) {
+        const std::string u = upper(fill->text);
+        if (u == "POINTS") points = true;
+        else if (u != "CELLS") r.fail(fill->pos, "unknown FILL '" + fill->text + "' (CELLS or POINTS)" + did_you_mean(fill->text, {"CELLS", "POINTS"}));
+    }
+    if (!r.ok()) return false;
+    CardReader c(kept, d);
     sc.clusters.emplace_back();
     const std::size_t at = sc.clusters.size() - 1;
     sc.clusters[at].pos = kp;
-    if (toks.size() > 2 && upper(toks[2].text) == "POLYGON") {
-        r.fields("CLUSTER", sc, at, "MAT");
-        detail::read_polygon(r, sc.clusters[at]);
+    sc.clusters[at].fill_points = points;
+    if (kept.size() > 2 && upper(kept[2].text) == "POLYGON") {
+        c.fields("CLUSTER", sc, at, "MAT");
+        detail::read_polygon(c, sc.clusters[at]);
     } else {
-        r.fields("CLUSTER", sc, at);
+        c.fields("CLUSTER", sc, at);
     }
-    r.parameters("CLUSTER", 0, sc, at);
-    if (!r.ok()) sc.clusters.pop_back();
+    const std::size_t before = d.size();
+    c.parameters("CLUSTER", 0, sc, at);
+    c.finish();
+    const std::string unknown = "unknown parameter '";
+    if (d.size() > before && d.back().message.compare(0, unknown.size(), unknown) == 0) {  // FILL is the card's too
+        const std::size_t end = d.back().message.find('\'', unknown.size());
+        const std::string name = d.back().message.substr(unknown.size(), end - unknown.size());
+        d.back().message = unknown + name + "' (this card takes PPC, FILL)" + did_you_mean(name, {"PPC", "FILL"});
+    }
+    if (!c.ok()) sc.clusters.pop_back();
+    return c.ok();
 }
 // FIX X|Y|XY x0 y0 x1 y1
 inline void read_fix(CardReader& r, Scene& sc, const Pos& kp) {
@@ -9365,7 +9489,8 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
             read_material(r, sc, kp);
         } else if (kw == "CLUSTER") {
             ++cluster_cards;
-            read_cluster(r, sc, kp, toks);
+            if (!read_cluster(r, d, sc, kp, toks)) unread_card(kw);
+            continue;
         } else if (kw == "FIX") {
             read_fix(r, sc, kp);
         } else if (kw == "WALL") {

@@ -143,6 +143,20 @@ run drystrict "$tmp/i" -q --strict --fos "$tmp/dry.deck"
 if [ "$rc" = 2 ] && grep -qF "$tmp/dry.deck:3:34: error: --fos does not verify a free face across the lattice" "$tmp/drystrict.err" && [ ! -e "$tmp/i" ]; then pass; else
     fail drystrict "--strict: exit status $rc (2 expected), stderr: $(head -n 1 "$tmp/drystrict.err")"
 fi
+# the same slope with FILL=POINTS (the points whose places lie inside the polygon): under
+# MAPPING SMOOTH verified (tests/test_fos.cpp), no warning; under the paper's mapping
+# still warned of, the message naming the remedy
+sed 's/^CLUSTER .*/& FILL=POINTS/' "$tmp/dry.deck" >"$tmp/drypoints.deck"
+sed 's/^END/MAPPING SMOOTH\nEND/' "$tmp/drypoints.deck" >"$tmp/drysmooth.deck"
+run drysmooth "$tmp/j" -q --strict --fos "$tmp/drysmooth.deck"
+if [ "$rc" = 0 ] && grep -q '^factor of safety: ' "$tmp/drysmooth.out" && [ ! -s "$tmp/drysmooth.err" ]; then pass; else
+    fail drysmooth "FILL=POINTS with MAPPING SMOOTH: exit status $rc (0 expected, no warning), stderr: $(head -n 1 "$tmp/drysmooth.err")"
+fi
+run drypoints "$tmp/k" -q --fos "$tmp/drypoints.deck"
+if [ "$rc" = 0 ] && grep -qF "$tmp/drypoints.deck:3:34: warning: --fos does not verify a free face across the lattice" "$tmp/drypoints.err" &&
+   grep -qF "unless drawn with FILL=POINTS under MAPPING SMOOTH" "$tmp/drypoints.err"; then pass; else
+    fail drypoints "FILL=POINTS, the paper's mapping: exit status $rc, stderr: $(head -n 1 "$tmp/drypoints.err")"
+fi
 # refused: the card named, exit status 2, nothing written
 refused() {  # NAME PATTERN ARGS...
     local name=$1 pattern=$2

@@ -6,6 +6,7 @@
 #include "../lpfdm.hpp"
 #include "common.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -334,6 +335,135 @@ TEST_CASE("deck error: a box or POLYGON holding no cell centre names the nearest
                     "the cluster polygon holds no cell centre: the nearest is (0.5, 1.5) m, 0.1 m from it");
     // A triangle between the centres (1.5, 1.5), (2.5, 1.5) and (1.5, 2.5): nearest the first.
     CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 1.6 1.55 2.3 1.55 1.6 2.2"), 5, 1, "the nearest is (1.5, 1.5) m, 0.112 m from it");
+}
+
+// ============================================================ FILL=POINTS ===
+
+namespace {
+// The points a scene makes: (x, y, material id), in the order made.
+struct Made { double x, y; int mat; };
+std::vector<Made> made(const Scene& s) {
+    lpfdm::Simulation sim(s);
+    std::vector<Made> v;
+    const lpfdm::Points& p = sim.points();
+    for (std::size_t k = 0; k < p.x.size(); ++k) v.push_back({p.x[k], p.y[k], s.materials[std::size_t(sim.groups()[p.group[k]].mat_index)].id});
+    return v;
+}
+bool same(const std::vector<Made>& a, const std::vector<Made>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t k = 0; k < a.size(); ++k)
+        if (a[k].x != b[k].x || a[k].y != b[k].y || a[k].mat != b[k].mat) return false;
+    return true;
+}
+// Even-odd: whether (x, y) lies inside the polygon v (the points tested here lie far from its edges).
+bool inside(const std::vector<double>& v, double x, double y) {
+    bool in = false;
+    const std::size_t n = v.size() / 2;
+    for (std::size_t k = 0, m = n - 1; k < n; m = k++)
+        if ((v[2 * k + 1] > y) != (v[2 * m + 1] > y) && x < v[2 * k] + (y - v[2 * k + 1]) * (v[2 * m] - v[2 * k]) / (v[2 * m + 1] - v[2 * k + 1])) in = !in;
+    return in;
+}
+}  // namespace
+
+TEST_CASE("deck: CLUSTER ... FILL=POINTS and FILL=CELLS, on a box or a POLYGON, in any case") {
+    CHECK(!read_ok(kGrid + kMaterial + "CLUSTER 1 0 0 4 4\n" + kStep).clusters[0].fill_points);
+    CHECK(read_ok(kGrid + kMaterial + "CLUSTER 1 0 0 4 4 FILL=POINTS\n" + kStep).clusters[0].fill_points);
+    CHECK(!read_ok(kGrid + kMaterial + "CLUSTER 1 0 0 4 4 fill=cells PPC=3\n" + kStep).clusters[0].fill_points);
+    const Scene s = read_ok(kGrid + kMaterial + "CLUSTER 1 POLYGON 0 0 4 0 0 4 FILL=Points PPC=3\n" + kStep);
+    CHECK(s.clusters[0].fill_points);
+    CHECK(s.clusters[0].ppc == 3);
+    CHECK(s.clusters[0].polygon.size() == 6);
+}
+
+TEST_CASE("deck error: FILL= takes CELLS or POINTS, once") {
+    CHECK_ONE_ERROR(plus("CLUSTER 1 0 0 4 4 FILL=EDGES"), 5, 24, "unknown FILL 'EDGES' (CELLS or POINTS)");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 0 0 4 4 FILL=POINT"), 5, 24, "unknown FILL 'POINT' (CELLS or POINTS) (did you mean POINTS?)");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 0 0 4 4 FILL="), 5, 23, "missing value after FILL=");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 0 0 4 4 FILL=POINTS FILL=CELLS"), 5, 31, "parameter FILL given twice");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 0 0 4 4 FIL=POINTS"), 5, 19, "unknown parameter 'FIL' (this card takes PPC, FILL) (did you mean FILL?)");
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 0 4 0 4 x FILL=POINTS"), 5, 29, "vertex 3 y: expected a number, found 'x'");
+    // a polygon holding no point's place: the nearest named (PPC=2: the places are L / 4 from the cells' edges)
+    CHECK_ONE_ERROR(plus("CLUSTER 1 POLYGON 0 1.3 4 1.3 4 1.45 0 1.45 FILL=POINTS"), 5, 1,
+                    "the cluster polygon holds no point's place (FILL=POINTS, PPC=2): the nearest is (0.25, 1.25) m, 0.05 m from it");
+    read_ok(plus("CLUSTER 1 POLYGON 0 1.3 4 1.3 4 1.8 0 1.8 FILL=POINTS"));  // no cell centre, but the places at y = 1.75
+}
+
+// With one point a cell the point's place is the cell's centre: FILL=POINTS and FILL=CELLS
+// make the same points. A box whose edges lie on the lattice's lines holds whole cells:
+// the same points at any PPC.
+TEST_CASE("deck: FILL=POINTS makes FILL=CELLS's points with PPC=1, and with a box on the lattice's lines at any PPC") {
+    const char* shapes[] = {"0.25 0.25 2.75 1.75", "0.2495 0.5 1.7505 3.2", "POLYGON 0 0 4 0 4 1 1 1 1 4 0 4", "POLYGON 0.3 0.2 3.7 1.1 1.2 3.9",
+                            "POLYGON 0 0 4 0 4 1.5 1.5 1.5 1.5 4 0 4"};
+    for (const char* shape : shapes) {
+        INFO(shape);
+        const std::string card = std::string("CLUSTER 1 ") + shape + " PPC=1";
+        CHECK(same(made(read_ok(kGrid + kMaterial + card + " FILL=POINTS\n" + kStep)), made(read_ok(kGrid + kMaterial + card + "\n" + kStep))));
+    }
+    for (const char* ppc : {"2", "3"}) {
+        const std::string card = std::string("CLUSTER 1 1 0 3 4 PPC=") + ppc;
+        const std::vector<Made> cells = made(read_ok(kGrid + kMaterial + card + "\n" + kStep));
+        CHECK(cells.size() == std::size_t(8 * std::stoi(ppc) * std::stoi(ppc)));
+        CHECK(same(made(read_ok(kGrid + kMaterial + card + " FILL=POINTS\n" + kStep)), cells));
+    }
+}
+
+// A triangle whose edges pass no point's place: FILL=POINTS makes the points whose places
+// lie inside it (an even-odd test written apart), each in its own cell, and their area
+// differs from the triangle's by less than its perimeter times the points' spacing.
+TEST_CASE("deck: FILL=POINTS makes exactly the points whose places lie inside the polygon") {
+    const std::vector<double> v = {0.31, 0.17, 7.63, 1.09, 2.27, 5.71};
+    const Scene s = read_ok("GRID 8 6 1\n" + kMaterial + "CLUSTER 1 POLYGON 0.31 0.17 7.63 1.09 2.27 5.71 PPC=4 FILL=POINTS\n" + kStep);
+    const std::vector<Made> m = made(s);
+    std::size_t expected = 0;
+    for (int j = 0; j < 24; ++j)
+        for (int i = 0; i < 32; ++i) expected += inside(v, (i + 0.5) / 4, (j + 0.5) / 4);
+    CHECK(m.size() == expected);
+    CHECK(lpfdm::count_points(s) == double(expected));
+    for (const Made& p : m) CHECK(inside(v, p.x, p.y));
+    const double area = 0.5 * std::fabs((v[2] - v[0]) * (v[5] - v[1]) - (v[4] - v[0]) * (v[3] - v[1]));
+    const double perimeter = std::hypot(v[2] - v[0], v[3] - v[1]) + std::hypot(v[4] - v[2], v[5] - v[3]) + std::hypot(v[0] - v[4], v[1] - v[5]);
+    MESSAGE("triangle of area " << area << " m^2: " << m.size() << " points of 1/16 m^2 (" << m.size() / 16.0 << " m^2)");
+    CHECK(std::fabs(m.size() / 16.0 - area) < perimeter * 0.25);
+    const Scene cells = read_ok("GRID 8 6 1\n" + kMaterial + "CLUSTER 1 POLYGON 0.31 0.17 7.63 1.09 2.27 5.71 PPC=4\n" + kStep);
+    CHECK(std::fabs(m.size() / 16.0 - area) < std::fabs(made(cells).size() / 16.0 - area));  // (the cells' staircase errs more here)
+}
+
+// A later cluster replaces an earlier one at the places it holds: two FILL=POINTS
+// triangles halving a box, of one PPC, make the box's points, each once, each of the
+// material of the triangle holding it (the diagonal's points: the later one's); a
+// FILL=POINTS polygon over a FILL=CELLS box keeps the box's points outside it; one of
+// another PPC replaces the box's points inside it, and only those.
+TEST_CASE("deck: a later FILL=POINTS cluster replaces an earlier one at the places it holds") {
+    const std::string mats = "MATERIAL 1 ELASTIC E=5E7 NU=0.3 RHO=2000\nMATERIAL 2 ELASTIC E=5E7 NU=0.3 RHO=1000\n";
+    const std::string grid = "GRID 8 8 0.5\n";
+    const std::vector<Made> box = made(read_ok(grid + mats + "CLUSTER 1 0 0 4 4 PPC=3\n" + kStep));
+    std::vector<Made> halves =
+        made(read_ok(grid + mats + "CLUSTER 1 POLYGON 0 0 4 0 4 4 PPC=3 FILL=POINTS\nCLUSTER 2 POLYGON 0 0 4 4 0 4 PPC=3 FILL=POINTS\n" + kStep));
+    REQUIRE(halves.size() == box.size());
+    // (in a cell the first cluster's points come first: the box's order, cluster by cluster)
+    std::sort(halves.begin(), halves.end(), [](const Made& a, const Made& b) {  // (places differ: a total order)
+        const int ca = int(a.y / 0.5) * 8 + int(a.x / 0.5), cb = int(b.y / 0.5) * 8 + int(b.x / 0.5);
+        return ca != cb ? ca < cb : a.y != b.y ? a.y < b.y : a.x < b.x;
+    });
+    for (std::size_t k = 0; k < box.size(); ++k) {
+        CHECK(halves[k].x == box[k].x);
+        CHECK(halves[k].y == box[k].y);
+        CHECK(halves[k].mat == (halves[k].y >= halves[k].x ? 2 : 1));
+    }
+    const std::vector<double> tri = {0.3, 0.2, 3.7, 1.1, 1.2, 3.9};
+    for (const char* ppc : {"3", "2"}) {
+        INFO("PPC=" << ppc);
+        const std::vector<Made> over = made(read_ok(grid + mats + "CLUSTER 1 0 0 4 4 PPC=3\nCLUSTER 2 POLYGON 0.3 0.2 3.7 1.1 1.2 3.9 FILL=POINTS PPC=" + ppc + "\n" + kStep));
+        std::size_t kept = 0, replaced = 0;
+        for (const Made& p : box) (inside(tri, p.x, p.y) ? replaced : kept) += 1;
+        std::size_t ones = 0, twos = 0;
+        for (const Made& p : over) {
+            CHECK(inside(tri, p.x, p.y) == (p.mat == 2));
+            (p.mat == 1 ? ones : twos) += 1;
+        }
+        CHECK(ones == kept);
+        if (std::string(ppc) == "3") CHECK(twos == replaced);
+    }
 }
 
 TEST_CASE("apply_setting: CLUSTERn.PPC and .MAT on a POLYGON; its corners are not a box's") {
