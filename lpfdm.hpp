@@ -2553,67 +2553,82 @@ inline void cluster_cells(const Cluster& c, double L, int mx, int my, const F& f
 template <class F>
 inline void made_points(const std::vector<Cluster>& cs, double L, int mx, int my, const F& f) {
     const int nc = int(cs.size());
+    auto fits = [&](int n) { return n >= 1 && n <= 32 && double(mx) * n <= 2e9 && double(my) * n <= 2e9; };  // (a scene not yet validated)
     std::vector<int> whole(std::size_t(mx) * std::size_t(my), -1);  // the last FILL=CELLS cluster of each cell
-    for (int k = 0; k < nc; ++k)
-        if (!cs[std::size_t(k)].fill_points)
-            cluster_cells(cs[std::size_t(k)], L, mx, my, [&](int i0, int i1, int j) {
-                for (int i = i0; i <= i1; ++i) whole[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = k;
-            });
+    std::vector<int> by_points;  // the FILL=POINTS clusters, in deck order
+    for (int k = 0; k < nc; ++k) {
+        if (cs[std::size_t(k)].fill_points) { by_points.push_back(k); continue; }
+        cluster_cells(cs[std::size_t(k)], L, mx, my, [&](int i0, int i1, int j) {
+            for (int i = i0; i <= i1; ++i) whole[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = k;
+        });
+    }
+    if (by_points.empty()) {  // every cluster fills cells: the last one holding a centre, all its points
+        for (int j = 0; j < my; ++j)
+            for (int i = 0; i < mx; ++i) {
+                const int w = whole[std::size_t(j) * std::size_t(mx) + std::size_t(i)];
+                const int n = w < 0 ? 0 : cs[std::size_t(w)].ppc;
+                if (!fits(n)) continue;
+                for (int sj = 0; sj < n; ++sj)
+                    for (int si = 0; si < n; ++si) f(i, j, w, si, sj);
+            }
+        return;
+    }
     // held[k][n]: the positions of the lattice of spacing L / n that the FILL=POINTS cluster k
-    // holds, as runs of columns a row (row j's runs first[j] .. first[j + 1]), for each n a
-    // cluster up to k uses
+    // holds, as runs of columns in its rows j0 .. j0 + first.size() - 2 (row j's runs
+    // first[j - j0] .. first[j - j0 + 1]), for each n a cluster up to k uses
     struct Runs {
+        int j0 = 0;
         std::vector<std::size_t> first;
         std::vector<std::pair<int, int>> run;
         bool holds(int i, int j) const {
-            for (std::size_t r = first[std::size_t(j)]; r < first[std::size_t(j) + 1]; ++r)
-                if (run[r].first <= i && i <= run[r].second) return true;
+            const long r = long(j) - j0;
+            if (r < 0 || r + 1 >= long(first.size())) return false;
+            for (std::size_t q = first[std::size_t(r)]; q < first[std::size_t(r) + 1]; ++q)
+                if (run[q].first <= i && i <= run[q].second) return true;
             return false;
         }
     };
     std::vector<std::vector<Runs>> held(cs.size());
-    bool any_points = false;
-    for (int k = 0; k < nc; ++k) {
-        const Cluster& c = cs[std::size_t(k)];
-        if (!c.fill_points) continue;
-        any_points = true;
+    for (int k : by_points) {
         held[std::size_t(k)].resize(33);
         for (int e = 0; e <= k; ++e) {
             const int n = cs[std::size_t(e)].ppc;
-            if (n < 1 || n > 32 || !held[std::size_t(k)][std::size_t(n)].first.empty()) continue;
+            if (!fits(n) || !held[std::size_t(k)][std::size_t(n)].first.empty()) continue;
             Runs& h = held[std::size_t(k)][std::size_t(n)];
-            h.first.assign(std::size_t(my) * std::size_t(n) + 1, 0);
-            cluster_cells(c, L / n, mx * n, my * n, [&](int i0, int i1, int j) {
+            std::vector<int> rows;  // each run's row (upwards: cluster_cells' order)
+            cluster_cells(cs[std::size_t(k)], L / n, mx * n, my * n, [&](int i0, int i1, int j) {
                 h.run.push_back({i0, i1});
-                h.first[std::size_t(j) + 1] = h.run.size();  // (rows come upwards)
+                rows.push_back(j);
             });
-            for (std::size_t j = 1; j < h.first.size(); ++j) h.first[j] = std::max(h.first[j], h.first[j - 1]);
+            h.first.assign(1, 0);
+            if (rows.empty()) continue;
+            h.j0 = rows.front();
+            h.first.assign(std::size_t(rows.back() - h.j0) + 2, 0);
+            for (int j : rows) ++h.first[std::size_t(j - h.j0) + 1];
+            for (std::size_t q = 1; q < h.first.size(); ++q) h.first[q] += h.first[q - 1];
         }
     }
     for (int j = 0; j < my; ++j)
         for (int i = 0; i < mx; ++i) {
             const int w = whole[std::size_t(j) * std::size_t(mx) + std::size_t(i)];
-            if (!any_points) {  // (every cluster fills cells: the last one holding the centre)
-                if (w < 0) continue;
-                const int n = cs[std::size_t(w)].ppc;
-                for (int sj = 0; sj < n; ++sj)
-                    for (int si = 0; si < n; ++si) f(i, j, w, si, sj);
-                continue;
-            }
-            for (int k = std::max(w, 0); k < nc; ++k) {
+            // the clusters that may make points here: w (a FILL=CELLS one) and the FILL=POINTS ones after it
+            auto in_cell = [&](int k) {
                 const Cluster& c = cs[std::size_t(k)];
                 const int n = c.ppc;
-                if ((c.fill_points ? w > k : w != k) || n < 1 || n > 32) continue;
+                if (!fits(n)) return;
+                const auto later = std::upper_bound(by_points.begin(), by_points.end(), k);
                 for (int sj = 0; sj < n; ++sj)
                     for (int si = 0; si < n; ++si) {
                         const int pi = i * n + si, pj = j * n + sj;  // the point's place on the lattice of spacing L / n
                         if (c.fill_points && !held[std::size_t(k)][std::size_t(n)].holds(pi, pj)) continue;
                         bool replaced = false;
-                        for (int later = k + 1; later < nc && !replaced; ++later)
-                            replaced = cs[std::size_t(later)].fill_points && held[std::size_t(later)][std::size_t(n)].holds(pi, pj);
+                        for (auto q = later; q != by_points.end() && !replaced; ++q) replaced = held[std::size_t(*q)][std::size_t(n)].holds(pi, pj);
                         if (!replaced) f(i, j, k, si, sj);
                     }
-            }
+            };
+            auto q = std::upper_bound(by_points.begin(), by_points.end(), w);
+            if (w >= 0) in_cell(w);
+            for (; q != by_points.end(); ++q) in_cell(*q);
         }
 }
 
@@ -2629,6 +2644,11 @@ inline bool warn_map_fits(const Scene& s) {
 }
 inline std::vector<int> cluster_owners(const std::vector<Cluster>& clusters, double L, int mx, int my) {
     std::vector<int> owner(std::size_t(mx) * std::size_t(my), -1);
+    const bool by_points = std::any_of(clusters.begin(), clusters.end(), [](const Cluster& c) { return c.fill_points; });
+    if (by_points) {  // a cell partly full: the last cluster that makes a point in it (made_points)
+        made_points(clusters, L, mx, my, [&](int i, int j, int k, int, int) { owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = k; });
+        return owner;
+    }
     for (std::size_t ci = 0; ci < clusters.size(); ++ci)
         cluster_cells(clusters[ci], L, mx, my, [&](int i0, int i1, int j) {
             for (int i = i0; i <= i1; ++i) owner[std::size_t(j) * std::size_t(mx) + std::size_t(i)] = int(ci);
@@ -2782,15 +2802,23 @@ LPFDM_DEF double estimate_bytes(const Scene& s, double points) {
     return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * (per_point + 2 * 8);  // (+ the initial positions)
 }
 
+// The points the scene's clusters make (made_points): exact, or for a lattice too large to
+// scan (or, with FILL=POINTS, too many places to test) an upper bound, the clusters'
+// points summed, for the memory check.
 LPFDM_DEF double count_points(const Scene& s) {
     if (s.mx <= 0 || s.my <= 0 || !(s.cell_m > 0)) return 0;
     double n = 0;
-    // Per cell the last cluster wins; count by scanning the clusters' cell ranges.
-    const long cells = long(s.mx) * s.my;
-    if (cells > 50'000'000L) {  // too large to scan; an upper bound is enough for the memory check
+    const double cells = double(s.mx) * s.my;
+    const bool by_points = std::any_of(s.clusters.begin(), s.clusters.end(), [](const Cluster& c) { return c.fill_points; });
+    int most = 1;  // the largest PPC
+    for (const auto& c : s.clusters) most = std::max(most, std::clamp(c.ppc, 1, 32));
+    // Too large to scan (or, with FILL=POINTS, to test each place): an upper bound is
+    // enough for the memory check.
+    if (cells > 5e7 || (by_points && cells * most * most > 2e8)) {
         for (const auto& c : s.clusters) {
             double cells_in = (c.box.x1 - c.box.x0) * (c.box.y1 - c.box.y0) / (s.cell_m * s.cell_m);
-            if (c.fill_points && c.ppc >= 1) {  // its points, one a cell of the lattice of spacing L / PPC
+            if (c.ppc < 1 || c.ppc > 32) continue;  // (a scene not yet validated)
+            if (c.fill_points && double(s.mx) * c.ppc <= 2e9 && double(s.my) * c.ppc <= 2e9) {  // its points, one a cell of the lattice of spacing L / PPC
                 double in = 0;
                 detail::cluster_cells(c, s.cell_m / c.ppc, s.mx * c.ppc, s.my * c.ppc, [&](int i0, int i1, int) { in += i1 - i0 + 1; });
                 n += in;
@@ -2804,7 +2832,13 @@ LPFDM_DEF double count_points(const Scene& s) {
         }
         return n;
     }
-    detail::made_points(s.clusters, s.cell_m, s.mx, s.my, [&](int, int, int, int, int) { n += 1; });
+    if (by_points) {
+        detail::made_points(s.clusters, s.cell_m, s.mx, s.my, [&](int, int, int, int, int) { n += 1; });
+        return n;
+    }
+    const std::vector<int> owner = detail::cluster_owners(s.clusters, s.cell_m, s.mx, s.my);  // (a cell's points at once)
+    for (int o : owner)
+        if (o >= 0) n += double(s.clusters[std::size_t(o)].ppc) * s.clusters[std::size_t(o)].ppc;
     return n;
 }
 
@@ -7944,10 +7978,11 @@ LPFDM_DEF FosResult factor_of_safety(const Scene& s, const FosOptions& o, const 
 // safety"). Warned at the edge's first vertex, once a cluster, where the edge is a free
 // face: at some point along it the cell a cell's width inside is the cluster's own and the
 // cell as far outside holds no cluster (a buried interface is not warned of). Not warned
-// of: a cluster drawn with FILL=POINTS under MAPPING SMOOTH, whose cells along the face are
-// partly full (decks/verify_drawn_slope.deck: 1.48, 1.46, 1.44 at 10, 20, 40 cells over H);
-// FILL=POINTS under the paper's mapping still reads 0.74 (its points along the face come to
-// lie alone above it as before).
+// of: a cluster drawn with FILL=POINTS and PPC=2 under MAPPING SMOOTH without ADVECT FLIP,
+// whose cells along the face are partly full (decks/verify_drawn_slope.deck: 1.48, 1.46,
+// 1.44 at 10, 20, 40 cells over H). Warned of otherwise: under the paper's mapping it still
+// reads 0.74 (its points along the face come to lie alone above it as before); PPC=1 makes
+// FILL=CELLS's points; PPC=4 reads high (1.59, 1.53, 1.48); FLIP was not measured.
 LPFDM_DEF Diagnostics fos_warnings(const Scene& s) {
     Diagnostics d;
     const double L = s.cell_m, g = std::hypot(s.gravity_x, s.gravity_y);
@@ -7963,7 +7998,9 @@ LPFDM_DEF Diagnostics fos_warnings(const Scene& s) {
         const Cluster& k = s.clusters[ci];
         const Material* m = s.material(k.mat);
         if (!m || m->model != Model::MohrCoulomb || k.polygon.size() < 6) continue;
-        if (k.fill_points && s.mapping == Mapping::Smooth) continue;  // verified (tests/README.md, "Factor of safety")
+        // verified: FILL=POINTS with 2 x 2 points a cell under MAPPING SMOOTH, no FLIP (tests/README.md, "Factor of safety")
+        const bool smooth_points = k.fill_points && s.mapping == Mapping::Smooth;
+        if (smooth_points && k.ppc == 2 && s.advect != Advect::Flip) continue;
         const double cut = 4 * m->c * std::tan((45 + 0.5 * m->phi_deg) * detail::kPi / 180) / (m->rho * g);
         if (!(cut < L)) continue;
         const std::size_t n = k.polygon.size() / 2;
@@ -7987,7 +8024,9 @@ LPFDM_DEF Diagnostics fos_warnings(const Scene& s) {
                          "--fos does not verify a free face across the lattice in soil too weak for a riser of one cell to stand: this edge, (" + shortest(ax) +
                              ", " + shortest(ay) + ") to (" + shortest(bx) + ", " + shortest(by) + ") m, of MATERIAL " + std::to_string(k.mat) +
                              " (a vertical cut stands to 4 c tan(45 + phi/2) / (rho g) = " + shortest(cut) + " m, L = " + shortest(L) +
-                             " m); such a face reads far below its slope's factor unless drawn with FILL=POINTS under MAPPING SMOOTH (decks/README.md, \"Factor of safety\")",
+                             (smooth_points ? " m); with FILL=POINTS under MAPPING SMOOTH it is verified with PPC=2 and no ADVECT FLIP only (PPC=4 reads 6-14 % high at 40-10 cells over H)"
+                                            : " m); such a face reads far below its slope's factor unless drawn with FILL=POINTS and PPC=2 under MAPPING SMOOTH") +
+                             " (decks/README.md, \"Factor of safety\")",
                          true});
             break;
         }
@@ -8137,7 +8176,7 @@ LPFDM_DEF std::string deck_help() {
         line.resize(std::max<std::size_t>(line.size() + 1, 58), ' ');
         out += line + c.meaning + "\n";
         if (cluster) {  // its second form and FILL=POINTS, read by the deck reader
-            line = "  CLUSTER mat POLYGON x1 y1 x2 y2 x3 y3 ... [PPC=2] [FILL=CELLS]";
+            line = "  CLUSTER mat POLYGON x1 y1 x2 y2 ... [PPC=2] [FILL=CELLS]";
             line.resize(std::max<std::size_t>(line.size() + 1, 58), ' ');
             out += line + "the same in the polygon (a centre on an edge counts; & continues the card)\n";
             line = "  ... FILL=POINTS";
@@ -8209,6 +8248,9 @@ LPFDM_DEF std::string apply_setting(Scene& s, const std::string& key_in, double 
     if ((card == "WATER" && !s.water.on) || (card == "RESERVOIR" && !s.reservoir.on) || (card == "GEOSTATIC" && !s.geostatic))
         return "the deck has no " + card + " card: " + key_in + " would change nothing";
     const DeckKey* k = deck_key(card, par);
+    if (card == "CLUSTER" && par == "FILL")
+        return "CLUSTER " + std::to_string(num) + "'s FILL is a word (CELLS or POINTS), and --set takes numbers: write it on the card (--set takes " +
+               (s.clusters[index].polygon.empty() ? "MAT, X0, Y0, X1, Y1, PPC" : "MAT, PPC") + ")";
     if (!k || !k->settable) {
         const std::vector<std::string> names = key_names(card, model, true);
         return card + " has no parameter " + par + " (it takes " + joined(names) + ")" + did_you_mean(par, names);
@@ -8272,7 +8314,8 @@ inline std::string cluster_place_problem(const Scene& s, const Cluster& c, Pos& 
         return std::string("the cluster ") + what + " reaches outside the lattice: " + past + " (the lattice is [0, " + ten(X) + "] x [0, " + ten(Y) + "] m)";
     }
     // FILL=POINTS: the points' places, the centres of the lattice of spacing L / PPC
-    const int n = c.fill_points ? std::clamp(c.ppc, 1, 32) : 1;
+    int n = c.fill_points ? std::clamp(c.ppc, 1, 32) : 1;
+    if (double(s.mx) * n > 2e9 || double(s.my) * n > 2e9) n = 1;  // (a lattice past GRID's bounds: refused elsewhere)
     bool any = false;
     detail::cluster_cells(c, s.cell_m / n, s.mx * n, s.my * n, [&](int, int, int) { any = true; });
     if (!any) {
@@ -9024,14 +9067,16 @@ public:
     }
     // The NAME=value parameters of card (of a material model: kElastic, kMohr) into scene
     // object `index` of sc, then each checked against its range, in the order given.
-    void parameters(const char* card, int model, Scene& sc, std::size_t index) {
+    // `words`: the card's parameters whose values are words, which its own reader took
+    // out before (named where an unknown parameter is).
+    void parameters(const char* card, int model, Scene& sc, std::size_t index, const std::vector<const char*>& words = {}) {
         std::vector<const char*> allowed, required;
         for (const DeckKey& k : kDeckKeys) {
             if (!k.param || std::strcmp(k.card, card) != 0 || (model && !(k.models & model))) continue;
             allowed.push_back(k.name);
             if (k.required) required.push_back(k.name);
         }
-        const std::vector<Param> ps = params(allowed, required);
+        const std::vector<Param> ps = params(allowed, required, words);
         for (const Param& p : ps) {  // a value out of range is not stored (it may not fit the member)
             const DeckKey& k = *deck_key(card, p.name);
             if (in_range(k, p.value)) k.set(sc, index, p.value);
@@ -9041,7 +9086,7 @@ public:
             if (ok_ && !key_ok(k, p.value, sc, index)) fail(p.pos, range_message(k, p.value));
         }
     }
-    std::vector<Param> params(const std::vector<const char*>& allowed, const std::vector<const char*>& required);
+    std::vector<Param> params(const std::vector<const char*>& allowed, const std::vector<const char*>& required, const std::vector<const char*>& words = {});
     void finish() {
         if (ok_ && next_ < t_.size()) fail(t_[next_].pos, "extra field '" + t_[next_].text + "'");
     }
@@ -9064,7 +9109,8 @@ private:
     bool ok_ = true;
 };
 
-inline std::vector<CardReader::Param> CardReader::params(const std::vector<const char*>& allowed, const std::vector<const char*>& required) {
+inline std::vector<CardReader::Param> CardReader::params(const std::vector<const char*>& allowed, const std::vector<const char*>& required,
+                                                         const std::vector<const char*>& words) {
     std::vector<Param> out;
     while (ok_ && next_ < t_.size()) {
         const Token& name = t_[next_];
@@ -9074,10 +9120,9 @@ inline std::vector<CardReader::Param> CardReader::params(const std::vector<const
         bool known = false;
         for (const char* a : allowed) known |= u == a;
         if (!known) {
-            std::string list;
-            for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
-            fail(name.pos, "unknown parameter '" + name.text + "' (this card takes " + list + ")" +
-                               did_you_mean(name.text, std::vector<std::string>(allowed.begin(), allowed.end())));
+            std::vector<std::string> named(allowed.begin(), allowed.end());
+            named.insert(named.end(), words.begin(), words.end());
+            fail(name.pos, "unknown parameter '" + name.text + "' (this card takes " + joined(named) + ")" + did_you_mean(name.text, named));
             break;
         }
         for (const auto& p : out)
@@ -9203,48 +9248,52 @@ inline void read_material(CardReader& r, Scene& sc, const Pos& kp) {
     if (!r.ok()) sc.materials.pop_back();
 }
 // CLUSTER mat x0 y0 x1 y1 [PPC=n] [FILL=CELLS|POINTS], or CLUSTER mat POLYGON x1 y1 ...
-// [PPC=n] [FILL=CELLS|POINTS]: FILL=, whose value is a word, taken out of the card's tokens
-// (r: the card's reader, for its own errors) and the rest read by a reader of its own.
-// False when the card failed.
-inline bool read_cluster(CardReader& r, Diagnostics& d, Scene& sc, const Pos& kp, const std::vector<Token>& toks) {
+// [PPC=n] [FILL=CELLS|POINTS]. FILL=, whose value is a word, is taken out of the card's
+// tokens and the rest read by a reader of its own; FILL= stands among the parameters,
+// after the fields. The card's first problem is reported, FILL's or the rest's. False
+// when the card failed.
+inline bool read_cluster(Diagnostics& d, Scene& sc, const Pos& kp, const std::vector<Token>& toks) {
     std::vector<Token> kept;
     const Token* fill = nullptr;
+    Diagnostic problem;  // FILL's first (no message: none)
+    auto fail = [&](const Pos& p, std::string m) { if (problem.message.empty()) problem = {p, std::move(m)}; };
     for (std::size_t t = 0; t < toks.size(); ++t) {
         if (!(t > 0 && upper(toks[t].text) == "FILL" && t + 1 < toks.size() && toks[t + 1].text == "=")) { kept.push_back(toks[t]); continue; }
-        if (fill) { r.fail(toks[t].pos, "parameter FILL given twice"); break; }
-        if (t + 2 >= toks.size() || toks[t + 2].text == "=") { r.fail(toks[t + 1].pos, "missing value after FILL="); break; }
+        if (t + 2 >= toks.size() || toks[t + 2].text == "=") { fail(toks[t + 1].pos, "missing value after FILL="); ++t; continue; }
+        if (fill) fail(toks[t].pos, "parameter FILL given twice");
+        const std::string u = upper(toks[t + 2].text);
+        if (u != "POINTS" && u != "CELLS")
+            fail(toks[t + 2].pos, "unknown FILL '" + toks[t + 2].text + "' (CELLS or POINTS)" + did_you_mean(toks[t + 2].text, {"CELLS", "POINTS"}));
+        for (std::size_t v = t + 3; v < toks.size(); v += 3)  // only NAME=value after it
+            if (!(v + 1 < toks.size() && toks[v + 1].text == "=")) {
+                fail(toks[t].pos, "FILL= stands before the field '" + toks[v].text + "': the parameters (PPC=, FILL=) come after the fields");
+                break;
+            }
         fill = &toks[t + 2];
         t += 2;
     }
-    bool points = false;
-    if (r.ok() && fill) {
-        const std::string u = upper(fill->text);
-        if (u == "POINTS") points = true;
-        else if (u != "CELLS") r.fail(fill->pos, "unknown FILL '" + fill->text + "' (CELLS or POINTS)" + did_you_mean(fill->text, {"CELLS", "POINTS"}));
-    }
-    if (!r.ok()) return false;
+    const std::size_t before = d.size();
     CardReader c(kept, d);
     sc.clusters.emplace_back();
     const std::size_t at = sc.clusters.size() - 1;
     sc.clusters[at].pos = kp;
-    sc.clusters[at].fill_points = points;
+    sc.clusters[at].fill_points = fill && upper(fill->text) == "POINTS";
     if (kept.size() > 2 && upper(kept[2].text) == "POLYGON") {
         c.fields("CLUSTER", sc, at, "MAT");
         detail::read_polygon(c, sc.clusters[at]);
     } else {
         c.fields("CLUSTER", sc, at);
     }
-    const std::size_t before = d.size();
-    c.parameters("CLUSTER", 0, sc, at);
+    c.parameters("CLUSTER", 0, sc, at, {"FILL"});
     c.finish();
-    const std::string unknown = "unknown parameter '";
-    if (d.size() > before && d.back().message.compare(0, unknown.size(), unknown) == 0) {  // FILL is the card's too
-        const std::size_t end = d.back().message.find('\'', unknown.size());
-        const std::string name = d.back().message.substr(unknown.size(), end - unknown.size());
-        d.back().message = unknown + name + "' (this card takes PPC, FILL)" + did_you_mean(name, {"PPC", "FILL"});
+    if (!problem.message.empty()) {  // FILL's, unless the rest's (the one c reported) comes first
+        const Pos& q = problem.pos;
+        if (d.size() == before) d.push_back(problem);
+        else if (q.line < d.back().pos.line || (q.line == d.back().pos.line && q.col < d.back().pos.col)) d.back() = problem;
     }
-    if (!c.ok()) sc.clusters.pop_back();
-    return c.ok();
+    const bool ok = c.ok() && problem.message.empty();
+    if (!ok) sc.clusters.pop_back();
+    return ok;
 }
 // FIX X|Y|XY x0 y0 x1 y1
 inline void read_fix(CardReader& r, Scene& sc, const Pos& kp) {
@@ -9489,7 +9538,7 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
             read_material(r, sc, kp);
         } else if (kw == "CLUSTER") {
             ++cluster_cards;
-            if (!read_cluster(r, d, sc, kp, toks)) unread_card(kw);
+            if (!read_cluster(d, sc, kp, toks)) unread_card(kw);
             continue;
         } else if (kw == "FIX") {
             read_fix(r, sc, kp);

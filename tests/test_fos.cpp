@@ -189,8 +189,9 @@ TEST_CASE("--fos: an infinite dry cohesionless 2:1 slope, phi = psi = 35 degrees
 //   below it by more than the bracket, and nearer than at 10 cells.
 // - The trial that fails slides at its surface: across the middle third of the face, the
 //   points within one cell of it move more than twice as far as those 1-1.5 m under it.
-// - Drawn by whole cells (FILL=CELLS: a staircase), the same slope reads far below: the
-//   warning's case (tests/README.md).
+// - Drawn by whole cells (FILL=CELLS: a staircase), or by points under the paper's
+//   mapping, the same slope reads far below (measured 0.88 and 0.74 at 10 cells): the
+//   warning's cases (tests/README.md).
 namespace {
 double face_depth(double x, double y) { return (x - 2 * y - 5) / std::sqrt(5.0); }  // below the face x = 5 + 2 y, normal to it
 }
@@ -227,8 +228,13 @@ TEST_CASE("--fos: a dry cohesionless 2:1 slope drawn as a polygon, FILL=POINTS, 
     Scene cells = coarse;  // the staircase
     cells.clusters[0].fill_points = false;
     const FosResult s = fos_of(cells, 0.02);
-    MESSAGE("drawn by whole cells, 10 cells over H: F = " << s.F);
+    Scene paper = coarse;  // FILL=POINTS under the paper's mapping
+    paper.mapping = Mapping::Paper;
+    paper.motion = Motion::Default;
+    const FosResult q = fos_of(paper, 0.02);
+    MESSAGE("10 cells over H: drawn by whole cells F = " << s.F << "; by points under the paper's mapping F = " << q.F);
     CHECK(s.F < 0.95 * reference);
+    CHECK(q.F < 0.95 * reference);
 }
 
 // The factor converges as L halves: at 10, 20 and 40 cells over H the second change is
@@ -300,6 +306,28 @@ TEST_CASE("--fos warns of a weak free face drawn across the lattice, and of noth
     CHECK(fos_warnings(scene("C=0", "CLUSTER 1 5 0 20 5\n")).empty());
     // the cohesionless slope buried under two cells of cohesive cover: its edge is no face
     CHECK(fos_warnings(scene("C=0", slope + "CLUSTER 2 POLYGON 1 0 5 0 15 5 15 7 1 2\n")).empty());
+    // FILL=POINTS: not warned of with PPC=2 under MAPPING SMOOTH alone (verified above);
+    // warned of under the paper's mapping, with FILL=CELLS, PPC=1 (the same points as
+    // FILL=CELLS), PPC=4 (reads high) or ADVECT FLIP (not measured)
+    const std::string points = "CLUSTER 1 POLYGON 5 0 20 0 20 5 15 5 FILL=POINTS PPC=";
+    auto with = [&](const std::string& cluster, const char* modes) {
+        Scene s = scene("C=0", cluster + "\n");
+        Scene m;
+        REQUIRE(read_deck_text(std::string("GRID 1 1 1\nMATERIAL 1 ELASTIC E=1 NU=0 RHO=1\nCLUSTER 1 0 0 1 1\nSTEP 1 1\n") + modes + "END\n", "m.deck", m).empty());
+        s.mapping = m.mapping; s.motion = m.motion; s.advect = m.advect;
+        return fos_warnings(s);
+    };
+    CHECK(with(points + "2", "MAPPING SMOOTH\n").empty());
+    CHECK(with(points + "2", "").size() == 1);
+    CHECK(with(points + "2", "").at(0).message.find("unless drawn with FILL=POINTS and PPC=2 under MAPPING SMOOTH") != std::string::npos);
+    CHECK(with(slope, "MAPPING SMOOTH\n").size() == 1);
+    for (const char* ppc : {"1", "4"}) {
+        INFO("PPC=" << ppc);
+        const Diagnostics d = with(points + ppc, "MAPPING SMOOTH\n");
+        REQUIRE(d.size() == 1);
+        CHECK(d[0].message.find("with FILL=POINTS under MAPPING SMOOTH it is verified with PPC=2 and no ADVECT FLIP only") != std::string::npos);
+    }
+    CHECK(with(points + "2", "MAPPING SMOOTH\nADVECT FLIP\n").size() == 1);
 }
 
 // The search's other ends: a scene that never comes to rest has no factor; one that fails
