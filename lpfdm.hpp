@@ -762,6 +762,7 @@ struct ConsultArrays {
 // coarser than dt loses nothing), du = v dt.
 struct GroundMotion {
     const Shake* spec = nullptr;  // the card (nullptr: this direction is not shaken)
+    bool rigid() const { return spec && !spec->compliant; }  // it moves the fixed nodes (not COMPLIANT)
     double c0 = 0, c1 = 0;        // BASELINE: the trend c0 + c1 t taken off the acceleration
     long first = 0;               // start_step
     std::size_t at = 0;           // the record's sample at or before the time last asked
@@ -1575,7 +1576,7 @@ private:
     void dynamics_begin();
     // The directions (kFixX, kFixY) in which a rigid SHAKE moves the fixed nodes.
     std::uint8_t shaken_dirs() const {
-        return std::uint8_t(((ground_[0].spec && !ground_[0].spec->compliant) ? kFixX : 0) | ((ground_[1].spec && !ground_[1].spec->compliant) ? kFixY : 0));
+        return std::uint8_t((ground_[0].rigid() ? kFixX : 0) | (ground_[1].rigid() ? kFixY : 0));
     }
     void absorb_increments();
     void absorb_work();
@@ -5256,6 +5257,7 @@ inline void Simulation::flip_transfer(const Range& nodes) {
     for (const std::int32_t u : driven_nodes_) start_from_support(u, driven_[std::size_t(u)], driven_[std::size_t(u)] & ~fixed_[std::size_t(u)] & (kFixX | kFixY));
     // The walls' in node order (fixed_nodes_ is): a wall lists its nodes in the order it
     // took them, a restart in node order, and flip_slip's sum must not depend on which
+    // of the two made the list.
     std::sort(flip_held_.begin() + long(walls_from), flip_held_.end(), [](const HeldStart& p, const HeldStart& q) { return p.node != q.node ? p.node < q.node : p.dirs < q.dirs; });
 }
 
@@ -5681,8 +5683,7 @@ inline void Simulation::setup_dynamics() {
                     // there is no moment to take its reaction at rest, and it stays fixed.
                     const int on = (nj == 0 ? kBottom : 0) | (nj == my_ ? kTop : 0) | (ni == 0 ? kLeft : 0) | (ni == mx_ ? kRight : 0);
                     // A direction a rigid SHAKE drives stays with the ground.
-                    const int rigid = (ground_[0].spec && !ground_[0].spec->compliant ? kFixX : 0) | (ground_[1].spec && !ground_[1].spec->compliant ? kFixY : 0);
-                    released_.push_back((on & ~edges) || !modes_.shake ? std::uint8_t(0) : std::uint8_t(fixed_[n] & ~rigid));
+                    released_.push_back((on & ~edges) || !modes_.shake ? std::uint8_t(0) : std::uint8_t(fixed_[n] & ~shaken_dirs()));
                 }
                 dashpots_.push_back({slot_of[n], cell(ci, cj), cx, cy, in_x ? 2 * cx : 0.0, in_y ? 2 * cy : 0.0});
             }
@@ -5736,7 +5737,7 @@ inline void Simulation::absorb_increments() {
     if (step_ < shake_step_) return;
     const double dt = sc_.dt_s;
     auto one = [&](std::size_t n, const Ground& g, double C, double b, double& c, double& f) {
-        const bool rigid = g.spec && !g.spec->compliant;
+        const bool rigid = g.rigid();
         const double bg = rigid ? g.du_before : 0.0, cg = rigid ? g.du : 0.0, beta = C * dt / (2 * inertia()[n]);
         c = (c - beta * (b - bg - cg)) / (1 + beta);
         f = -C * ((b + c) - (bg + cg)) / (2 * dt);  // the dashpot's force on the node
@@ -5762,7 +5763,7 @@ inline void Simulation::absorb_work() {
     if (step_ < shake_step_) return;
     double ha = 0, hi = 0, hh = 0;
     auto one = [&](const Ground& g, double f, double fin, double hold, double b, double c) {
-        const bool rigid = g.spec && !g.spec->compliant;
+        const bool rigid = g.rigid();
         const double bg = rigid ? g.du_before : 0.0, cg = rigid ? g.du : 0.0;
         const double s = b + c, sg = bg + cg;
         es_.d_absorb -= 0.5 * f * (s - sg); ha -= 0.5 * f * (c - cg);
@@ -7968,11 +7969,12 @@ LPFDM_DEF FosResult factor_of_safety(const Scene& s, const FosOptions& o, const 
 }
 
 // A face drawn across the lattice (a CLUSTER POLYGON's edge neither level nor upright) and
-// filled by cells is a staircase of cells. Where the soil is too weak for a riser of one cell to stand (a
-// vertical cut stands to 4 c tan(45 + phi/2) / (rho g), Rankine's, below L), --fos reads
-// such a face far below its slope's factor (the steps' corners keep moving at every cell
-// size, and points carried over the risers come to lie alone in cells above the face: the nodes
-// above them, which nothing stiff holds, keep the unbalanced force up): a 2:1 face of dry
+// filled by cells is a staircase of cells. Where the soil is too weak for a riser of one
+// cell to stand (a vertical cut stands to 4 c tan(45 + phi/2) / (rho g), Rankine's, below
+// L), --fos reads such a face far below its slope's factor (the steps' corners keep moving
+// at every cell size, and points carried over the risers come to lie alone in cells above
+// the face: the nodes above them, which nothing stiff holds, keep the unbalanced force
+// up): a 2:1 face of dry
 // cohesionless soil with phi = psi = 35 degrees reads 0.74, 0.88 and 1.18 with the paper's
 // mapping, MAPPING SMOOTH and ADVECT FLIP, against 1.40 (tests/README.md, "Factor of
 // safety"). Warned at the edge's first vertex, once a cluster, where the edge is a free
@@ -8866,6 +8868,11 @@ inline std::string upper(std::string s) {
     for (auto& ch : s) ch = char(std::toupper(static_cast<unsigned char>(ch)));
     return s;
 }
+// s without the characters of `chars` at either end (TITLE's text).
+inline std::string trimmed(const std::string& s, const char* chars) {
+    const std::size_t b = s.find_first_not_of(chars);
+    return b == std::string::npos ? std::string() : s.substr(b, s.find_last_not_of(chars) - b + 1);
+}
 
 // Splits the deck into cards: comments removed, continuations joined, each field
 // with its own line and column. Fields are separated by blanks or commas; '=' stands
@@ -9524,11 +9531,7 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
         };
         if (kw == "TITLE") {
             once(have_title);
-            std::string t = lx.raw[ci];
-            const std::size_t b = t.find_first_not_of(" \t,");
-            t = b == std::string::npos ? "" : t.substr(b);
-            while (!t.empty() && std::strchr(" \t,", t.back())) t.pop_back();
-            sc.title = t;
+            sc.title = trimmed(lx.raw[ci], " \t,");
             continue;
         } else if (kw == "GRID") {
             once(have_grid);

@@ -41,6 +41,14 @@ FosResult fos_of(const Scene& s, double tol = 0.01) {
     return r;
 }
 
+// The factor (bracket 0.002) of a deck twice as coarse, as written and twice as fine.
+struct Ladder { double coarse, written, fine; };
+Ladder fos_ladder(const char* deck) {
+    Scene finest = fos_deck(deck);
+    refine(finest, 2);
+    return {fos_of(fos_deck(deck, 2), 0.002).F, fos_of(fos_deck(deck), 0.002).F, fos_of(finest, 0.002).F};
+}
+
 // Taylor: F = 5.24 c / (gamma H) for a 60 degree slope with phi = 0.
 double taylor(const Scene& s) {
     const Material& m = s.materials[0];
@@ -241,9 +249,7 @@ TEST_CASE("--fos: a dry cohesionless 2:1 slope drawn as a polygon, FILL=POINTS, 
 // smaller than the first (measured, Griffiths and Lane: 1.370, 1.360, 1.353).
 TEST_CASE("--fos converges as L halves: 10, 20 and 40 cells over H [slow][verify]") {
     for (const char* deck : {"decks/verify_taylor.deck", "decks/slope.deck"}) {
-        Scene finest = fos_deck(deck);
-        refine(finest, 2);
-        const double f1 = fos_of(fos_deck(deck, 2), 0.002).F, f2 = fos_of(fos_deck(deck), 0.002).F, f4 = fos_of(finest, 0.002).F;
+        const auto [f1, f2, f4] = fos_ladder(deck);
         MESSAGE(std::string(deck) << ": F = " << f1 << ", " << f2 << ", " << f4 << " at 10, 20, 40 cells over H");
         CHECK(std::fabs(f4 - f2) < std::fabs(f2 - f1) + 0.002);
         CHECK(f4 == approx(f2).epsilon(0.01));
@@ -255,10 +261,7 @@ TEST_CASE("--fos converges as L halves: 10, 20 and 40 cells over H [slow][verify
 // tan(phi) / tan(beta) (measured 1.409, 1.405, 1.401).
 TEST_CASE("--fos on an infinite dry cohesionless slope converges as L halves: 5, 10 and 20 cells over H [slow][verify]") {
     const double reference = std::tan(35 * kDeg) / 0.5;
-    Scene finest = fos_deck("decks/verify_dry_slope.deck");
-    refine(finest, 2);
-    const double f1 = fos_of(fos_deck("decks/verify_dry_slope.deck", 2), 0.002).F, f2 = fos_of(fos_deck("decks/verify_dry_slope.deck"), 0.002).F,
-                 f4 = fos_of(finest, 0.002).F;
+    const auto [f1, f2, f4] = fos_ladder("decks/verify_dry_slope.deck");
     MESSAGE("infinite slope: F = " << f1 << ", " << f2 << ", " << f4 << " at 5, 10, 20 cells over H; tan(phi) / tan(beta) = " << reference);
     CHECK(std::fabs(f4 - f2) < std::fabs(f2 - f1) + 0.002);
     CHECK(f4 == approx(reference).epsilon(0.005));
@@ -269,10 +272,7 @@ TEST_CASE("--fos on an infinite dry cohesionless slope converges as L halves: 5,
 // within 3 % (measured 1.483, 1.456, 1.437).
 TEST_CASE("--fos on a dry cohesionless slope drawn as a polygon converges as L halves: 10, 20 and 40 cells over H [slow][verify]") {
     const double reference = std::tan(35 * kDeg) / 0.5;
-    Scene finest = fos_deck("decks/verify_drawn_slope.deck");
-    refine(finest, 2);
-    const double f1 = fos_of(fos_deck("decks/verify_drawn_slope.deck", 2), 0.002).F, f2 = fos_of(fos_deck("decks/verify_drawn_slope.deck"), 0.002).F,
-                 f4 = fos_of(finest, 0.002).F;
+    const auto [f1, f2, f4] = fos_ladder("decks/verify_drawn_slope.deck");
     MESSAGE("drawn slope: F = " << f1 << ", " << f2 << ", " << f4 << " at 10, 20, 40 cells over H; tan(phi) / tan(beta) = " << reference);
     CHECK(f4 < f2);
     CHECK(f2 < f1);
