@@ -381,6 +381,10 @@ struct Scene {
     Pos mapping_pos;
     Advect advect = Advect::Eq12;
     double hourglass = 0;               // kappa: viscous control of eq. 5's zero-energy mode (0: off)
+    // SHIFT [RATE=r] [ABOVE=a]: points moved apart where they crowd (Simulation::shift_points).
+    bool shift = false;
+    double shift_rate = 0.1, shift_above = 1.25;
+    Pos shift_pos;
     std::string title;
     int mx = 0, my = 0;
     double cell_m = 0;                  // L
@@ -490,6 +494,8 @@ inline const DeckKey kDeckKeys[] = {
     {"DAMPING",   "ALPHA",   "alpha",               "DAMPING alpha",     false, true,  true,  0,      1,          false, true,  false, "",         0,   0, LPFDM_OF(damping)},
     {"DAMPING",   "WINDOW",  "time over which each node's mean increment is taken, s (0: eq. 14 about rest)", "WINDOW", true, false, true, 0, kHuge, false, true, false, "", 0, 0, LPFDM_OF(damping_window)},
     {"HOURGLASS", "KAPPA",   "kappa",               "HOURGLASS kappa",   false, true,  true,  0,      1,          false, false, false, "",         0,   0, LPFDM_OF(hourglass)},
+    {"SHIFT",     "RATE",    "how far a point moves every 10 steps, in L/2, per unit of the fill's change across L/2", "RATE", true, false, true, 0, 1, true, false, false, "", 0.1, 0, LPFDM_OF(shift_rate)},
+    {"SHIFT",     "ABOVE",   "the fill (the points' area over the lattice's) above which they move apart", "ABOVE", true, false, true, 1, 4, false, false, false, "", 1.25, 0, LPFDM_OF(shift_above)},
     {"SEED",      "N",       "seed",                "seed",              false, true,  true,  0,      9007199254740992.0, false, false, true, "", 0,   0, LPFDM_OF(seed)},
     {"REORDER",   "N",       "steps between sorts of the points", "REORDER n",        false, true,  true,  0,      1e9,        false, false, true,  "",         0,   0, LPFDM_OF(reorder)},
     {"STEP",      "DT",      "dt (s)",              "the time step dt",  false, true,  true,  0,      kHuge,      true,  true,  false, "",         0,   0, LPFDM_OF(dt_s)},
@@ -551,6 +557,7 @@ inline const DeckCard kDeckCards[] = {
     {"MOTION", "PAPER|CENTRE|BILINEAR", "", "how points move with their cell: eq. 7a/7b about node [1], about the centre, or bilinear"},
     {"MAPPING", "PAPER|SMOOTH", "", "a point in the cell holding its centre (the paper), or shared by the cells its square overlaps (no jump at cell edges)"},
     {"ADVECT", "EQ12|POINTS|FLIP", "", "how increments follow the material: eq. 12, carried by the points, or kept by them (FLIP)"},
+    {"SHIFT", "", "", "every 10 steps, points that crowd (their squares' area above ABOVE times the lattice's, default 1.25) move apart, down the crowding's gradient"},
     {"SEED", "", "", "seed of the strength scatter"},
     {"REORDER", "", "", "sort the points' storage by cell every n steps (default 50; 0: never), for speed as points move"},
     {"STEP", "", "", "n steps of dt seconds"},
@@ -1006,6 +1013,8 @@ public:
     // compressed (a cell that swallows them) drive it up; material made at one volume a
     // cell and moved as a continuum keeps it near 1.
     double packing() const;
+    // SHIFT: the point moves shift_points made since step 0.
+    long shifted() const { return shifted_; }
     // WATER: the largest excess pore pressure over the points, p - rho_w |g_y| (TABLE - y)
     // at the point's place now [Pa] (0 without water), and the water that left through the
     // drains since step 0 [m^3/m] (entered: negative).
@@ -1056,11 +1065,14 @@ public:
     //   d_slip    (ADVECT FLIP) the supports' force on the slip between a support that changes
     //             speed (SHAKE's ground, a wall given a new velocity) and the material beside
     //             it (flip_slip); 0 in the other cycles, whose held nodes move with the material.
+    //   w_shift   (SHIFT) the potential energy the points' moves apart gave them (shift_points),
+    //             counted as work in.
     struct Energy {
         double kinetic = 0, strain = 0, gravity = 0, w_walls = 0, w_fixes = 0, w_gravity = 0, d_damping = 0, d_plastic = 0, error = 0;
         double w_ground = 0, d_absorb = 0;
         double w_loads = 0, d_water = 0;  // LOAD's work; WATER: the stored water energy the flow and drains took out
         double d_slip = 0;                // ADVECT FLIP: the slip between a support changing speed and the material (flip_slip)
+        double w_shift = 0;               // SHIFT: the potential energy the moves apart gave the points (shift_points)
     };
     Energy energy() const;
     double reaction_x() const { return rx_; }                         // sum of fixed-node reactions [N/m]
@@ -1392,6 +1404,12 @@ private:
     struct HeldStart { std::int32_t node; std::uint8_t dirs; double bx, by; };
     std::vector<HeldStart> flip_held_;
     void flip_slip();
+    // SHIFT (shift_points): the fill of each cell of the lattice of spacing L/2 (the
+    // sub-cells), its excess at each of that lattice's nodes; zero outside a step's box.
+    std::vector<double> shift_fill_, shift_excess_;
+    long shifted_ = 0;
+    static constexpr long kShiftEvery = 10;  // steps between the passes
+    void shift_points(const Range& cells);
     double flip_kinetic_ = 0;
     // The node masses eq. 13 moves with: eq. 10's, or with ADVECT FLIP the transfer's M_n
     // (flip_changes). The fixed directions and the walls read the same masses, and the same
@@ -1542,6 +1560,7 @@ private:
         double w_ground = 0, h_ground = 0, h_input = 0;                       // SHAKE: fixed nodes moved (h_ground), input traction (h_input)
         double d_absorb = 0, h_absorb = 0, w_held = 0, h_held = 0;            // ABSORB: dashpots; the reactions taken over
         double d_slip = 0;                                                    // ADVECT FLIP: the supports' slip (flip_slip)
+        double w_shift = 0;                                                   // SHIFT: the potential energy of the moves apart
     } es_;
     void start_energy();
     void keep_increments(const Range& nodes);
@@ -2800,7 +2819,8 @@ LPFDM_DEF double estimate_bytes(const Scene& s, double points) {
     Points().each_array([&](const char*, const auto& v, Points::Use u, bool) {
         if (uses(s, u, true)) per_point += double(sizeof(v[0]));
     });
-    return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * (per_point + 2 * 8);  // (+ the initial positions)
+    const double shift = s.shift ? 8 * 8 * cells : 0;  // SHIFT: four sub-cells and about four sub-nodes a cell
+    return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * (per_point + 2 * 8) + shift;  // (+ the initial positions)
 }
 
 // The points the scene's clusters make (made_points): exact, or for a lattice too large to
@@ -2912,6 +2932,10 @@ inline void Simulation::setup() {
     if (modes_.hourglass) { hgx_.assign(cells, 0.0); hgy_.assign(cells, 0.0); }
     if (modes_.mapping == Mapping::Smooth) for (auto* v : {&shx_, &shy_, &smu_, &smv_, &centroid_trace_}) v->assign(cells, 0.0);
     if (modes_.mapping == Mapping::Smooth) holds_point_.assign(cells, 0);
+    if (sc_.shift) {  // SHIFT: the sub-cells and their nodes
+        shift_fill_.assign(4 * cells, 0.0);
+        shift_excess_.assign(std::size_t(2 * mx_ + 1) * std::size_t(2 * my_ + 1), 0.0);
+    }
     if (modes_.advect == Advect::Points)
         carried_.assign(cells, Carried{});
     for (const auto& m : sc_.materials) consts_.push_back(constants_of(m));
@@ -3792,6 +3816,132 @@ LPFDM_DEF double Simulation::packing() const {
     return most / (L_ * L_);
 }
 
+// ======================================================================================
+// SHIFT (not in the paper): points that crowd move apart
+//
+// Where the choices are made (each tested in tests/):
+// * The cycle can carry points together faster than their cells' strain compresses them:
+//   a flow drawn out into thin lines leaves cells of many points beside empty ones, each
+//   point keeping its volume, and nothing in eq. 1-14 moves them apart; eq. 8 then gives
+//   such a cell several times the mass and stress its area can hold. SHIFT [RATE=r]
+//   [ABOVE=a] moves them apart every kShiftEvery = 10 steps, after the step, as particle
+//   shifting does in SPH:
+//   - the fill: each point stands for a square of side sqrt(V) (at most L) about it; f at
+//     each node of the lattice of spacing h = L/2 is the squares' area in the L x L window
+//     about that node (the four sub-cells around it that lie in the lattice) over the
+//     window's area, 1 where the points tile the material as made, at any PPC;
+//   - each point moves down the gradient of the excess e = max(f - a, 0), bilinear in its
+//     sub-cell: delta = -r h (h grad e), at most L/10; where f <= a nothing moves;
+//   - a point stays where it is if the move would take it out of the lattice, out of a
+//     cell with a fixed edge or into one, or if it lies near a wall's face (kEdgeWall) or
+//     carries a LOAD: the supports' guards are not crossed;
+//   - only after a step whose largest eq. 8 sum exceeds a L^2 (packing()): a scene that
+//     never crowds so runs bit for bit as it does without the card;
+//   - every 10 steps, not every step: the pass costs about as much as the paper's step
+//     (bench_flow.deck: 7.9 s without, 19 s moving every step at r / 10, 9.1 s every 10
+//     steps, `packed` 2.25 and 2.24);
+//   - a point keeps its mass, volume, stress and (ADVECT FLIP) its own increment, so mass,
+//     and under FLIP momentum, are kept exactly; the potential energy the moves change is
+//     the account's w_shift, work in. Under eq. 12 the nodes keep their increments while
+//     masses move under them, as they do when eq. 7a/7b moves the points.
+//   Why squares on the half-spacing lattice: the fill of whole cells (eq. 8's sums, or their
+//   means at the nodes) cannot see cells that alternate full and empty, the pattern flows
+//   leave, and moving points down it made bench_flow.deck's packing worse (4.5 -> 9.7);
+//   points counted in sub-cells without their squares read 2 in half the sub-cells of a
+//   material at rest, and a threshold low enough to act moved every scene at rest.
+//   tests/README.md gives what SHIFT changes on the flows.
+// ======================================================================================
+
+// After a step, the points whose cells lie in the box `cells` (the whole lattice in the
+// reference cycle, occupied_ in the fast kernel: every point's cell either way), in point order.
+inline void Simulation::shift_points(const Range& cells) {
+    if (!sc_.shift || cells.empty() || (step_ + 1) % kShiftEvery) return;
+    const double above = sc_.shift_above;
+    double most = 0;  // the gate: packing() over the box
+    for (int j = cells.j0; j < cells.j1; ++j)
+        for (int i = cells.i0; i < cells.i1; ++i) most = std::max(most, cvol_[std::size_t(cell(i, j))]);
+    if (most <= above * L_ * L_) return;
+    const int sx = 2 * mx_, sy = 2 * my_, n1 = sx + 1;
+    const double h = 0.5 * L_, ih = 1 / h;
+    const Range box = cells.grow(1, mx_, my_);  // holds every square of the points in `cells`
+    const int I0 = 2 * box.i0, I1 = 2 * box.i1, J0 = 2 * box.j0, J1 = 2 * box.j1;  // sub-cells I0 .. I1-1, sub-nodes I0 .. I1
+    double* fill = shift_fill_.data();
+    double* ex = shift_excess_.data();
+    // The lengths of [c0, c1] (a square's side along one axis) in the sub-cells from its
+    // first, in units of h, and that first sub-cell (at most 3: the side is at most 2h). A
+    // point lies in the lattice, so c0 > -h and the sub-cells before the lattice's get 0.
+    auto parts = [&](double c0, double c1, int m, double (&o)[3]) {
+        const double u0 = c0 * ih, u1 = c1 * ih;
+        const int i0 = int(std::floor(u0)), i1 = std::min(int(std::floor(u1)), m - 1);
+        o[0] = o[1] = o[2] = 0;
+        for (int i = i0; i <= i1; ++i) o[i - i0] = i >= 0 ? std::min(u1, i + 1.0) - std::max(u0, double(i)) : 0.0;
+        return i0;
+    };
+    for (std::size_t k = 0; k < p_.size(); ++k) {  // the squares' areas in the sub-cells, over h^2
+        if (p_.cell[k] < 0) continue;
+        const double a = 0.5 * std::min(std::sqrt(std::max(p_.vol[k], 0.0)), L_);
+        double ox[3], oy[3];
+        const int i0 = parts(p_.x[k] - a, p_.x[k] + a, sx, ox), j0 = parts(p_.y[k] - a, p_.y[k] + a, sy, oy);
+        for (int j = 0; j < 3; ++j) {
+            if (oy[j] == 0) continue;
+            double* row = fill + std::size_t(j0 + j) * std::size_t(sx);
+            for (int i = 0; i < 3; ++i)
+                if (ox[i] != 0) row[i0 + i] += ox[i] * oy[j];
+        }
+    }
+    for (int J = J0; J <= J1; ++J) {  // the excess at the sub-nodes: the mean of the sub-cells around, less a
+        const bool bottom = J == 0, top = J == sy;
+        const double* below = fill + std::size_t(std::max(J - 1, 0)) * std::size_t(sx);
+        const double* upper = fill + std::size_t(std::min(J, sy - 1)) * std::size_t(sx);
+        double* e = ex + std::size_t(J) * std::size_t(n1);
+        for (int I = I0; I <= I1; ++I) {
+            const int a0 = std::max(I - 1, 0), a1 = std::min(I, sx - 1);
+            const double s = (bottom ? 0.0 : below[a0] + (a1 != a0 ? below[a1] : 0.0)) + (top ? 0.0 : upper[a0] + (a1 != a0 ? upper[a1] : 0.0));
+            const int n = (a1 != a0 ? 2 : 1) * (bottom || top ? 1 : 2);
+            e[I] = std::max(s / n - above, 0.0);
+        }
+    }
+    const double cap = 0.1 * L_, rate = sc_.shift_rate;
+    double work = 0;
+    long moved = 0;
+    Range reach = cells;
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const int c = p_.cell[k];
+        if (c < 0 || (modes_.loads && p_.load_axis[k])) continue;
+        const std::uint8_t fe = fixed_edges_[std::size_t(c)];
+        if (fe & kEdgeWall) continue;
+        const double x = p_.x[k], y = p_.y[k];
+        const int I = std::clamp(int(x * ih), 0, sx - 1), J = std::clamp(int(y * ih), 0, sy - 1);
+        const double u = x * ih - I, v = y * ih - J;
+        const double* e = ex + std::size_t(J) * std::size_t(n1) + std::size_t(I);
+        const double e00 = e[0], e10 = e[1], e01 = e[n1], e11 = e[n1 + 1];
+        if (e00 == 0 && e10 == 0 && e01 == 0 && e11 == 0) continue;
+        const double gx = (1 - v) * (e10 - e00) + v * (e11 - e01), gy = (1 - u) * (e01 - e00) + u * (e11 - e10);  // h grad e
+        double dx = -rate * h * gx, dy = -rate * h * gy;
+        const double len2 = dx * dx + dy * dy;
+        if (!(len2 > 0)) continue;
+        if (len2 > cap * cap) { const double r = cap / std::sqrt(len2); dx *= r; dy *= r; }
+        const double xn = x + dx, yn = y + dy;
+        const int cn = cell_holding(xn, yn);
+        if (cn < 0 || (cn != c && (fe || fixed_edges_[std::size_t(cn)]))) continue;
+        const double before = potential_energy(k);
+        p_.x[k] = xn; p_.y[k] = yn; p_.cell[k] = cn;
+        work += potential_energy(k) - before;
+        ++moved;
+        reach = reach.unite(Range{cn % mx_, cn % mx_ + 1, cn / mx_, cn / mx_ + 1});
+    }
+    for (int J = J0; J < J1; ++J) std::fill(fill + std::size_t(J) * std::size_t(sx) + std::size_t(I0), fill + std::size_t(J) * std::size_t(sx) + std::size_t(I1), 0.0);
+    for (int J = J0; J <= J1; ++J) std::fill(ex + std::size_t(J) * std::size_t(n1) + std::size_t(I0), ex + std::size_t(J) * std::size_t(n1) + std::size_t(I1) + 1, 0.0);
+    es_.w_shift += work;
+    shifted_ += moved;
+    if (!moved) return;
+    parts_known_ = false;  // the threaded pass's chunks: the cells their points lie in
+    // MAPPING SMOOTH: the next step reads the last mapping's centroids (cell_centroid): the
+    // squares and sums made anew where the points are now, as a restart makes them (resumed).
+    if (modes_.mapping == Mapping::Smooth) map_points();
+    else if (!reference_only()) occupied_ = reach;
+}
+
 LPFDM_DEF double Simulation::excess_pressure() const {
     if (!modes_.water) return 0;
     double most = -std::numeric_limits<double>::infinity();
@@ -3824,7 +3974,8 @@ LPFDM_DEF Simulation::Energy Simulation::energy() const {
     e.w_loads = w_loads_ - h_loads_;
     e.d_water = d_water_;
     e.d_slip = es_.d_slip;
-    const double in = e.w_walls + e.w_fixes + e.w_ground + e.w_loads;
+    e.w_shift = es_.w_shift;
+    const double in = e.w_walls + e.w_fixes + e.w_ground + e.w_loads + e.w_shift;
     const double out = e.d_damping + e.d_plastic + e.d_absorb + e.d_water + e.d_slip;
     // (at least 1e-10 of the energies whose differences the terms are: below that the
     // account's own rounding, as a scene exactly at rest has, would read as energy made)
@@ -4402,6 +4553,7 @@ LPFDM_DEF void Simulation::step_reference() {
     reference_compensate();    // eq. 12
     reference_integrate();     // eq. 13-14, fixed nodes, moving walls
     load_work();
+    shift_points({0, mx_, 0, my_});  // SHIFT
     parked_ += parking_.take();
     held_ += holding_.take();
     ++step_;
@@ -6261,6 +6413,7 @@ LPFDM_DEF void Simulation::step() {
     compensate();      // eq. 12
     integrate();       // eq. 13-14, fixed nodes, moving walls
     load_work();
+    shift_points(occupied_);  // SHIFT
     parked_ += parking_.take();
     held_ += holding_.take();
     ++step_;
@@ -6279,7 +6432,7 @@ inline void Simulation::step_profiled() {
         case 1: ref ? reference_points() : point_pass(); water_pass(); break;
         case 2: ref ? reference_nodal_forces() : nodal_forces(); load_forces(); break;
         case 3: ref ? reference_compensate() : compensate(); break;
-        default: ref ? reference_integrate() : integrate(); load_work(); break;
+        default: ref ? reference_integrate() : integrate(); load_work(); shift_points(ref ? Range{0, mx_, 0, my_} : occupied_); break;
         }
         phase_s_[k] += std::chrono::duration<double>(clock::now() - t0).count();
     }
@@ -7840,6 +7993,7 @@ template <class S, class F> inline void Simulation::visit_state(S& s, F& f) {
         f("absorb_hold_x", s.hold_fx_); f("absorb_hold_y", s.hold_fy_);
     }
     if (s.modes_.advect == Advect::Flip) f("energy_d_slip", e.d_slip);                    // ADVECT FLIP (flip_slip)
+    if (s.sc_.shift) { f("energy_w_shift", e.w_shift); f("shift_moved", s.shifted_); }      // SHIFT (shift_points)
     if (s.modes_.water) { f("water_drained", s.drained_); f("water_d_water", s.d_water_); }  // WATER
     if (s.modes_.loads) { f("load_work", s.w_loads_); f("load_work_half", s.h_loads_); }     // LOAD
     if (!s.mean_ux_.empty()) { f("damping_mean_x", s.mean_ux_); f("damping_mean_y", s.mean_uy_); }  // DAMPING WINDOW
@@ -8247,7 +8401,7 @@ LPFDM_DEF std::string apply_setting(Scene& s, const std::string& key_in, double 
         if (num < 1 || std::size_t(num) > count) return "there is no " + card + " number " + std::to_string(num) + " (cards of a kind count from 1)";
         index = std::size_t(num - 1);
     }
-    if ((card == "WATER" && !s.water.on) || (card == "RESERVOIR" && !s.reservoir.on) || (card == "GEOSTATIC" && !s.geostatic))
+    if ((card == "WATER" && !s.water.on) || (card == "RESERVOIR" && !s.reservoir.on) || (card == "GEOSTATIC" && !s.geostatic) || (card == "SHIFT" && !s.shift))
         return "the deck has no " + card + " card: " + key_in + " would change nothing";
     const DeckKey* k = deck_key(card, par);
     if (card == "CLUSTER" && par == "FILL")
@@ -8483,6 +8637,7 @@ LPFDM_DEF Diagnostics validate(const Scene& s, const Unread& unread) {
     keys("DAMPING", 0, s.damping_pos, 0);
     keys("HOURGLASS", 0, s.grid_pos, 0);
     keys("REORDER", 0, s.grid_pos, 0);
+    if (s.shift) keys("SHIFT", 0, s.shift_pos, 0);
     if (!unread.step) keys("STEP", 0, s.step_pos, 0);
     for (std::size_t a = 0; a < s.outputs.size(); ++a) keys("OUTPUT", a, s.outputs[a].pos, 0);
     for (std::size_t a = 0; a < s.materials.size(); ++a) {
@@ -9504,7 +9659,7 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
         u.all();
         return d;
     }
-    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_mapping = false, have_hourglass = false, have_advect = false, have_reorder = false, have_water = false, have_reservoir = false, have_geostatic = false;
+    bool have_grid = false, have_step = false, have_end = false, have_gravity = false, have_damping = false, have_seed = false, have_title = false, have_motion = false, have_mapping = false, have_hourglass = false, have_advect = false, have_reorder = false, have_water = false, have_reservoir = false, have_geostatic = false, have_shift = false;
     Pos last{file, 1, 1};
     int cluster_cards = 0;
     // The cards with errors leave unchecked what depends on them (Unread); an unknown card
@@ -9563,6 +9718,11 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
             sc.reservoir.pos = kp;
             r.fields("RESERVOIR", sc, 0);
             r.parameters("RESERVOIR", 0, sc, 0);
+        } else if (kw == "SHIFT") {
+            once(have_shift);
+            sc.shift = true;
+            sc.shift_pos = kp;
+            r.parameters("SHIFT", 0, sc, 0);
         } else if (kw == "GEOSTATIC") {
             once(have_geostatic);
             sc.geostatic = true;
@@ -9731,6 +9891,7 @@ LPFDM_DEF std::string history_columns(const Simulation& sim) {
     if (sim.scene().reservoir.on) h += " level";            // RESERVOIR
     if (sim.water()) h += " d_water p_excess drained";      // WATER
     if (sim.scene().advect == Advect::Flip) h += " d_slip";  // ADVECT FLIP
+    if (sim.scene().shift) h += " w_shift shifted";          // SHIFT
     return h;
 }
 
@@ -9788,6 +9949,8 @@ LPFDM_DEF void write_history_header(std::FILE* f, const Simulation& sim, const s
         fmt::print(f, "#   d_water stored water energy the flow and the drains took out (dissipated); p_excess the largest pore pressure above hydrostatic [Pa]; drained water out through DRAIN [m^3/m]\n");
     if (sim.scene().advect == Advect::Flip)
         fmt::print(f, "#   d_slip (ADVECT FLIP) dissipated by the slip between a support that changes speed (SHAKE's ground, a wall's new velocity) and the material beside it\n");
+    if (sim.scene().shift)
+        fmt::print(f, "#   w_shift (SHIFT) the potential energy the points' moves apart gave them (counted as work in); shifted the point moves since step 0\n");
     fmt::print(f, "# {}\n", h);
 }
 
@@ -9814,6 +9977,7 @@ LPFDM_DEF void write_history_row(std::FILE* f, const Simulation& sim) {
     if (sim.scene().reservoir.on) fmt::format_to(std::back_inserter(b), " {:.9g}", sim.scene().reservoir.at(sim.time()));
     if (sim.water()) fmt::format_to(std::back_inserter(b), " {:.9g} {:.9g} {:.9g}", e.d_water, sim.excess_pressure(), sim.drained());
     if (sim.scene().advect == Advect::Flip) fmt::format_to(std::back_inserter(b), " {:.9g}", e.d_slip);
+    if (sim.scene().shift) fmt::format_to(std::back_inserter(b), " {:.9g} {}", e.w_shift, sim.shifted());
     b.push_back('\n');
     std::fwrite(b.data(), 1, b.size(), f);
 }
@@ -10042,7 +10206,7 @@ LPFDM_DEF void write_pvd(std::FILE* f, const std::vector<std::pair<std::string, 
 // The digest is state_digest's of the deck text and of the options that change the
 // scene: a state continues only the run it came from.
 inline constexpr char kStateMagic[] = "lpfdm state\n";
-inline constexpr std::uint32_t kStateVersion = 4;  // 2: ADVECT FLIP's point_flip_ux, point_flip_uy; 3: parked; 4: ADVECT FLIP's energy_d_slip
+inline constexpr std::uint32_t kStateVersion = 5;  // 2: ADVECT FLIP's point_flip_ux, point_flip_uy; 3: parked; 4: ADVECT FLIP's energy_d_slip; 5: SHIFT's energy_w_shift
 namespace detail {
 inline std::uint64_t fnv1a(const void* data, std::size_t n, std::uint64_t h = 14695981039346656037ull) {
     const unsigned char* c = static_cast<const unsigned char*>(data);

@@ -131,6 +131,13 @@ stopped_and_continued "$tmp/rf.deck" "flip: "
 # beyond the material read it again)
 sed 's/^END/MAPPING SMOOTH\nDAMPING 0.4 WINDOW=0.004\nEND/' "$tmp/r.deck" >"$tmp/rd.deck"
 stopped_and_continued "$tmp/rd.deck" "window: "
+# SHIFT from the first crowding (ABOVE=1, passes every 10 steps from step 10): the
+# potential energy its moves gave (the account's w_shift) and their count are state; with
+# the paper's cycle and under ADVECT FLIP (whose squares it moves)
+sed 's/^END/SHIFT ABOVE=1\nEND/' "$tmp/r.deck" >"$tmp/rsh.deck"
+stopped_and_continued "$tmp/rsh.deck" "shift: "
+sed 's/^END/MAPPING SMOOTH\nADVECT FLIP\nDAMPING 0.4\nSHIFT ABOVE=1\nEND/' "$tmp/r.deck" >"$tmp/rfsh.deck"
+stopped_and_continued "$tmp/rfsh.deck" "shift, flip: "
 # WATER, DRAIN, LOAD, RESERVOIR (falling from step 25 to 75), GEOSTATIC: each point's pore
 # pressure, the volume it last took, the force it carries; the water drained, the flow's
 # dissipation and the loads' work are state; the reservoir's level follows the time.
@@ -198,7 +205,7 @@ cp "$good" "$tmp/corrupt.state"
 printf '\x55' | dd of="$tmp/corrupt.state" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
 cmp -s "$good" "$tmp/corrupt.state" && printf '\xaa' | dd of="$tmp/corrupt.state" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
 cp "$good" "$tmp/version.state"
-printf '\x05' | dd of="$tmp/version.state" bs=1 seek=12 conv=notrunc 2>/dev/null
+printf '\x06' | dd of="$tmp/version.state" bs=1 seek=12 conv=notrunc 2>/dev/null
 echo "x y sxx" >"$tmp/text.state"
 sed 's/^SEED 7/SEED 8/' "$tmp/r.deck" >"$tmp/other.deck"
 mkdir -p "$tmp/dir.state"
@@ -216,7 +223,7 @@ refused() {
 refused "truncated" "truncated" "$tmp/truncated.state" "$tmp/r.deck"
 refused "shorter than a header" "truncated" "$tmp/short.state" "$tmp/r.deck"
 refused "corrupt" "checksum" "$tmp/corrupt.state" "$tmp/r.deck"
-refused "other format version" "version 5" "$tmp/version.state" "$tmp/r.deck"
+refused "other format version" "version 6" "$tmp/version.state" "$tmp/r.deck"
 refused "not a state file" "not an lpfdm state file" "$tmp/text.state" "$tmp/r.deck"
 refused "a directory" "directory" "$tmp/dir.state" "$tmp/r.deck"
 refused "missing" "cannot open" "$tmp/none.state" "$tmp/r.deck"

@@ -109,6 +109,19 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
         CHECK(news_in_steps(f, c.steps) == 0);
         CHECK(news_in_steps(f, 20, false, Kernel::Reference) == 0);
     }
+    // SHIFT from the first crowding (ABOVE=1; its sub-cells are made at set-up): a tall
+    // collapse three times as fine under the paper's cycle and psc.deck under ADVECT FLIP
+    // both move points from step 10 on
+    for (const bool flip : {false, true}) {
+        Scene f = deck(flip ? "decks/psc.deck" : "decks/verify_collapse.deck", 60);
+        if (flip) { f.mapping = Mapping::Smooth; f.advect = Advect::Flip; }
+        else { f.clusters[0].box.y1 = 2; refine(f, 3); }
+        f.shift = true;
+        f.shift_above = 1;
+        INFO(std::string(flip ? "psc.deck, FLIP, SHIFT" : "collapse, SHIFT"));
+        CHECK(news_in_steps(f, 60) == 0);
+        CHECK(news_in_steps(f, 20, false, Kernel::Reference) == 0);
+    }
 }
 
 TEST_CASE("no allocation inside the time step when points leave the lattice") {

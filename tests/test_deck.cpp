@@ -1492,6 +1492,33 @@ TEST_CASE("deck error: a bad REORDER card") {
     CHECK_ONE_ERROR(plus("REORDER 1\nREORDER 2"), 6, 1, "REORDER is given twice");
 }
 
+TEST_CASE("deck: SHIFT moves crowding points apart, RATE=0.1 and ABOVE=1.25 unless given; off without the card") {
+    CHECK_FALSE(read_ok(kBase).shift);
+    const Scene s = read_ok(plus("SHIFT"));
+    CHECK(s.shift);
+    CHECK(s.shift_rate == 0.1);
+    CHECK(s.shift_above == 1.25);
+    CHECK(s.shift_pos.line == 5);
+    const Scene t = read_ok(plus("shift above=1.5 rate=0.05"));
+    CHECK(t.shift_rate == 0.05);
+    CHECK(t.shift_above == 1.5);
+    CHECK(read_ok(plus("SHIFT ABOVE=1")).shift_above == 1);  // from the first crowding
+    Scene u = t;
+    CHECK(lpfdm::apply_setting(u, "SHIFT.RATE", 0.2).empty());
+    CHECK(u.shift_rate == 0.2);
+    Scene v = read_ok(kBase);
+    CHECK(lpfdm::apply_setting(v, "SHIFT.RATE", 0.2) == "the deck has no SHIFT card: SHIFT.RATE would change nothing");
+}
+
+TEST_CASE("deck error: a bad SHIFT card") {
+    CHECK_ONE_ERROR(plus("SHIFT RATE=0"), 5, 12, "RATE must lie in (0, 1]");
+    CHECK_ONE_ERROR(plus("SHIFT RATE=1.5"), 5, 12, "RATE must lie in (0, 1]");
+    CHECK_ONE_ERROR(plus("SHIFT ABOVE=0.9"), 5, 13, "ABOVE must lie in [1, 4]");
+    CHECK_ONE_ERROR(plus("SHIFT 0.1"), 5, 7, "extra field '0.1'");
+    CHECK_ONE_ERROR(plus("SHIFT SPEED=1"), 5, 7, "unknown parameter 'SPEED' (this card takes RATE, ABOVE)");
+    CHECK_ONE_ERROR(plus("SHIFT\nSHIFT RATE=0.2"), 6, 1, "SHIFT is given twice");
+}
+
 TEST_CASE("deck: ADVECT chooses how the nodal increments follow the material; EQ12 by default") {
     CHECK(read_ok(kBase).advect == lpfdm::Advect::Eq12);
     CHECK(read_ok(plus("ADVECT eq12")).advect == lpfdm::Advect::Eq12);

@@ -212,6 +212,37 @@ TEST_CASE("MAPPING SMOOTH with ADVECT FLIP, walls, softening, points leaving, SH
     }
 }
 
+// SHIFT (Simulation::shift_points) with ABOVE=1, so that its passes start at the first
+// crowding: a tall collapse three times as fine (4 608 points: the threaded passes, whose
+// boxes the moved points must stay inside; fixed edges) with the paper's cycle and with
+// ADVECT FLIP, a hopper (points leaving), and psc.deck's walls under ADVECT FLIP twice as
+// fine. Each run moves points (checked; the hopper's first pass comes after 200 steps, past
+// the sanitizer build's shorter run), and every kernel moves the same ones.
+TEST_CASE("SHIFT with the paper's cycle and with ADVECT FLIP, fixed edges, walls, points leaving, by threads: the same bits") {
+    struct Case { const char* deck; bool flip; int refine; double y1; long steps; };
+    for (const Case& c : {Case{"decks/verify_collapse.deck", false, 3, 2, 60}, Case{"decks/verify_collapse.deck", true, 3, 2, 60},
+                          Case{"decks/verify_hopper.deck", false, 1, 0, 300}, Case{"decks/psc.deck", true, 2, 0, 60}}) {
+        Scene s;
+        REQUIRE(read_deck(c.deck, s).empty());
+        s.outputs.clear();
+        if (c.y1 > 0) s.clusters[0].box.y1 = c.y1;
+        if (c.flip) { s.mapping = Mapping::Smooth; s.advect = Advect::Flip; }
+        refine(s, c.refine);
+        s.shift = true;
+        s.shift_above = 1;
+        REQUIRE_MESSAGE(validate(s).empty(), c.deck);
+        REQUIRE(count_points(s) > 4096);  // the threaded passes' threshold (Simulation::serial)
+        const long steps = small_runs() ? c.steps / 4 : c.steps;
+        const std::string name = std::string(c.deck) + (c.flip ? " ADVECT FLIP" : "") + " SHIFT ABOVE=1, refined " + std::to_string(c.refine);
+        if (steps >= 200 || c.refine > 1) {
+            Simulation probe(s);
+            for (long n = 0; n < steps; ++n) probe.step();
+            CHECK_MESSAGE(probe.shifted() > 0, name);
+        }
+        compare_kernels(name, s, steps);
+    }
+}
+
 // DAMPING WINDOW (eq. 14 about each node's mean increment, damped_increment): the means
 // are advanced where eq. 13 is, in the reference cycle over the whole lattice, in the fast
 // kernel over its boxes and by threads, with ADVECT FLIP in its own step 5, and read again

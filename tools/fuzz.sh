@@ -72,7 +72,7 @@ dict=build/fuzz/deck.dict
 {
     for w in TITLE GRID MATERIAL ELASTIC MOHR CLUSTER FIX WALL GRAVITY DAMPING SEED STEP OUTPUT POINTS HISTORY EVERY END \
              E= NU= RHO= PHI= C= PSI= TENSION= SOFTEN= SCATTER= PPC= FILL= CELLS POLYGON X XY Y \
-             SHAKE ABSORB FILE= SCALE= START= DAMPING= COMPLIANT BASELINE BOTTOM TOP LEFT RIGHT \
+             SHAKE ABSORB FILE= SCALE= START= DAMPING= COMPLIANT BASELINE BOTTOM TOP LEFT RIGHT SHIFT RATE= ABOVE= \
              decks/quake_pulse.txt decks/quake_burst.txt tests/decks/good_quake.txt; do
         printf '"%s"\n' "$w"
     done
