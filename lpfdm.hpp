@@ -557,7 +557,7 @@ inline const DeckCard kDeckCards[] = {
     {"MOTION", "PAPER|CENTRE|BILINEAR", "", "how points move with their cell: eq. 7a/7b about node [1], about the centre, or bilinear"},
     {"MAPPING", "PAPER|SMOOTH", "", "a point in the cell holding its centre (the paper), or shared by the cells its square overlaps (no jump at cell edges)"},
     {"ADVECT", "EQ12|POINTS|FLIP", "", "how increments follow the material: eq. 12, carried by the points, or kept by them (FLIP)"},
-    {"SHIFT", "", "", "every 10 steps, points that crowd (their squares' area above ABOVE times the lattice's, default 1.25) move apart, down the crowding's gradient"},
+    {"SHIFT", "", "", "every 10 steps, points that crowd (their squares' area over ABOVE times the area they lie in) move apart, down the crowding's gradient"},
     {"SEED", "", "", "seed of the strength scatter"},
     {"REORDER", "", "", "sort the points' storage by cell every n steps (default 50; 0: never), for speed as points move"},
     {"STEP", "", "", "n steps of dt seconds"},
@@ -1409,7 +1409,7 @@ private:
     std::vector<double> shift_fill_, shift_excess_;
     long shifted_ = 0;
     static constexpr long kShiftEvery = 10;  // steps between the passes
-    void shift_points(const Range& cells);
+    void shift_points();
     double flip_kinetic_ = 0;
     // The node masses eq. 13 moves with: eq. 10's, or with ADVECT FLIP the transfer's M_n
     // (flip_changes). The fixed directions and the walls read the same masses, and the same
@@ -3819,7 +3819,7 @@ LPFDM_DEF double Simulation::packing() const {
 // ======================================================================================
 // SHIFT (not in the paper): points that crowd move apart
 //
-// Where the choices are made (each tested in tests/):
+// The choices made here (each tested in tests/):
 // * The cycle can carry points together faster than their cells' strain compresses them:
 //   a flow drawn out into thin lines leaves cells of many points beside empty ones, each
 //   point keeping its volume, and nothing in eq. 1-14 moves them apart; eq. 8 then gives
@@ -3838,7 +3838,7 @@ LPFDM_DEF double Simulation::packing() const {
 //   - only after a step whose largest eq. 8 sum exceeds a L^2 (packing()): a scene that
 //     never crowds so runs bit for bit as it does without the card;
 //   - every 10 steps, not every step: the pass costs about as much as the paper's step
-//     (bench_flow.deck: 7.9 s without, 19 s moving every step at r / 10, 9.1 s every 10
+//     (bench_flow.deck: 7.9 s without, 19 s moving every step at r / 10, 9.6 s every 10
 //     steps, `packed` 2.25 and 2.24);
 //   - a point keeps its mass, volume, stress and (ADVECT FLIP) its own increment, so mass,
 //     and under FLIP momentum, are kept exactly; the potential energy the moves change is
@@ -3847,23 +3847,23 @@ LPFDM_DEF double Simulation::packing() const {
 //   Why squares on the half-spacing lattice: the fill of whole cells (eq. 8's sums, or their
 //   means at the nodes) cannot see cells that alternate full and empty, the pattern flows
 //   leave, and moving points down it made bench_flow.deck's packing worse (4.5 -> 9.7);
-//   points counted in sub-cells without their squares read 2 in half the sub-cells of a
-//   material at rest, and a threshold low enough to act moved every scene at rest.
-//   tests/README.md gives what SHIFT changes on the flows.
+//   points counted whole in the sub-cells (no squares) held it to 3.5-4.0 only, creating
+//   6-14 % of the energy in play. tests/README.md gives what SHIFT changes on the flows.
 // ======================================================================================
 
-// After a step, the points whose cells lie in the box `cells` (the whole lattice in the
-// reference cycle, occupied_ in the fast kernel: every point's cell either way), in point order.
-inline void Simulation::shift_points(const Range& cells) {
-    if (!sc_.shift || cells.empty() || (step_ + 1) % kShiftEvery) return;
+// After a step (every kernel the same code, the points in point order).
+inline void Simulation::shift_points() {
+    if (!sc_.shift || (step_ + 1) % kShiftEvery) return;
     const double above = sc_.shift_above;
-    double most = 0;  // the gate: packing() over the box
-    for (int j = cells.j0; j < cells.j1; ++j)
-        for (int i = cells.i0; i < cells.i1; ++i) most = std::max(most, cvol_[std::size_t(cell(i, j))]);
-    if (most <= above * L_ * L_) return;
+    if (packing() <= above) return;
     const int sx = 2 * mx_, sy = 2 * my_, n1 = sx + 1;
     const double h = 0.5 * L_, ih = 1 / h;
-    const Range box = cells.grow(1, mx_, my_);  // holds every square of the points in `cells`
+    Range cells;  // the box of the points' cells
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const int c = p_.cell[k];
+        if (c >= 0) cells = cells.unite(Range{c % mx_, c % mx_ + 1, c / mx_, c / mx_ + 1});
+    }
+    const Range box = cells.grow(1, mx_, my_);  // holds every point's square
     const int I0 = 2 * box.i0, I1 = 2 * box.i1, J0 = 2 * box.j0, J1 = 2 * box.j1;  // sub-cells I0 .. I1-1, sub-nodes I0 .. I1
     double* fill = shift_fill_.data();
     double* ex = shift_excess_.data();
@@ -3904,7 +3904,7 @@ inline void Simulation::shift_points(const Range& cells) {
     const double cap = 0.1 * L_, rate = sc_.shift_rate;
     double work = 0;
     long moved = 0;
-    Range reach = cells;
+    Range reach = occupied_;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const int c = p_.cell[k];
         if (c < 0 || (modes_.loads && p_.load_axis[k])) continue;
@@ -4553,7 +4553,7 @@ LPFDM_DEF void Simulation::step_reference() {
     reference_compensate();    // eq. 12
     reference_integrate();     // eq. 13-14, fixed nodes, moving walls
     load_work();
-    shift_points({0, mx_, 0, my_});  // SHIFT
+    shift_points();  // SHIFT
     parked_ += parking_.take();
     held_ += holding_.take();
     ++step_;
@@ -6413,7 +6413,7 @@ LPFDM_DEF void Simulation::step() {
     compensate();      // eq. 12
     integrate();       // eq. 13-14, fixed nodes, moving walls
     load_work();
-    shift_points(occupied_);  // SHIFT
+    shift_points();  // SHIFT
     parked_ += parking_.take();
     held_ += holding_.take();
     ++step_;
@@ -6432,7 +6432,7 @@ inline void Simulation::step_profiled() {
         case 1: ref ? reference_points() : point_pass(); water_pass(); break;
         case 2: ref ? reference_nodal_forces() : nodal_forces(); load_forces(); break;
         case 3: ref ? reference_compensate() : compensate(); break;
-        default: ref ? reference_integrate() : integrate(); load_work(); shift_points(ref ? Range{0, mx_, 0, my_} : occupied_); break;
+        default: ref ? reference_integrate() : integrate(); load_work(); shift_points(); break;
         }
         phase_s_[k] += std::chrono::duration<double>(clock::now() - t0).count();
     }
