@@ -1053,7 +1053,7 @@ public:
     //   error     (work in - kinetic - strain - gravity - dissipated) / max(|work in|, kinetic +
     //             |strain| + |gravity|, the largest kinetic energy so far, |dissipated|, 1e-10 of
     //             the strain and potential energies at the start), work in = w_walls + w_fixes +
-    //             w_ground + w_loads, dissipated = d_damping + d_plastic + d_absorb + d_water +
+    //             w_ground + w_loads + w_shift, dissipated = d_damping + d_plastic + d_absorb + d_water +
     //             d_slip: energy the discrete cycle created (< 0) or lost (> 0), as a fraction of
     //             the energy in play.
     // Nodal works are trapezoidal in time (the force at t and t + dt on the increment between).
@@ -3838,8 +3838,8 @@ LPFDM_DEF double Simulation::packing() const {
 //   - only after a step whose largest eq. 8 sum exceeds a L^2 (packing()): a scene that
 //     never crowds so runs bit for bit as it does without the card;
 //   - every 10 steps, not every step: the pass costs about as much as the paper's step
-//     (bench_flow.deck: 7.9 s without, 19 s moving every step at r / 10, 9.6 s every 10
-//     steps, `packed` 2.25 and 2.24);
+//     (bench_flow.deck: 7.9 s without, 19 s moving every step at r / 10 for the same
+//     packing, 9.9 s every 10 steps);
 //   - a point keeps its mass, volume, stress and (ADVECT FLIP) its own increment, so mass,
 //     and under FLIP momentum, are kept exactly; the potential energy the moves change is
 //     the account's w_shift, work in. Under eq. 12 the nodes keep their increments while
@@ -3861,7 +3861,7 @@ inline void Simulation::shift_points() {
     Range cells;  // the box of the points' cells
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const int c = p_.cell[k];
-        if (c >= 0) cells = cells.unite(Range{c % mx_, c % mx_ + 1, c / mx_, c / mx_ + 1});
+        if (c >= 0 && std::isfinite(p_.x[k] + p_.y[k])) cells = cells.unite(Range{c % mx_, c % mx_ + 1, c / mx_, c / mx_ + 1});
     }
     const Range box = cells.grow(1, mx_, my_);  // holds every point's square
     const int I0 = 2 * box.i0, I1 = 2 * box.i1, J0 = 2 * box.j0, J1 = 2 * box.j1;  // sub-cells I0 .. I1-1, sub-nodes I0 .. I1
@@ -3874,12 +3874,12 @@ inline void Simulation::shift_points() {
         const double u0 = c0 * ih, u1 = c1 * ih;
         const int i0 = int(std::floor(u0)), i1 = std::min(int(std::floor(u1)), m - 1);
         o[0] = o[1] = o[2] = 0;
-        for (int i = i0; i <= i1; ++i) o[i - i0] = i >= 0 ? std::min(u1, i + 1.0) - std::max(u0, double(i)) : 0.0;
+        for (int i = i0; i <= std::min(i1, i0 + 2); ++i) o[i - i0] = i >= 0 ? std::min(u1, i + 1.0) - std::max(u0, double(i)) : 0.0;  // (a side of 2h exactly may round to four)
         return i0;
     };
     for (std::size_t k = 0; k < p_.size(); ++k) {  // the squares' areas in the sub-cells, over h^2
-        if (p_.cell[k] < 0) continue;
         const double a = 0.5 * std::min(std::sqrt(std::max(p_.vol[k], 0.0)), L_);
+        if (p_.cell[k] < 0 || !(a > 0) || !std::isfinite(p_.x[k] + p_.y[k])) continue;  // (not finite: the health check stops the run)
         double ox[3], oy[3];
         const int i0 = parts(p_.x[k] - a, p_.x[k] + a, sx, ox), j0 = parts(p_.y[k] - a, p_.y[k] + a, sy, oy);
         for (int j = 0; j < 3; ++j) {
@@ -3904,13 +3904,12 @@ inline void Simulation::shift_points() {
     const double cap = 0.1 * L_, rate = sc_.shift_rate;
     double work = 0;
     long moved = 0;
-    Range reach = occupied_;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const int c = p_.cell[k];
-        if (c < 0 || (modes_.loads && p_.load_axis[k])) continue;
+        const double x = p_.x[k], y = p_.y[k];
+        if (c < 0 || !std::isfinite(x + y) || (modes_.loads && p_.load_axis[k])) continue;
         const std::uint8_t fe = fixed_edges_[std::size_t(c)];
         if (fe & kEdgeWall) continue;
-        const double x = p_.x[k], y = p_.y[k];
         const int I = std::clamp(int(x * ih), 0, sx - 1), J = std::clamp(int(y * ih), 0, sy - 1);
         const double u = x * ih - I, v = y * ih - J;
         const double* e = ex + std::size_t(J) * std::size_t(n1) + std::size_t(I);
@@ -3928,18 +3927,18 @@ inline void Simulation::shift_points() {
         p_.x[k] = xn; p_.y[k] = yn; p_.cell[k] = cn;
         work += potential_energy(k) - before;
         ++moved;
-        reach = reach.unite(Range{cn % mx_, cn % mx_ + 1, cn / mx_, cn / mx_ + 1});
     }
     for (int J = J0; J < J1; ++J) std::fill(fill + std::size_t(J) * std::size_t(sx) + std::size_t(I0), fill + std::size_t(J) * std::size_t(sx) + std::size_t(I1), 0.0);
     for (int J = J0; J <= J1; ++J) std::fill(ex + std::size_t(J) * std::size_t(n1) + std::size_t(I0), ex + std::size_t(J) * std::size_t(n1) + std::size_t(I1) + 1, 0.0);
     es_.w_shift += work;
     shifted_ += moved;
+    // The next step reads the last mapping (eq. 5's cells with mass, MAPPING SMOOTH's
+    // centroids, packing()): made anew where the points are now (with it, a restart's
+    // state), its sums cleared first in every cell the step's mapping wrote (`box`; the
+    // reference cycle keeps no occupied_ of its own).
     if (!moved) return;
-    parts_known_ = false;  // the threaded pass's chunks: the cells their points lie in
-    // MAPPING SMOOTH: the next step reads the last mapping's centroids (cell_centroid): the
-    // squares and sums made anew where the points are now, as a restart makes them (resumed).
-    if (modes_.mapping == Mapping::Smooth) map_points();
-    else if (!reference_only()) occupied_ = reach;
+    occupied_ = occupied_.unite(box);
+    map_points();
 }
 
 LPFDM_DEF double Simulation::excess_pressure() const {

@@ -138,6 +138,11 @@ sed 's/^END/SHIFT ABOVE=1\nEND/' "$tmp/r.deck" >"$tmp/rsh.deck"
 stopped_and_continued "$tmp/rsh.deck" "shift: "
 sed 's/^END/MAPPING SMOOTH\nADVECT FLIP\nDAMPING 0.4\nSHIFT ABOVE=1\nEND/' "$tmp/r.deck" >"$tmp/rfsh.deck"
 stopped_and_continued "$tmp/rfsh.deck" "shift, flip: "
+for d in rsh rfsh; do  # the passes moved points before step 60 and after it
+    "$exe" -q -o "$tmp/$d-moves" "$tmp/$d.deck" >/dev/null 2>&1
+    moves=$(awk '!/^#/ && ($1 == 60 || $1 == 120) { printf "%s ", $NF }' "$tmp/$d-moves/h.txt")
+    check "$d: points moved by step 60 and after" $(echo "$moves" | awk '{ exit !($1 > 0 && $2 > $1) }'; echo $?) "the history's shifted at steps 60 and 120: $moves"
+done
 # WATER, DRAIN, LOAD, RESERVOIR (falling from step 25 to 75), GEOSTATIC: each point's pore
 # pressure, the volume it last took, the force it carries; the water drained, the flow's
 # dissipation and the loads' work are state; the reservoir's level follows the time.

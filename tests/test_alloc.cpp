@@ -111,7 +111,7 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
     }
     // SHIFT from the first crowding (ABOVE=1; its sub-cells are made at set-up): a tall
     // collapse three times as fine under the paper's cycle and psc.deck under ADVECT FLIP
-    // both move points from step 10 on
+    // both move points from step 10 on (checked)
     for (const bool flip : {false, true}) {
         Scene f = deck(flip ? "decks/psc.deck" : "decks/verify_collapse.deck", 60);
         if (flip) { f.mapping = Mapping::Smooth; f.advect = Advect::Flip; }
@@ -119,6 +119,9 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
         f.shift = true;
         f.shift_above = 1;
         INFO(std::string(flip ? "psc.deck, FLIP, SHIFT" : "collapse, SHIFT"));
+        Simulation probe(f);
+        for (int k = 0; k < 60; ++k) probe.step();
+        CHECK(probe.shifted() > 0);
         CHECK(news_in_steps(f, 60) == 0);
         CHECK(news_in_steps(f, 20, false, Kernel::Reference) == 0);
     }

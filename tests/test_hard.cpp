@@ -975,8 +975,9 @@ Flow hopper(bool shift, bool flip) {
 // area unless they were compressed that much. The hopper's cells hold up to 3.5 times
 // (the paper's cycle) and 2.5 times (ADVECT FLIP) without SHIFT, the points' volumes all but
 // unchanged. With it, ADVECT FLIP keeps every step's cells within twice their area; the
-// paper's cycle comes to one point over (2.25 in a cell made with 2 x 2: its cell-wise
-// motion packs them faster than a pass every 10 steps spreads them). The discharge is the
+// paper's cycle comes to one point over (2.25: nine points of V0 in a cell made with 2 x 2,
+// eq. 8 counting at most V0 a point; its cell-wise motion packs them faster than a pass
+// every 10 steps spreads them). The discharge is the
 // flow's own measure: the slot's rate must not move by more than the 2 % by which
 // the rate's own scatter between runs differs.
 TEST_CASE("hard: SHIFT holds a draining hopper's cells within twice their area under ADVECT FLIP, and the discharge as it was [slow]") {
@@ -1057,4 +1058,56 @@ TEST_CASE("hard: SHIFT changes nothing in a scene whose cells never hold more th
         CHECK_MESSAGE(a.points().syy == b.points().syy, deck);
         CHECK_MESSAGE(a.energy().error == b.energy().error, deck);
     }
+}
+
+// The account names what a pass changes: two runs of one scene, with SHIFT and without, are
+// the same bits until the first pass (after step 10, ABOVE=1), so after it their points
+// differ by the moves alone. Then w_shift is the potential energy those moves gave,
+// sum_p -m_p g . (x_with - x_without), the potential energy of the run with SHIFT is the
+// other's plus w_shift, and energy_error, which counts w_shift as work in, stays as small
+// as the other run's (its scale grows with the potential energy: the two differ there; left
+// out of the work in, w_shift would read as most of the energy in play). The upper half of
+// a column is squeezed to half its height before the first step, so that the pass has
+// crowding to undo and its potential energy is a good part of the energy in play.
+TEST_CASE("hard: SHIFT's w_shift is the potential energy its moves gave, and the account stays closed") {
+    Scene s;
+    REQUIRE(read_deck("decks/verify_collapse.deck", s).empty());
+    s.outputs.clear();
+    s.clusters[0].box.y1 = 2;
+    refine(s, 3);
+    Scene t = s;
+    t.shift = true;
+    t.shift_above = 1;
+    t.shift_rate = 1;
+    REQUIRE(validate(t).empty());
+    Simulation a(t), b(s);
+    for (Simulation* sim : {&a, &b}) {
+        Points& p = sim->points();
+        for (std::size_t k = 0; k < p.size(); ++k)
+            if (p.y[k] > 1) { p.y[k] = 1 + 0.5 * (p.y[k] - 1); p.cell[k] = sim->cell_holding(p.x[k], p.y[k]); }
+        sim->map_to_lattice();
+    }
+    for (int k = 0; k < 9; ++k) { a.step(); b.step(); }
+    CHECK(a.shifted() == 0);
+    CHECK(a.points().y == b.points().y);
+    a.step();
+    b.step();
+    REQUIRE(a.shifted() > 0);
+    const Points &p = a.points(), &q = b.points();
+    REQUIRE(p.size() == q.size());
+    double w = 0, moved = 0;
+    for (std::size_t k = 0; k < p.size(); ++k) {
+        REQUIRE(p.id[k] == q.id[k]);
+        const double m = a.point_mass(k);
+        w += -m * (s.gravity_x * (p.x[k] - q.x[k]) + s.gravity_y * (p.y[k] - q.y[k]));
+        moved += m * std::fabs(s.gravity_y * (p.y[k] - q.y[k]));
+    }
+    const Simulation::Energy ea = a.energy(), eb = b.energy();
+    MESSAGE("first pass: " << a.shifted() << " moves, w_shift " << ea.w_shift << " J/m (the sum of -m g . dx over the moves " << w << ", of |m g dy| " << moved
+            << "), the potential energy " << ea.gravity << " with, " << eb.gravity << " without; energy_error " << ea.error << " with, " << eb.error << " without");
+    CHECK(std::fabs(ea.w_shift) > 0.1 * moved);  // the moves' potential energy does not cancel out
+    CHECK(ea.w_shift == approx(w).epsilon(1e-9));
+    CHECK(ea.gravity - eb.gravity == approx(ea.w_shift).epsilon(1e-6));
+    CHECK(std::fabs(ea.error) <= 2 * std::fabs(eb.error));
+    CHECK(std::fabs(ea.w_shift) > 0.5 * (ea.kinetic + std::fabs(ea.strain) + std::fabs(ea.gravity)));
 }
