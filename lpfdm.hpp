@@ -3832,14 +3832,15 @@ LPFDM_DEF double Simulation::packing() const {
 //     window's area, 1 where the points tile the material as made, at any PPC;
 //   - each point moves down the gradient of the excess e = max(f - a, 0), bilinear in its
 //     sub-cell: delta = -r h (h grad e), at most L/10; where f <= a nothing moves;
-//   - a point stays where it is if the move would take it out of the lattice, out of a
-//     cell with a fixed edge or into one, or if it lies near a wall's face (kEdgeWall) or
-//     carries a LOAD: the supports' guards are not crossed;
+//   - a point stays where it is if the move would take it out of the lattice, across a
+//     fixed cell edge (of the cells about the edge or corner it crosses) or into a cell
+//     near a wall's face (kEdgeWall), or if it lies in such a cell or carries a LOAD: the
+//     supports' guards are not crossed;
 //   - only after a step whose largest eq. 8 sum exceeds a L^2 (packing()): a scene that
 //     never crowds so runs bit for bit as it does without the card;
 //   - every 10 steps, not every step: the pass costs about as much as the paper's step
 //     (bench_flow.deck: 7.9 s without, 19 s moving every step at r / 10 for the same
-//     packing, 9.9 s every 10 steps);
+//     packing, 9.7 s every 10 steps);
 //   - a point keeps its mass, volume, stress and (ADVECT FLIP) its own increment, so mass,
 //     and under FLIP momentum, are kept exactly; the potential energy the moves change is
 //     the account's w_shift, work in. Under eq. 12 the nodes keep their increments while
@@ -3922,7 +3923,13 @@ inline void Simulation::shift_points() {
         if (len2 > cap * cap) { const double r = cap / std::sqrt(len2); dx *= r; dy *= r; }
         const double xn = x + dx, yn = y + dy;
         const int cn = cell_holding(xn, yn);
-        if (cn < 0 || (cn != c && (fe || fixed_edges_[std::size_t(cn)]))) continue;
+        if (cn < 0) continue;
+        if (cn != c) {  // the edges of the two cells about the corner or edge it crosses: none fixed
+            const int di = cn % mx_ - c % mx_, dj = cn / mx_ - c / mx_;
+            const std::uint8_t from = std::uint8_t((di > 0 ? kEdgeRight : di < 0 ? kEdgeLeft : 0) | (dj > 0 ? kEdgeTop : dj < 0 ? kEdgeBottom : 0));
+            const std::uint8_t into = std::uint8_t((di > 0 ? kEdgeLeft : di < 0 ? kEdgeRight : 0) | (dj > 0 ? kEdgeBottom : dj < 0 ? kEdgeTop : 0));
+            if ((fe & from) || (fixed_edges_[std::size_t(cn)] & (into | kEdgeWall))) continue;
+        }
         const double before = potential_energy(k);
         p_.x[k] = xn; p_.y[k] = yn; p_.cell[k] = cn;
         work += potential_energy(k) - before;

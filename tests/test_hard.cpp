@@ -945,6 +945,7 @@ struct Flow {
     double most = 0;   // the largest packing() over every step
     double out = 0;    // the mass that left through the slot [kg/m]
     long shifted = 0;
+    long crossed = 0;  // steps in which a point crossed the floor (y = 1) beside the slot
     bool mass = true;
 };
 
@@ -959,10 +960,20 @@ Flow hopper(bool shift, bool flip) {
     REQUIRE(validate(s).empty());
     Simulation sim(s);
     Flow r;
+    const Points& p = sim.points();
+    std::vector<double> x0(p.size()), y0(p.size());  // by id: where each point was a step before
+    for (std::size_t k = 0; k < p.size(); ++k) { x0[std::size_t(p.id[k])] = p.x[k]; y0[std::size_t(p.id[k])] = p.y[k]; }
     for (long k = 0; k < s.steps; ++k) {
         sim.step();
         r.most = std::max(r.most, sim.packing());
         r.mass &= mass_exact(sim);
+        bool crossed = false;
+        for (std::size_t q = 0; q < p.size(); ++q) {
+            const std::size_t i = std::size_t(p.id[q]);
+            if (y0[i] >= 1 && p.y[q] < 1 && (std::min(x0[i], p.x[q]) < 2.5 || std::max(x0[i], p.x[q]) > 3.5)) crossed = true;
+            x0[i] = p.x[q]; y0[i] = p.y[q];
+        }
+        r.crossed += crossed;
     }
     r.out = sim.mass_outflow();
     r.shifted = sim.shifted();
@@ -987,6 +998,8 @@ TEST_CASE("hard: SHIFT holds a draining hopper's cells within twice their area u
                 << " moves), discharge " << off.out << " -> " << on.out << " kg/m");
         CHECK(off.shifted == 0);
         CHECK(on.shifted > 0);
+        CHECK(off.crossed == 0);
+        CHECK(on.crossed == 0);  // the passes do not carry points across the floor's fixed edges
         CHECK(off.most > 2.4);  // packed without it: the case is a test
         CHECK(on.most <= (flip ? 2.0 : 2.25));
         CHECK(on.mass);
@@ -1110,4 +1123,42 @@ TEST_CASE("hard: SHIFT's w_shift is the potential energy its moves gave, and the
     CHECK(ea.gravity - eb.gravity == approx(ea.w_shift).epsilon(1e-6));
     CHECK(std::fabs(ea.error) <= 2 * std::fabs(eb.error));
     CHECK(std::fabs(ea.w_shift) > 0.5 * (ea.kinetic + std::fabs(ea.strain) + std::fabs(ea.gravity)));
+}
+
+// A pass does not carry points across a fixed cell edge: the hopper's bin with its lowest
+// half metre squeezed to half its height against the floor (y = 1, fixed beside the slot),
+// so that the crowding's gradient points into the floor; RATE=1, ABOVE=1. No point moves
+// from above the floor to below it beside the slot (2.5 < x < 3.5 is the slot), in either
+// cycle, and the passes did move points there.
+TEST_CASE("hard: SHIFT moves no point across a fixed edge, crowded against it") {
+    for (const bool flip : {false, true}) {
+        Scene s;
+        REQUIRE(read_deck("decks/verify_hopper.deck", s).empty());
+        s.outputs.clear();
+        s.shift = true; s.shift_above = 1; s.shift_rate = 1;
+        s.reorder = 0;  // (the points by storage index, step to step)
+        if (flip) { s.mapping = Mapping::Smooth; s.advect = Advect::Flip; }
+        REQUIRE(validate(s).empty());
+        Simulation sim(s);
+        Points& p = sim.points();
+        for (std::size_t k = 0; k < p.size(); ++k)
+            if (p.y[k] < 1.5) { p.y[k] = 1 + 0.5 * (p.y[k] - 1); p.cell[k] = sim.cell_holding(p.x[k], p.y[k]); }
+        sim.map_to_lattice();
+        long crossed = 0, near = 0;
+        for (long n = 0; n < 100; ++n) {
+            std::vector<double> x0(p.x), y0(p.y);
+            const std::vector<std::int32_t> id0(p.id);
+            const long before = sim.shifted();
+            sim.step();
+            REQUIRE(p.id == id0);  // (no sort, and no point left in 100 steps)
+            for (std::size_t k = 0; k < p.size(); ++k) {
+                const bool beside = std::min(x0[k], p.x[k]) < 2.5 || std::max(x0[k], p.x[k]) > 3.5;
+                if (beside && y0[k] >= 1 && p.y[k] < 1) ++crossed;
+                if (sim.shifted() > before && beside && p.y[k] < 1.1 && p.y[k] != y0[k]) ++near;
+            }
+        }
+        MESSAGE(std::string(flip ? "ADVECT FLIP" : "the paper's cycle") << ": " << sim.shifted() << " moves, " << crossed << " crossings of the floor beside the slot");
+        CHECK(near > 0);  // points within a cell of the floor moved in pass steps
+        CHECK(crossed == 0);
+    }
 }
