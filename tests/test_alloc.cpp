@@ -119,9 +119,9 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
         f.shift = true;
         f.shift_above = 1;
         INFO(std::string(flip ? "psc.deck, FLIP, SHIFT" : "collapse, SHIFT"));
-        Simulation probe(f);
-        for (int k = 0; k < 60; ++k) probe.step();
-        CHECK(probe.shifted() > 0);
+        Simulation moving(f);
+        for (int k = 0; k < 60; ++k) moving.step();
+        CHECK(moving.shifted() > 0);
         CHECK(news_in_steps(f, 60) == 0);
         CHECK(news_in_steps(f, 20, false, Kernel::Reference) == 0);
     }

@@ -235,9 +235,9 @@ TEST_CASE("SHIFT with the paper's cycle and with ADVECT FLIP, fixed edges, walls
         const long steps = small_runs() ? c.steps / 4 : c.steps;
         const std::string name = std::string(c.deck) + (c.flip ? " ADVECT FLIP" : "") + " SHIFT ABOVE=1, refined " + std::to_string(c.refine);
         if (steps >= 200 || c.refine > 1) {
-            Simulation probe(s);
-            for (long n = 0; n < steps; ++n) probe.step();
-            CHECK_MESSAGE(probe.shifted() > 0, name);
+            Simulation moving(s);
+            for (long n = 0; n < steps; ++n) moving.step();
+            CHECK_MESSAGE(moving.shifted() > 0, name);
         }
         compare_kernels(name, s, steps);
     }
