@@ -9724,16 +9724,12 @@ LPFDM_DEF Diagnostics parse_deck_text(const std::string& text, const std::string
             sc.reservoir.pos = kp;
             r.fields("RESERVOIR", sc, 0);
             r.parameters("RESERVOIR", 0, sc, 0);
-        } else if (kw == "SHIFT") {
-            once(have_shift);
-            sc.shift = true;
-            sc.shift_pos = kp;
-            r.parameters("SHIFT", 0, sc, 0);
-        } else if (kw == "GEOSTATIC") {
-            once(have_geostatic);
-            sc.geostatic = true;
-            sc.geostatic_pos = kp;
-            r.parameters("GEOSTATIC", 0, sc, 0);
+        } else if (kw == "SHIFT" || kw == "GEOSTATIC") {  // a switch with parameters only
+            const bool shift = kw == "SHIFT";
+            once(shift ? have_shift : have_geostatic);
+            (shift ? sc.shift : sc.geostatic) = true;
+            (shift ? sc.shift_pos : sc.geostatic_pos) = kp;
+            r.parameters(kw.c_str(), 0, sc, 0);
         } else if (kw == "DRAIN" || kw == "LOAD") {
             read_drain_or_load(r, sc, kp, kw == "LOAD");
         } else if (kw == "GRAVITY") {
