@@ -557,7 +557,7 @@ inline const DeckCard kDeckCards[] = {
     {"MOTION", "PAPER|CENTRE|BILINEAR", "", "how points move with their cell: eq. 7a/7b about node [1], about the centre, or bilinear"},
     {"MAPPING", "PAPER|SMOOTH", "", "a point in the cell holding its centre (the paper), or shared by the cells its square overlaps (no jump at cell edges)"},
     {"ADVECT", "EQ12|POINTS|FLIP", "", "how increments follow the material: eq. 12, carried by the points, or kept by them (FLIP)"},
-    {"SHIFT", "", "", "every 10 steps, points that crowd (their squares' area over ABOVE times the area they lie in) move apart, down the crowding's gradient"},
+    {"SHIFT", "", "", "every 10 steps, points that crowd (their squares' area over ABOVE times the area they lie in) move apart, down the crowding's gradient; after every step, no cell's points over twice its area where a neighbour has room"},
     {"SEED", "", "", "seed of the strength scatter"},
     {"REORDER", "", "", "sort the points' storage by cell every n steps (default 50; 0: never), for speed as points move"},
     {"STEP", "", "", "n steps of dt seconds"},
@@ -1409,7 +1409,17 @@ private:
     std::vector<double> shift_fill_, shift_excess_;
     long shifted_ = 0;
     static constexpr long kShiftEvery = 10;  // steps between the passes
+    static constexpr double kShiftLimit = 2;  // shift_relief: no cell's points over twice its area
+    static constexpr int kShiftRounds = 8;    // shift_relief: at most so many moves out of one cell a step
+    // A cell's whole points' volumes (shift_relief), the move it would make first (the point
+    // nearest an edge whose neighbour has room, that edge 0-3) and its distance.
+    struct ShiftCell { double sum = 0, best = std::numeric_limits<double>::infinity(); long stamp = -1; std::int32_t point = -1; std::int8_t edge = -1; };
+    std::vector<ShiftCell> shift_cells_;
+    std::vector<int> shift_full_;
     void shift_points();
+    bool shift_pass();
+    bool shift_relief(double limit);
+    bool shift_moved(double work, long moved, const Range& box);
     double flip_kinetic_ = 0;
     // The node masses eq. 13 moves with: eq. 10's, or with ADVECT FLIP the transfer's M_n
     // (flip_changes). The fixed directions and the walls read the same masses, and the same
@@ -2819,7 +2829,7 @@ LPFDM_DEF double estimate_bytes(const Scene& s, double points) {
     Points().each_array([&](const char*, const auto& v, Points::Use u, bool) {
         if (uses(s, u, true)) per_point += double(sizeof(v[0]));
     });
-    const double shift = s.shift ? 8 * 8 * cells : 0;  // SHIFT: four sub-cells and about four sub-nodes a cell
+    const double shift = s.shift ? (8 * 8 + 32 + 4) * cells : 0;  // SHIFT: four sub-cells and about four sub-nodes a cell, the guard's sums
     return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * (per_point + 2 * 8) + shift;  // (+ the initial positions)
 }
 
@@ -2935,6 +2945,8 @@ inline void Simulation::setup() {
     if (sc_.shift) {  // SHIFT: the sub-cells and their nodes
         shift_fill_.assign(4 * cells, 0.0);
         shift_excess_.assign(std::size_t(2 * mx_ + 1) * std::size_t(2 * my_ + 1), 0.0);
+        shift_cells_.assign(cells, ShiftCell{});
+        shift_full_.assign(cells, 0);
     }
     if (modes_.advect == Advect::Points)
         carried_.assign(cells, Carried{});
@@ -3838,6 +3850,14 @@ LPFDM_DEF double Simulation::packing() const {
 //     supports' guards are not crossed;
 //   - only after a step whose largest eq. 8 sum exceeds a L^2 (packing()): a scene that
 //     never crowds so runs bit for bit as it does without the card;
+//   - and after every step a guard (shift_relief): where the points lying in a cell (V at
+//     most V0 each, as eq. 8 counts them) hold more than twice its area (kShiftLimit, or
+//     a if larger), the cell gives points, one a round, to the edge neighbours that stay
+//     within it with them: the point nearest such an edge, put just across it (L / 1000).
+//     The pass's fill, smooth over L, cannot see it: flows leave lines of points about
+//     0.9 L apart, two of which fall in one cell beside cells holding one (the fill
+//     reads 0.9 there, eq. 8's sum 2.25), and eq. 12's cell-wise motion brings them so
+//     between passes; the guard moves the nearest line's points a few hundredths of L;
 //   - every 10 steps, not every step: the pass costs about as much as the paper's step
 //     (bench_flow.deck: 7.9 s without, 19 s moving every step at r / 10 for the same
 //     packing, 9.7 s every 10 steps);
@@ -3854,9 +3874,101 @@ LPFDM_DEF double Simulation::packing() const {
 
 // After a step (every kernel the same code, the points in point order).
 inline void Simulation::shift_points() {
-    if (!sc_.shift || (step_ + 1) % kShiftEvery) return;
+    if (!sc_.shift) return;
+    const double above = sc_.shift_above, limit = std::max(kShiftLimit, above);
+    if ((step_ + 1) % kShiftEvery == 0 && packing() > above) shift_pass();
+    shift_relief(limit);
+}
+
+// After every step: a cell whose points' volumes (whole points, by the cell they lie in)
+// sum above limit L^2 gives points to its edge neighbours, in rounds of one point a cell:
+// the point nearest one of its cell's edges whose neighbour across it stays within the
+// limit with it, moved just across that edge. The same guards as shift_pass (fixed
+// edges, walls, the lattice's edges, LOAD points).
+inline bool Simulation::shift_relief(double limit) {
+    // (under the paper's mapping eq. 8's sums are these sums, made where the points are now)
+    if (modes_.mapping == Mapping::Paper && packing() <= limit) return false;
+    const double cap = limit * L_ * L_, margin = 1e-3 * L_;
+    auto vol = [&](std::size_t k) { return std::min(p_.vol[k], groups_[p_.group[k]].vol0); };  // as eq. 8 counts it
+    ShiftCell* sc = shift_cells_.data();
+    const long stamp = step_;  // a cell's entries are this step's only where its stamp says so
+    auto sum = [&](int c) { return sc[c].stamp == stamp ? sc[c].sum : 0.0; };
+    int* full = shift_full_.data();  // the cells over the limit, in the order they passed it
+    int nfull = 0;
+    for (std::size_t k = 0; k < p_.size(); ++k) {
+        const int c = p_.cell[k];
+        if (c < 0 || !std::isfinite(p_.x[k] + p_.y[k])) continue;
+        if (sc[c].stamp != stamp) sc[c] = ShiftCell{0.0, std::numeric_limits<double>::infinity(), stamp, -1, -1};
+        const bool was = sc[c].sum > cap;
+        if ((sc[c].sum += vol(k)) > cap && !was) full[nfull++] = c;
+    }
+    if (!nfull) return false;
+    double work = 0;
+    long moved = 0;
+    Range box;  // the cells moves left and entered
+    for (int round = 0, left = nfull; left && round < kShiftRounds; ++round) {
+        for (std::size_t k = 0; k < p_.size(); ++k) {  // each full cell's best move
+            const int c = p_.cell[k];
+            if (c < 0 || sum(c) <= cap || !std::isfinite(p_.x[k] + p_.y[k]) || (modes_.loads && p_.load_axis[k])) continue;
+            const std::uint8_t fe = fixed_edges_[std::size_t(c)];
+            if (fe & kEdgeWall) continue;
+            const int i = c % mx_, j = c / mx_;
+            const double u = p_.x[k] - i * L_, v = p_.y[k] - j * L_;
+            const double d[4] = {u, L_ - u, v, L_ - v};  // to the left, right, bottom, top edge
+            for (int e = 0; e < 4; ++e) {
+                if (!(d[e] < sc[c].best)) continue;
+                const int ni = i + (e == 0 ? -1 : e == 1 ? 1 : 0), nj = j + (e == 2 ? -1 : e == 3 ? 1 : 0);
+                if (ni < 0 || nj < 0 || ni >= mx_ || nj >= my_) continue;
+                const std::uint8_t from = e == 0 ? kEdgeLeft : e == 1 ? kEdgeRight : e == 2 ? kEdgeBottom : kEdgeTop;
+                const std::uint8_t into = e == 0 ? kEdgeRight : e == 1 ? kEdgeLeft : e == 2 ? kEdgeTop : kEdgeBottom;
+                const int cn = nj * mx_ + ni;
+                if ((fe & from) || (fixed_edges_[std::size_t(cn)] & (into | kEdgeWall)) || sum(cn) + vol(std::size_t(k)) > cap) continue;
+                sc[c].best = d[e]; sc[c].point = std::int32_t(k); sc[c].edge = std::int8_t(e);
+            }
+        }
+        left = 0;
+        for (int f = 0; f < nfull; ++f) {  // the moves, in the order the cells filled
+            const int c = full[f];
+            const std::int32_t k = sc[c].point;
+            if (k < 0) continue;
+            const int e = sc[c].edge, i = c % mx_, j = c / mx_;
+            const int cn = c + (e == 0 ? -1 : e == 1 ? 1 : e == 2 ? -mx_ : mx_);
+            sc[c].best = std::numeric_limits<double>::infinity(); sc[c].point = -1; sc[c].edge = -1;
+            if (sum(cn) + vol(std::size_t(k)) > cap) { ++left; continue; }  // (filled by another cell's move this round)
+            const double before = potential_energy(std::size_t(k));
+            if (e == 0) p_.x[k] = i * L_ - margin;
+            else if (e == 1) p_.x[k] = (i + 1) * L_ + margin;
+            else if (e == 2) p_.y[k] = j * L_ - margin;
+            else p_.y[k] = (j + 1) * L_ + margin;
+            p_.cell[k] = cn;
+            work += potential_energy(std::size_t(k)) - before;
+            ++moved;
+            if (sc[cn].stamp != stamp) sc[cn] = ShiftCell{0.0, std::numeric_limits<double>::infinity(), stamp, -1, -1};
+            sc[c].sum -= vol(std::size_t(k)); sc[cn].sum += vol(std::size_t(k));
+            if (sc[c].sum > cap) ++left;
+            box = box.unite(Range{std::min(i, cn % mx_), std::max(i, cn % mx_) + 1, std::min(j, cn / mx_), std::max(j, cn / mx_) + 1});
+        }
+    }
+    return shift_moved(work, moved, box);
+}
+
+// After a pass or the guard: the account (w_shift, the moves), and where points moved
+// the last mapping, which the next step reads (eq. 5's cells with mass, MAPPING SMOOTH's
+// centroids, packing()), made anew where the points are now (with it, a restart's state),
+// its sums cleared first in every cell the step's mapping wrote and the moves entered
+// (`box`; the reference cycle keeps no occupied_ of its own).
+inline bool Simulation::shift_moved(double work, long moved, const Range& box) {
+    es_.w_shift += work;
+    shifted_ += moved;
+    if (!moved) return false;
+    occupied_ = occupied_.unite(box);
+    map_points();
+    return true;
+}
+
+// The pass, every kShiftEvery steps (the choices at the head of this section).
+inline bool Simulation::shift_pass() {
     const double above = sc_.shift_above;
-    if (packing() <= above) return;
     const int sx = 2 * mx_, sy = 2 * my_, n1 = sx + 1;
     const double h = 0.5 * L_, ih = 1 / h;
     Range cells;  // the box of the points' cells
@@ -3937,15 +4049,7 @@ inline void Simulation::shift_points() {
     }
     for (int J = J0; J < J1; ++J) std::fill(fill + std::size_t(J) * std::size_t(sx) + std::size_t(I0), fill + std::size_t(J) * std::size_t(sx) + std::size_t(I1), 0.0);
     for (int J = J0; J <= J1; ++J) std::fill(ex + std::size_t(J) * std::size_t(n1) + std::size_t(I0), ex + std::size_t(J) * std::size_t(n1) + std::size_t(I1) + 1, 0.0);
-    es_.w_shift += work;
-    shifted_ += moved;
-    // The next step reads the last mapping (eq. 5's cells with mass, MAPPING SMOOTH's
-    // centroids, packing()): made anew where the points are now (with it, a restart's
-    // state), its sums cleared first in every cell the step's mapping wrote (`box`; the
-    // reference cycle keeps no occupied_ of its own).
-    if (!moved) return;
-    occupied_ = occupied_.unite(box);
-    map_points();
+    return shift_moved(work, moved, box);
 }
 
 LPFDM_DEF double Simulation::excess_pressure() const {

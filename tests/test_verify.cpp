@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -376,4 +377,31 @@ TEST_CASE("verify: discharge through a slot grows as D^(3/2) (Beverloo), with a 
     // 1.5 for k = 0 and 2.0 for k = 0.85 (the coarse rung's 1.70 gives k = 0.43).
     CHECK(p > 1.5);
     CHECK(p < 2.0);
+}
+
+// #62's invariant on every shipped deck, over its whole run: no cell's points hold more
+// than twice its area (packing() at most 2 after every step; the flows that would pack
+// more say SHIFT), and no point's move was clamped on a face or a fixed edge (parked()).
+// A few minutes of runs (psc.deck alone 136 000 steps): make verify only.
+TEST_CASE("verify: every shipped deck, its whole run: no cell over twice its area, no point parked [slow][verify]") {
+    std::vector<std::filesystem::path> decks;
+    for (const auto& e : std::filesystem::directory_iterator("decks"))
+        if (e.path().extension() == ".deck") decks.push_back(e.path());
+    std::sort(decks.begin(), decks.end());
+    REQUIRE(decks.size() > 30);
+    for (const auto& deck : decks) {
+        Scene s;
+        REQUIRE_MESSAGE(read_deck(deck.string(), s).empty(), deck.string());
+        s.outputs.clear();
+        Simulation sim(s);
+        double most = 0;
+        for (long k = 0; k < s.steps; ++k) {
+            sim.step();
+            most = std::max(most, sim.packing());
+        }
+        MESSAGE(deck.string() << ": " << s.steps << " steps, packing at most " << most << ", parked " << sim.parked() << ", shifted " << sim.shifted());
+        CHECK_MESSAGE(sim.healthy(), deck.string());
+        CHECK_MESSAGE(most <= 2.0, deck.string());
+        CHECK_MESSAGE(sim.parked() == 0, deck.string());
+    }
 }

@@ -167,6 +167,8 @@ for sc in "${scenes[@]}"; do
   base=$(basename "$deck" .deck)
   awk -v s="OUTPUT STATE $base.state" '/^[ \t]*[Ee][Nn][Dd]([ \t!]|$)/ && !done { print s; done = 1 } { print } END { if (!done) print s }' "$deck" >"$tmp/$base.deck"
   copy=$tmp/$base.deck
+  mkdir -p "$tmp/plain" && plain=$tmp/plain/$base.deck
+  grep -v -i -E '^[[:space:]]*SHIFT([[:space:]!]|$)' "$deck" >"$plain"
   # The state at 90 % of the steps (two threads: the same bytes as one), continued by every last-10 % run.
   OMP_NUM_THREADS=2 "$exe" -q -o "$tmp/$name-state" --steps "$resume" "$copy" 2>/dev/null
   state=$tmp/$name-state/$base.state
@@ -188,13 +190,14 @@ for sc in "${scenes[@]}"; do
       timed "$tenth" 2 "$tmp/$name-l2" --restart "$state" "$copy" >>"$tmp/last2"
       timed "$tenth" 1 "$tmp/$name-l0" --kernel reference --restart "$state" "$copy" >>"$tmp/reflast"
     fi
-    # the plain loop of BEFORE on the whole run (the deck as it is: that version writes no
-    # state), beside the program's own whole run timed the same way (its summary line:
-    # the steps with their output), one thread each
+    # the plain loop of BEFORE on the whole run (the deck as it is, less the cards that
+    # version cannot read, SHIFT: it writes no state), beside the program's own whole run
+    # of that same deck timed the same way (its summary line: the steps with their
+    # output), one thread each
     if [ -n "$before" ]; then
-      rate "$before" 1 "$deck" "" >>"$tmp/plainw"
+      rate "$before" 1 "$plain" "" >>"$tmp/plainw"
       cp "$tmp/o/${base}_points.txt" "$tmp/$name-plain-points.txt" 2>/dev/null
-      rate "$exe" 1 "$deck" "" >>"$tmp/progw"
+      rate "$exe" 1 "$plain" "" >>"$tmp/progw"
     fi
     [ "$r" -lt "$runs" ] && rm -rf "$tmp/$name-w1-$r" "$tmp/$name-w2-$r"  # (the last run's table is measured below)
   done
