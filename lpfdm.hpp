@@ -557,7 +557,7 @@ inline const DeckCard kDeckCards[] = {
     {"MOTION", "PAPER|CENTRE|BILINEAR", "", "how points move with their cell: eq. 7a/7b about node [1], about the centre, or bilinear"},
     {"MAPPING", "PAPER|SMOOTH", "", "a point in the cell holding its centre (the paper), or shared by the cells its square overlaps (no jump at cell edges)"},
     {"ADVECT", "EQ12|POINTS|FLIP", "", "how increments follow the material: eq. 12, carried by the points, or kept by them (FLIP)"},
-    {"SHIFT", "", "", "every 10 steps, points that crowd (their squares' area over ABOVE times the area they lie in) move apart, down the crowding's gradient; after every step, no cell's points over twice its area where a neighbour has room"},
+    {"SHIFT", "", "", "every 10 steps, points that crowd (their squares' area over ABOVE times the area they lie in) move apart, down the crowding's gradient; after every step, a cell's points over twice its area move to neighbours with room (at most 8 a cell a step)"},
     {"SEED", "", "", "seed of the strength scatter"},
     {"REORDER", "", "", "sort the points' storage by cell every n steps (default 50; 0: never), for speed as points move"},
     {"STEP", "", "", "n steps of dt seconds"},
@@ -1413,9 +1413,16 @@ private:
     static constexpr int kShiftRounds = 8;    // shift_relief: at most so many moves out of one cell a step
     // A cell's whole points' volumes (shift_relief), the move it would make first (the point
     // nearest an edge whose neighbour has room, that edge 0-3) and its distance.
-    struct ShiftCell { double sum = 0, best = std::numeric_limits<double>::infinity(); long stamp = -1; std::int32_t point = -1; std::int8_t edge = -1; };
+    struct ShiftCell {
+        double sum = 0, best = std::numeric_limits<double>::infinity();
+        long stamp = -1;  // the guard's call that wrote it (shift_stamp_): older entries read as empty
+        std::int32_t point = -1;
+        std::int8_t edge = -1;
+        bool listed = false;  // in shift_full_
+    };
     std::vector<ShiftCell> shift_cells_;
     std::vector<int> shift_full_;
+    long shift_stamp_ = 0;
     void shift_points();
     bool shift_pass();
     bool shift_relief(double limit);
@@ -3849,12 +3856,16 @@ LPFDM_DEF double Simulation::packing() const {
 //     near a wall's face (kEdgeWall), or if it lies in such a cell or carries a LOAD: the
 //     supports' guards are not crossed;
 //   - only after a step whose largest eq. 8 sum exceeds a L^2 (packing()): a scene that
-//     never crowds so runs bit for bit as it does without the card;
+//     never crowds so (nor, counted whole, past the guard's limit below) runs bit for bit
+//     as it does without the card;
 //   - and after every step a guard (shift_relief): where the points lying in a cell (V at
 //     most V0 each, as eq. 8 counts them) hold more than twice its area (kShiftLimit, or
-//     a if larger), the cell gives points, one a round, to the edge neighbours that stay
-//     within it with them: the point nearest such an edge, put just across it (L / 1000).
-//     The pass's fill, smooth over L, cannot see it: flows leave lines of points about
+//     a if larger), the cell gives points, one a round and at most 8, to the edge
+//     neighbours that stay within it with them: the point nearest such an edge, put just
+//     across it (L / 1000). Under MAPPING SMOOTH it counts whole points too, which eq. 8
+//     there does not (a cell may hold nine points' centres and packing() read 1), so
+//     there it may move points where the pass's gate would not. Why a guard besides the
+//     pass: the pass's fill, smooth over L, cannot see it: flows leave lines of points about
 //     0.9 L apart, two of which fall in one cell beside cells holding one (the fill
 //     reads 0.9 there, eq. 8's sum 2.25), and eq. 12's cell-wise motion brings them so
 //     between passes; the guard moves the nearest line's points a few hundredths of L;
@@ -3881,32 +3892,35 @@ inline void Simulation::shift_points() {
 }
 
 // After every step: a cell whose points' volumes (whole points, by the cell they lie in)
-// sum above limit L^2 gives points to its edge neighbours, in rounds of one point a cell:
-// the point nearest one of its cell's edges whose neighbour across it stays within the
-// limit with it, moved just across that edge. The same guards as shift_pass (fixed
-// edges, walls, the lattice's edges, LOAD points).
+// sum above limit L^2 gives points to its edge neighbours, in rounds of one point a cell
+// (at most kShiftRounds), the cells in index order: the point nearest one of its cell's
+// edges whose neighbour across it stays within the limit with it (of two as near, the
+// lower id), moved just across that edge; rounds go on while a cell is over the limit and
+// the last round moved a point. The choices do not depend on the points' storage order
+// (REORDER) or on the step's number (a state read into a used Simulation). The same
+// guards as shift_pass (fixed edges, walls, the lattice's edges, LOAD points).
 inline bool Simulation::shift_relief(double limit) {
     // (under the paper's mapping eq. 8's sums are these sums, made where the points are now)
     if (modes_.mapping == Mapping::Paper && packing() <= limit) return false;
-    const double cap = limit * L_ * L_, margin = 1e-3 * L_;
+    const double cap = limit * L_ * L_, margin = 1e-3 * L_, inf = std::numeric_limits<double>::infinity();
     auto vol = [&](std::size_t k) { return std::min(p_.vol[k], groups_[p_.group[k]].vol0); };  // as eq. 8 counts it
     ShiftCell* sc = shift_cells_.data();
-    const long stamp = step_;  // a cell's entries are this step's only where its stamp says so
+    const long stamp = ++shift_stamp_;  // (a call's own: entries of earlier calls, or runs, read as empty)
     auto sum = [&](int c) { return sc[c].stamp == stamp ? sc[c].sum : 0.0; };
-    int* full = shift_full_.data();  // the cells over the limit, in the order they passed it
+    int* full = shift_full_.data();  // the cells over the limit
     int nfull = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) {
         const int c = p_.cell[k];
         if (c < 0 || !std::isfinite(p_.x[k] + p_.y[k])) continue;
-        if (sc[c].stamp != stamp) sc[c] = ShiftCell{0.0, std::numeric_limits<double>::infinity(), stamp, -1, -1};
-        const bool was = sc[c].sum > cap;
-        if ((sc[c].sum += vol(k)) > cap && !was) full[nfull++] = c;
+        if (sc[c].stamp != stamp) sc[c] = ShiftCell{0.0, inf, stamp, -1, -1, false};
+        if ((sc[c].sum += vol(k)) > cap && !sc[c].listed) { sc[c].listed = true; full[nfull++] = c; }
     }
     if (!nfull) return false;
+    std::sort(full, full + nfull);  // in cell order, and each cell's choice by distance, then id: not the storage's order
     double work = 0;
     long moved = 0;
     Range box;  // the cells moves left and entered
-    for (int round = 0, left = nfull; left && round < kShiftRounds; ++round) {
+    for (int round = 0, left = nfull, now = 1; left && now && round < kShiftRounds; ++round) {
         for (std::size_t k = 0; k < p_.size(); ++k) {  // each full cell's best move
             const int c = p_.cell[k];
             if (c < 0 || sum(c) <= cap || !std::isfinite(p_.x[k] + p_.y[k]) || (modes_.loads && p_.load_axis[k])) continue;
@@ -3916,7 +3930,8 @@ inline bool Simulation::shift_relief(double limit) {
             const double u = p_.x[k] - i * L_, v = p_.y[k] - j * L_;
             const double d[4] = {u, L_ - u, v, L_ - v};  // to the left, right, bottom, top edge
             for (int e = 0; e < 4; ++e) {
-                if (!(d[e] < sc[c].best)) continue;
+                const bool nearer = d[e] < sc[c].best || (d[e] == sc[c].best && sc[c].point >= 0 && p_.id[k] < p_.id[std::size_t(sc[c].point)]);
+                if (!nearer) continue;
                 const int ni = i + (e == 0 ? -1 : e == 1 ? 1 : 0), nj = j + (e == 2 ? -1 : e == 3 ? 1 : 0);
                 if (ni < 0 || nj < 0 || ni >= mx_ || nj >= my_) continue;
                 const std::uint8_t from = e == 0 ? kEdgeLeft : e == 1 ? kEdgeRight : e == 2 ? kEdgeBottom : kEdgeTop;
@@ -3926,14 +3941,14 @@ inline bool Simulation::shift_relief(double limit) {
                 sc[c].best = d[e]; sc[c].point = std::int32_t(k); sc[c].edge = std::int8_t(e);
             }
         }
-        left = 0;
-        for (int f = 0; f < nfull; ++f) {  // the moves, in the order the cells filled
+        left = now = 0;
+        for (int f = 0; f < nfull; ++f) {  // the moves, in cell order
             const int c = full[f];
             const std::int32_t k = sc[c].point;
-            if (k < 0) continue;
+            if (k < 0) { left += sum(c) > cap; continue; }  // (none has room now; it may after others' moves)
             const int e = sc[c].edge, i = c % mx_, j = c / mx_;
             const int cn = c + (e == 0 ? -1 : e == 1 ? 1 : e == 2 ? -mx_ : mx_);
-            sc[c].best = std::numeric_limits<double>::infinity(); sc[c].point = -1; sc[c].edge = -1;
+            sc[c].best = inf; sc[c].point = -1; sc[c].edge = -1;
             if (sum(cn) + vol(std::size_t(k)) > cap) { ++left; continue; }  // (filled by another cell's move this round)
             const double before = potential_energy(std::size_t(k));
             if (e == 0) p_.x[k] = i * L_ - margin;
@@ -3943,7 +3958,8 @@ inline bool Simulation::shift_relief(double limit) {
             p_.cell[k] = cn;
             work += potential_energy(std::size_t(k)) - before;
             ++moved;
-            if (sc[cn].stamp != stamp) sc[cn] = ShiftCell{0.0, std::numeric_limits<double>::infinity(), stamp, -1, -1};
+            ++now;
+            if (sc[cn].stamp != stamp) sc[cn] = ShiftCell{0.0, inf, stamp, -1, -1, false};
             sc[c].sum -= vol(std::size_t(k)); sc[cn].sum += vol(std::size_t(k));
             if (sc[c].sum > cap) ++left;
             box = box.unite(Range{std::min(i, cn % mx_), std::max(i, cn % mx_) + 1, std::min(j, cn / mx_), std::max(j, cn / mx_) + 1});

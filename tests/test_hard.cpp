@@ -1009,22 +1009,26 @@ TEST_CASE("hard: SHIFT holds a draining hopper's cells within twice their area, 
 }
 
 // SHIFT's guard (shift_relief), with a known answer: a weightless block at rest (nothing
-// moves but what SHIFT moves), one of its cells given six points of its neighbours (one
-// from each of six: ten points of L^2 / 4, 2.5 times its area). After one step (no pass:
-// those come every 10) the cell holds eight, twice its area, and no cell more; exactly two
-// points moved, each along one axis to L / 1000 beyond an edge of that cell, and they were
-// the points nearest an edge (the guard takes the smallest moves); no energy made. With
-// the cell's four corner nodes fixed (its edges fixed) nothing may leave: no move. Each
-// mapping, and ADVECT FLIP.
+// moves but what SHIFT moves), cells of 0.1 m made with 2 x 2 points, cell (10, 10) given
+// six points of its neighbours (one from each of six: ten points of L^2 / 4, 2.5 times its
+// area). After one step (no pass: those come every 10) the cell holds eight, twice its
+// area, and no cell more; exactly two points moved, each along one axis to L / 1000
+// beyond an edge of that cell, into the cell there, and they were the points nearest an
+// edge (the guard takes the smallest moves); no energy made. Variants: the cell's four
+// corner nodes fixed (its edges fixed): nothing may leave, no move; its left and lower
+// neighbours filled to eight points (no room there) and the cell's own four points put
+// nearest those edges: the two that move are the nearest the right and upper edges, and
+// go right or up. Each mapping, and ADVECT FLIP.
 TEST_CASE("hard: SHIFT's guard empties a cell holding more than twice its area by the smallest moves") {
+    enum Variant { kOpen, kFixed, kFull };
     for (int mode = 0; mode < 3; ++mode)
-        for (const bool fixed : {false, true}) {
+        for (const Variant variant : {kOpen, kFixed, kFull}) {
             Scene s;
             s.mx = 20; s.my = 20; s.cell_m = 0.1;
             s.gravity_y = 0;
             s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
             s.clusters.push_back({1, {0.5, 0.5, 1.5, 1.5}, 2, {}});
-            if (fixed)
+            if (variant == kFixed)
                 for (const double x : {1.0, 1.1})
                     for (const double y : {1.0, 1.1}) s.fixes.push_back({kFixX | kFixY, {x, y, x, y}, {}});
             if (mode > 0) s.mapping = Mapping::Smooth;
@@ -1036,31 +1040,51 @@ TEST_CASE("hard: SHIFT's guard empties a cell holding more than twice its area b
             Simulation sim(s);
             Points& p = sim.points();
             const double L = s.cell_m;
-            const int target = sim.cell_holding(1.05, 1.05);
-            const double spots[6][2] = {{1.04, 1.05}, {1.06, 1.05}, {1.05, 1.04}, {1.05, 1.062}, {1.045, 1.058}, {1.058, 1.043}};
-            int given = 0;
-            for (const auto& from : {std::pair{0.95, 1.05}, std::pair{1.15, 1.05}, std::pair{1.05, 0.95}, std::pair{1.05, 1.15}, std::pair{0.95, 0.95}, std::pair{1.15, 1.15}}) {
-                const int c = sim.cell_holding(from.first, from.second);
+            // one point of the cell holding (fx, fy) moved to (tx, ty)
+            auto give = [&](double fx, double fy, double tx, double ty) {
+                const int c = sim.cell_holding(fx, fy);
                 for (std::size_t k = 0; k < p.size(); ++k)
-                    if (p.cell[k] == c) { p.x[k] = spots[given][0]; p.y[k] = spots[given][1]; p.cell[k] = target; ++given; break; }
+                    if (p.cell[k] == c) { p.x[k] = tx; p.y[k] = ty; p.cell[k] = sim.cell_holding(tx, ty); return true; }
+                return false;
+            };
+            const int target = sim.cell_holding(1.05, 1.05);
+            REQUIRE(give(0.95, 1.05, 1.04, 1.05));
+            REQUIRE(give(1.15, 1.05, 1.06, 1.05));
+            REQUIRE(give(1.05, 0.95, 1.05, 1.04));
+            REQUIRE(give(1.05, 1.15, 1.05, 1.062));
+            REQUIRE(give(0.95, 0.95, 1.045, 1.058));
+            REQUIRE(give(1.15, 1.15, 1.058, 1.043));
+            if (variant == kFull)  // cells (9, 10) and (10, 9), three points each now, given five more each
+                for (int n = 0; n < 5; ++n) {  // from cells 8 .. 5 along the row (down the column) and the one beside 8
+                    const double far = n < 4 ? 0.85 - 0.1 * n : 0.85, side = n < 4 ? 1.05 : 1.15, at = 0.94 + 0.005 * n, across = 1.03 + 0.01 * n;
+                    REQUIRE(give(far, side, at, across));
+                    REQUIRE(give(side, far, across, at));
+                }
+            if (variant == kFull) {  // and the cell's own four points put nearest its left and lower edges
+                const double near[4][2] = {{1.01, 1.05}, {1.05, 1.01}, {1.015, 1.03}, {1.03, 1.015}};
+                int m = 0;
+                for (std::size_t k = 0; k < p.size(); ++k)
+                    if (p.cell[k] == target && (std::fabs(p.x[k] - 1.025) < 1e-9 || std::fabs(p.x[k] - 1.075) < 1e-9)) { p.x[k] = near[m][0]; p.y[k] = near[m][1]; ++m; }
+                REQUIRE(m == 4);
             }
-            REQUIRE(given == 6);
             sim.map_to_lattice();
             const std::vector<double> x0(p.x), y0(p.y);
-            auto edge_distance = [&](std::size_t k) {
+            auto edge_distance = [&](std::size_t k) {  // to the nearest edge with room beyond it
                 const double u = x0[k] / L - 10, v = y0[k] / L - 10;
-                return L * std::min({u, 1 - u, v, 1 - v});
+                return L * (variant == kFull ? std::min(1 - u, 1 - v) : std::min({u, 1 - u, v, 1 - v}));
             };
             sim.step();
             std::map<int, int> count;
             for (std::size_t k = 0; k < p.size(); ++k) ++count[p.cell[k]];
             int most = 0;
             for (const auto& [c, n] : count) most = std::max(most, n);
-            const std::string name = std::string(mode == 0 ? "the paper's mapping" : mode == 1 ? "MAPPING SMOOTH" : "ADVECT FLIP") + (fixed ? ", the cell's edges fixed" : "");
+            const std::string name = std::string(mode == 0 ? "the paper's mapping" : mode == 1 ? "MAPPING SMOOTH" : "ADVECT FLIP") +
+                                     (variant == kFixed ? ", the cell's edges fixed" : variant == kFull ? ", its left and lower neighbours full" : "");
             MESSAGE(name << ": " << sim.shifted() << " moves, the cell holds " << count[target] << " points, no cell more than " << most);
             CHECK(mass_exact(sim));
             CHECK(std::fabs(sim.energy().error) < 1e-12);
-            if (fixed) {
+            for (std::size_t k = 0; k < p.size(); ++k) CHECK(p.cell[k] == sim.cell_holding(p.x[k], p.y[k]));
+            if (variant == kFixed) {
                 CHECK(sim.shifted() == 0);
                 CHECK(count[target] == 10);
                 continue;
@@ -1082,11 +1106,62 @@ TEST_CASE("hard: SHIFT's guard empties a cell holding more than twice its area b
                 const double off = std::min({std::fabs(p.x[k] - 1.0), std::fabs(p.x[k] - 1.1), std::fabs(p.y[k] - 1.0), std::fabs(p.y[k] - 1.1)});
                 CHECK(off == approx(1e-3 * L).epsilon(1e-6));
                 CHECK(p.cell[k] != target);
+                if (variant == kFull) CHECK((p.x[k] > 1.1 || p.y[k] > 1.1));  // right or up: the full ones took none
                 farthest_moved = std::max(farthest_moved, edge_distance(k));
             }
             CHECK(moved == 2);
             CHECK(farthest_moved <= nearest_stayed);
         }
+}
+
+// The guard's moves in the account: the scene above under gravity with a horizontal part
+// (gx = 5, gy = -9.81 m/s^2, so that its horizontal moves change the potential energy), a
+// free fall of the whole block, run beside the same without SHIFT: the two fall alike (no
+// stress, every point the same increment) and differ after the step by the guard's moves
+// alone, so w_shift is sum -m g . (x_with - x_without) and the potential energy of the run
+// with SHIFT is the other's plus w_shift; energy_error stays at its rounding.
+TEST_CASE("hard: SHIFT's guard puts the potential energy of its moves in w_shift") {
+    for (int mode = 0; mode < 3; ++mode) {
+        Scene s;
+        s.mx = 20; s.my = 20; s.cell_m = 0.1;
+        s.gravity_x = 5; s.gravity_y = -9.81;
+        s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
+        s.clusters.push_back({1, {0.5, 0.5, 1.5, 1.5}, 2, {}});
+        if (mode > 0) s.mapping = Mapping::Smooth;
+        if (mode > 1) s.advect = Advect::Flip;
+        s.steps = 1;
+        s.dt_s = 0.5 * stable_dt(s);
+        Scene t = s;
+        t.shift = true;
+        REQUIRE(validate(t).empty());
+        Simulation a(t), b(s);
+        for (Simulation* sim : {&a, &b}) {
+            Points& p = sim->points();
+            int given = 0;
+            const int target = sim->cell_holding(1.05, 1.05);
+            for (const double fx : {0.95, 1.15})
+                for (const double fy : {0.95, 1.05, 1.15}) {
+                    const int c = sim->cell_holding(fx, fy);
+                    for (std::size_t k = 0; k < p.size(); ++k)
+                        if (p.cell[k] == c) { p.x[k] = 1.04 + 0.004 * given; p.y[k] = 1.045 + 0.002 * given; p.cell[k] = target; ++given; break; }
+                }
+            REQUIRE(given == 6);
+            sim->map_to_lattice();
+        }
+        a.step();
+        b.step();
+        REQUIRE(a.shifted() == 2);
+        const Points &p = a.points(), &q = b.points();
+        double w = 0;
+        for (std::size_t k = 0; k < p.size(); ++k) w += -a.point_mass(k) * (s.gravity_x * (p.x[k] - q.x[k]) + s.gravity_y * (p.y[k] - q.y[k]));
+        const Simulation::Energy ea = a.energy(), eb = b.energy();
+        MESSAGE(std::string(mode == 0 ? "the paper's mapping" : mode == 1 ? "MAPPING SMOOTH" : "ADVECT FLIP") << ": w_shift " << ea.w_shift << " J/m, the moves' -m g . dx " << w
+                << ", energy_error " << ea.error << " with, " << eb.error << " without");
+        CHECK(std::fabs(w) > 1e-3);  // (a move of a few cm of 5 kg: not zero)
+        CHECK(ea.w_shift == approx(w).epsilon(1e-9));
+        CHECK(ea.gravity - eb.gravity == approx(ea.w_shift).epsilon(1e-6));
+        CHECK(std::fabs(ea.error) < 1e-9);
+    }
 }
 
 // A pass moves points only: mass, volume and (ADVECT FLIP) each point's own increment stay,
@@ -1162,9 +1237,10 @@ TEST_CASE("hard: SHIFT changes nothing in a scene whose cells never hold more th
 // other's plus w_shift, and energy_error, which counts w_shift as work in, stays as small
 // as the other run's (its scale grows with the potential energy: the two differ there; left
 // out of the work in, w_shift would read as most of the energy in play). The upper half of
-// a column is squeezed to 0.55 of its height before the first step, so that the pass has
-// crowding to undo and its potential energy is a good part of the energy in play (to half,
-// rows of points would fall five to a cell, and the guard would move some at once).
+// a column is squeezed to 0.7 of its height before the first step, so that the pass has
+// crowding to undo and its potential energy is a good part of the energy in play (to half
+// or 0.55, the flow brings nine points into some cells within the first steps, and the
+// guard moves them before the pass).
 TEST_CASE("hard: SHIFT's w_shift is the potential energy its moves gave, and the account stays closed") {
     Scene s;
     REQUIRE(read_deck("decks/verify_collapse.deck", s).empty());
