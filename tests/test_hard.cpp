@@ -1114,6 +1114,55 @@ TEST_CASE("hard: SHIFT's guard empties a cell holding more than twice its area b
         }
 }
 
+// The guard at the lattice's corner: the same block put in the lattice's lower left corner,
+// cell (0, 0) given six of its neighbours' points. Its own points lie nearest the
+// lattice's edges, beyond which there is no cell: the two that move go right or up, to the
+// points nearest those edges, and every point stays on the lattice.
+TEST_CASE("hard: SHIFT's guard moves no point off the lattice") {
+    Scene s;
+    s.mx = 20; s.my = 20; s.cell_m = 0.1;
+    s.gravity_y = 0;
+    s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
+    s.clusters.push_back({1, {0, 0, 1, 1}, 2, {}});
+    s.shift = true;
+    s.steps = 1;
+    s.dt_s = 0.5 * stable_dt(s);
+    REQUIRE(validate(s).empty());
+    Simulation sim(s);
+    Points& p = sim.points();
+    const double spots[6][2] = {{0.04, 0.05}, {0.06, 0.05}, {0.05, 0.04}, {0.05, 0.062}, {0.045, 0.058}, {0.058, 0.043}};
+    int given = 0;
+    for (const auto& from : {std::pair{0.15, 0.05}, std::pair{0.05, 0.15}, std::pair{0.15, 0.15}, std::pair{0.25, 0.05}, std::pair{0.05, 0.25}, std::pair{0.25, 0.25}}) {
+        const int c = sim.cell_holding(from.first, from.second);
+        for (std::size_t k = 0; k < p.size(); ++k)
+            if (p.cell[k] == c) { p.x[k] = spots[given][0]; p.y[k] = spots[given][1]; p.cell[k] = 0; ++given; break; }
+    }
+    REQUIRE(given == 6);
+    const double near[4][2] = {{0.01, 0.05}, {0.05, 0.01}, {0.015, 0.03}, {0.03, 0.015}};  // the cell's own, nearest the lattice's edges
+    int m = 0;
+    for (std::size_t k = 0; k < p.size(); ++k)
+        if (p.cell[k] == 0 && (std::fabs(p.x[k] - 0.025) < 1e-9 || std::fabs(p.x[k] - 0.075) < 1e-9)) { p.x[k] = near[m][0]; p.y[k] = near[m][1]; ++m; }
+    REQUIRE(m == 4);
+    sim.map_to_lattice();
+    const std::vector<double> x0(p.x), y0(p.y);
+    sim.step();
+    int in_corner = 0, moved = 0;
+    for (std::size_t k = 0; k < p.size(); ++k) {
+        CHECK(p.cell[k] >= 0);
+        CHECK(p.cell[k] == sim.cell_holding(p.x[k], p.y[k]));
+        in_corner += p.cell[k] == 0;
+        if (p.x[k] == x0[k] && p.y[k] == y0[k]) continue;
+        ++moved;
+        CHECK((p.x[k] > 0.1 || p.y[k] > 0.1));  // right or up
+        CHECK((std::fabs(x0[k] - 0.06) < 1e-12 || std::fabs(y0[k] - 0.062) < 1e-12));  // the two nearest those edges
+    }
+    MESSAGE("the corner cell: " << sim.shifted() << " moves, " << in_corner << " points left in it");
+    CHECK(moved == 2);
+    CHECK(in_corner == 8);
+    CHECK(sim.mass_outflow() == 0);
+    CHECK(mass_exact(sim));
+}
+
 // The guard's moves in the account: the scene above under gravity with a horizontal part
 // (gx = 5, gy = -9.81 m/s^2, so that its horizontal moves change the potential energy), a
 // free fall of the whole block, run beside the same without SHIFT: the two fall alike (no
