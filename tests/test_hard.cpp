@@ -1163,6 +1163,63 @@ TEST_CASE("hard: SHIFT's guard moves no point off the lattice") {
     CHECK(mass_exact(sim));
 }
 
+// The guard beside a wall: the weightless block with a SMOOTH wall at rest along x = 1 m
+// through it. The cells within two of the wall's face (x 0.8 to 1.2 m) are the wall's
+// (kEdgeWall: its own guard of the face acts there): the guard moves no point out of them
+// or into them. Cell (10, 10), on the face, given six of its neighbours' points keeps its
+// ten; cell (13, 10), beside the wall's cells, given six of its neighbours' points (not of
+// the wall's cells) with its own points nearest its left edge, gives two, none to the
+// left.
+TEST_CASE("hard: SHIFT's guard moves no point out of or into the cells of a wall's face") {
+    Scene s;
+    s.mx = 30; s.my = 20; s.cell_m = 0.1;
+    s.gravity_y = 0;
+    s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
+    s.clusters.push_back({1, {0.5, 0.5, 2.0, 1.5}, 2, {}});
+    Wall w;
+    w.id = 1; w.box = {1.0, 0.3, 1.0, 1.7}; w.smooth = true;
+    s.walls.push_back(w);
+    s.shift = true;
+    s.steps = 1;
+    s.dt_s = 0.5 * stable_dt(s);
+    REQUIRE(validate(s).empty());
+    Simulation sim(s);
+    Points& p = sim.points();
+    auto give = [&](double fx, double fy, double tx, double ty) {
+        const int c = sim.cell_holding(fx, fy);
+        for (std::size_t k = 0; k < p.size(); ++k)
+            if (p.cell[k] == c) { p.x[k] = tx; p.y[k] = ty; p.cell[k] = sim.cell_holding(tx, ty); return true; }
+        return false;
+    };
+    for (const double cx : {1.05, 1.35}) {  // cells (10, 10) and (13, 10)
+        const double from[6][2] = {{cx + 0.1, 1.15}, {cx + 0.1, 0.95}, {cx, 1.25}, {cx, 0.85}, {cx + 0.2, 1.05}, {cx + 0.1, 1.05}};
+        for (int n = 0; n < 6; ++n) REQUIRE(give(from[n][0], from[n][1], cx - 0.01 + 0.004 * n, 1.04 + 0.004 * n));
+    }
+    const int face = sim.cell_holding(1.05, 1.05), beside = sim.cell_holding(1.35, 1.05);
+    int m = 0;  // cell (13, 10)'s own four points put nearest its left edge
+    for (std::size_t k = 0; k < p.size(); ++k)
+        if (p.cell[k] == beside && (std::fabs(p.x[k] - 1.325) < 1e-9 || std::fabs(p.x[k] - 1.375) < 1e-9)) { p.x[k] = 1.305 + 0.002 * m; p.y[k] = 1.02 + 0.02 * m; ++m; }
+    REQUIRE(m == 4);
+    sim.map_to_lattice();
+    const std::vector<double> x0(p.x), y0(p.y);
+    sim.step();
+    int at_face = 0, at_beside = 0, moved = 0;
+    for (std::size_t k = 0; k < p.size(); ++k) {
+        at_face += p.cell[k] == face;
+        at_beside += p.cell[k] == beside;
+        if (p.x[k] == x0[k] && p.y[k] == y0[k]) continue;
+        ++moved;
+        CHECK(x0[k] >= 1.3);  // from the cell beside the wall's
+        CHECK(p.x[k] >= 1.3);  // not into the wall's cells
+    }
+    MESSAGE("beside a wall: " << sim.shifted() << " moves; the cell on the face holds " << at_face << ", the one beside the wall's cells " << at_beside);
+    CHECK(sim.shifted() == 2);
+    CHECK(moved == 2);
+    CHECK(at_face == 10);
+    CHECK(at_beside == 8);
+    CHECK(sim.parked() == 0);
+}
+
 // The guard's moves in the account: the scene above under gravity with a horizontal part
 // (gx = 5, gy = -9.81 m/s^2, so that its horizontal moves change the potential energy), a
 // free fall of the whole block, run beside the same without SHIFT: the two fall alike (no
