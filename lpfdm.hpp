@@ -1427,6 +1427,8 @@ private:
     bool shift_pass();
     bool shift_relief(double limit);
     bool shift_moved(double work, long moved, const Range& box);
+    bool shift_may_move(std::size_t k) const;
+    bool shift_may_cross(int c, int cn) const;
     double flip_kinetic_ = 0;
     // The node masses eq. 13 moves with: eq. 10's, or with ADVECT FLIP the transfer's M_n
     // (flip_changes). The fixed directions and the walls read the same masses, and the same
@@ -3897,8 +3899,8 @@ inline void Simulation::shift_points() {
 // edges whose neighbour across it stays within the limit with it (of two as near, the
 // lower id), moved just across that edge; rounds go on while a cell is over the limit and
 // the last round moved a point. The choices do not depend on the points' storage order
-// (REORDER) or on the step's number (a state read into a used Simulation). The same
-// guards as shift_pass (fixed edges, walls, the lattice's edges, LOAD points).
+// (REORDER) or on the step's number (a state read into a used Simulation). The pass's
+// guards (shift_may_move, shift_may_cross), and the lattice's edges.
 inline bool Simulation::shift_relief(double limit) {
     // (under the paper's mapping eq. 8's sums are these sums, made where the points are now)
     if (modes_.mapping == Mapping::Paper && packing() <= limit) return false;
@@ -3923,9 +3925,7 @@ inline bool Simulation::shift_relief(double limit) {
     for (int round = 0, left = nfull, now = 1; left && now && round < kShiftRounds; ++round) {
         for (std::size_t k = 0; k < p_.size(); ++k) {  // each full cell's best move
             const int c = p_.cell[k];
-            if (c < 0 || sum(c) <= cap || !std::isfinite(p_.x[k] + p_.y[k]) || (modes_.loads && p_.load_axis[k])) continue;
-            const std::uint8_t fe = fixed_edges_[std::size_t(c)];
-            if (fe & kEdgeWall) continue;
+            if (c < 0 || sum(c) <= cap || !shift_may_move(k)) continue;
             const int i = c % mx_, j = c / mx_;
             const double u = p_.x[k] - i * L_, v = p_.y[k] - j * L_;
             const double d[4] = {u, L_ - u, v, L_ - v};  // to the left, right, bottom, top edge
@@ -3934,10 +3934,8 @@ inline bool Simulation::shift_relief(double limit) {
                 if (!nearer) continue;
                 const int ni = i + (e == 0 ? -1 : e == 1 ? 1 : 0), nj = j + (e == 2 ? -1 : e == 3 ? 1 : 0);
                 if (ni < 0 || nj < 0 || ni >= mx_ || nj >= my_) continue;
-                const std::uint8_t from = e == 0 ? kEdgeLeft : e == 1 ? kEdgeRight : e == 2 ? kEdgeBottom : kEdgeTop;
-                const std::uint8_t into = e == 0 ? kEdgeRight : e == 1 ? kEdgeLeft : e == 2 ? kEdgeTop : kEdgeBottom;
                 const int cn = nj * mx_ + ni;
-                if ((fe & from) || (fixed_edges_[std::size_t(cn)] & (into | kEdgeWall)) || sum(cn) + vol(std::size_t(k)) > cap) continue;
+                if (!shift_may_cross(c, cn) || sum(cn) + vol(std::size_t(k)) > cap) continue;
                 sc[c].best = d[e]; sc[c].point = std::int32_t(k); sc[c].edge = std::int8_t(e);
             }
         }
@@ -3966,6 +3964,23 @@ inline bool Simulation::shift_relief(double limit) {
         }
     }
     return shift_moved(work, moved, box);
+}
+
+// The supports' guards, which neither the pass nor the guard crosses: a point may move if
+// it lies on the lattice, finite, without a LOAD, and not in a cell near a wall's face
+// (kEdgeWall, where hold_by_walls keeps the face); from cell c into its edge or corner
+// neighbour cn if no edge of the two cells about the edge or corner it crosses is fixed
+// and cn is not near a wall's face.
+inline bool Simulation::shift_may_move(std::size_t k) const {
+    const int c = p_.cell[k];
+    return c >= 0 && std::isfinite(p_.x[k] + p_.y[k]) && !(modes_.loads && p_.load_axis[k]) && !(fixed_edges_[std::size_t(c)] & kEdgeWall);
+}
+
+inline bool Simulation::shift_may_cross(int c, int cn) const {
+    const int di = cn % mx_ - c % mx_, dj = cn / mx_ - c / mx_;
+    const std::uint8_t from = std::uint8_t((di > 0 ? kEdgeRight : di < 0 ? kEdgeLeft : 0) | (dj > 0 ? kEdgeTop : dj < 0 ? kEdgeBottom : 0));
+    const std::uint8_t into = std::uint8_t((di > 0 ? kEdgeLeft : di < 0 ? kEdgeRight : 0) | (dj > 0 ? kEdgeBottom : dj < 0 ? kEdgeTop : 0));
+    return !(fixed_edges_[std::size_t(c)] & from) && !(fixed_edges_[std::size_t(cn)] & (into | kEdgeWall));
 }
 
 // After a pass or the guard: the account (w_shift, the moves), and where points moved
@@ -4034,11 +4049,9 @@ inline bool Simulation::shift_pass() {
     double work = 0;
     long moved = 0;
     for (std::size_t k = 0; k < p_.size(); ++k) {
+        if (!shift_may_move(k)) continue;
         const int c = p_.cell[k];
         const double x = p_.x[k], y = p_.y[k];
-        if (c < 0 || !std::isfinite(x + y) || (modes_.loads && p_.load_axis[k])) continue;
-        const std::uint8_t fe = fixed_edges_[std::size_t(c)];
-        if (fe & kEdgeWall) continue;
         const int I = std::clamp(int(x * ih), 0, sx - 1), J = std::clamp(int(y * ih), 0, sy - 1);
         const double u = x * ih - I, v = y * ih - J;
         const double* e = ex + std::size_t(J) * std::size_t(n1) + std::size_t(I);
@@ -4051,13 +4064,7 @@ inline bool Simulation::shift_pass() {
         if (len2 > cap * cap) { const double r = cap / std::sqrt(len2); dx *= r; dy *= r; }
         const double xn = x + dx, yn = y + dy;
         const int cn = cell_holding(xn, yn);
-        if (cn < 0) continue;
-        if (cn != c) {  // the edges of the two cells about the corner or edge it crosses: none fixed
-            const int di = cn % mx_ - c % mx_, dj = cn / mx_ - c / mx_;
-            const std::uint8_t from = std::uint8_t((di > 0 ? kEdgeRight : di < 0 ? kEdgeLeft : 0) | (dj > 0 ? kEdgeTop : dj < 0 ? kEdgeBottom : 0));
-            const std::uint8_t into = std::uint8_t((di > 0 ? kEdgeLeft : di < 0 ? kEdgeRight : 0) | (dj > 0 ? kEdgeBottom : dj < 0 ? kEdgeTop : 0));
-            if ((fe & from) || (fixed_edges_[std::size_t(cn)] & (into | kEdgeWall))) continue;
-        }
+        if (cn < 0 || (cn != c && !shift_may_cross(c, cn))) continue;
         const double before = potential_energy(k);
         p_.x[k] = xn; p_.y[k] = yn; p_.cell[k] = cn;
         work += potential_energy(k) - before;

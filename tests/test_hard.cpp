@@ -1008,6 +1008,52 @@ TEST_CASE("hard: SHIFT holds a draining hopper's cells within twice their area, 
     }
 }
 
+namespace {
+
+// The guard's scenes: a weightless elastic block (nothing moves but what SHIFT moves), 2 x 2
+// points in cells of 0.1 m on a lattice of mx x 20 cells, one step with SHIFT (its
+// defaults); mode 0 the paper's mapping, 1 MAPPING SMOOTH, 2 with ADVECT FLIP.
+Scene guard_block(Box box, int mx = 20, int mode = 0) {
+    Scene s;
+    s.mx = mx; s.my = 20; s.cell_m = 0.1;
+    s.gravity_y = 0;
+    s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
+    s.clusters.push_back({1, box, 2, {}});
+    if (mode > 0) s.mapping = Mapping::Smooth;
+    if (mode > 1) s.advect = Advect::Flip;
+    s.shift = true;
+    s.steps = 1;
+    s.dt_s = 0.5 * stable_dt(s);
+    return s;
+}
+
+const char* mode_name(int mode) { return mode == 0 ? "the paper's mapping" : mode == 1 ? "MAPPING SMOOTH" : "ADVECT FLIP"; }
+
+// One point of the cell holding (fx, fy) moved to (tx, ty); false if that cell holds none.
+bool give(Simulation& sim, double fx, double fy, double tx, double ty) {
+    Points& p = sim.points();
+    const int c = sim.cell_holding(fx, fy);
+    for (std::size_t k = 0; k < p.size(); ++k)
+        if (p.cell[k] == c) { p.x[k] = tx; p.y[k] = ty; p.cell[k] = sim.cell_holding(tx, ty); return true; }
+    return false;
+}
+
+// The points of the cell whose lower left corner is (x0, y0) still where they were made (at
+// a quarter and three quarters of the cell across) moved to `to`; how many there were.
+int put_own(Simulation& sim, double x0, double y0, const double (&to)[4][2]) {
+    Points& p = sim.points();
+    const int c = sim.cell_holding(x0 + 0.05, y0 + 0.05);
+    int m = 0;
+    for (std::size_t k = 0; k < p.size(); ++k)
+        if (p.cell[k] == c && (std::fabs(p.x[k] - (x0 + 0.025)) < 1e-9 || std::fabs(p.x[k] - (x0 + 0.075)) < 1e-9)) {
+            if (m < 4) { p.x[k] = to[m][0]; p.y[k] = to[m][1]; p.cell[k] = sim.cell_holding(to[m][0], to[m][1]); }
+            ++m;
+        }
+    return m;
+}
+
+}  // namespace
+
 // SHIFT's guard (shift_relief), with a known answer: a weightless block at rest (nothing
 // moves but what SHIFT moves), cells of 0.1 m made with 2 x 2 points, cell (10, 10) given
 // six points of its neighbours (one from each of six: ten points of L^2 / 4, 2.5 times its
@@ -1023,49 +1069,29 @@ TEST_CASE("hard: SHIFT's guard empties a cell holding more than twice its area b
     enum Variant { kOpen, kFixed, kFull };
     for (int mode = 0; mode < 3; ++mode)
         for (const Variant variant : {kOpen, kFixed, kFull}) {
-            Scene s;
-            s.mx = 20; s.my = 20; s.cell_m = 0.1;
-            s.gravity_y = 0;
-            s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
-            s.clusters.push_back({1, {0.5, 0.5, 1.5, 1.5}, 2, {}});
+            Scene s = guard_block({0.5, 0.5, 1.5, 1.5}, 20, mode);
             if (variant == kFixed)
                 for (const double x : {1.0, 1.1})
                     for (const double y : {1.0, 1.1}) s.fixes.push_back({kFixX | kFixY, {x, y, x, y}, {}});
-            if (mode > 0) s.mapping = Mapping::Smooth;
-            if (mode > 1) s.advect = Advect::Flip;
-            s.shift = true;
-            s.steps = 1;
-            s.dt_s = 0.5 * stable_dt(s);
             REQUIRE(validate(s).empty());
             Simulation sim(s);
             Points& p = sim.points();
             const double L = s.cell_m;
-            // one point of the cell holding (fx, fy) moved to (tx, ty)
-            auto give = [&](double fx, double fy, double tx, double ty) {
-                const int c = sim.cell_holding(fx, fy);
-                for (std::size_t k = 0; k < p.size(); ++k)
-                    if (p.cell[k] == c) { p.x[k] = tx; p.y[k] = ty; p.cell[k] = sim.cell_holding(tx, ty); return true; }
-                return false;
-            };
             const int target = sim.cell_holding(1.05, 1.05);
-            REQUIRE(give(0.95, 1.05, 1.04, 1.05));
-            REQUIRE(give(1.15, 1.05, 1.06, 1.05));
-            REQUIRE(give(1.05, 0.95, 1.05, 1.04));
-            REQUIRE(give(1.05, 1.15, 1.05, 1.062));
-            REQUIRE(give(0.95, 0.95, 1.045, 1.058));
-            REQUIRE(give(1.15, 1.15, 1.058, 1.043));
-            if (variant == kFull)  // cells (9, 10) and (10, 9), three points each now, given five more each
+            REQUIRE(give(sim, 0.95, 1.05, 1.04, 1.05));
+            REQUIRE(give(sim, 1.15, 1.05, 1.06, 1.05));
+            REQUIRE(give(sim, 1.05, 0.95, 1.05, 1.04));
+            REQUIRE(give(sim, 1.05, 1.15, 1.05, 1.062));
+            REQUIRE(give(sim, 0.95, 0.95, 1.045, 1.058));
+            REQUIRE(give(sim, 1.15, 1.15, 1.058, 1.043));
+            if (variant == kFull) {  // cells (9, 10) and (10, 9), three points each now, given five more each
                 for (int n = 0; n < 5; ++n) {  // from cells 8 .. 5 along the row (down the column) and the one beside 8
                     const double far = n < 4 ? 0.85 - 0.1 * n : 0.85, side = n < 4 ? 1.05 : 1.15, at = 0.94 + 0.005 * n, across = 1.03 + 0.01 * n;
-                    REQUIRE(give(far, side, at, across));
-                    REQUIRE(give(side, far, across, at));
+                    REQUIRE(give(sim, far, side, at, across));
+                    REQUIRE(give(sim, side, far, across, at));
                 }
-            if (variant == kFull) {  // and the cell's own four points put nearest its left and lower edges
-                const double near[4][2] = {{1.01, 1.05}, {1.05, 1.01}, {1.015, 1.03}, {1.03, 1.015}};
-                int m = 0;
-                for (std::size_t k = 0; k < p.size(); ++k)
-                    if (p.cell[k] == target && (std::fabs(p.x[k] - 1.025) < 1e-9 || std::fabs(p.x[k] - 1.075) < 1e-9)) { p.x[k] = near[m][0]; p.y[k] = near[m][1]; ++m; }
-                REQUIRE(m == 4);
+                // and the cell's own four points put nearest its left and lower edges
+                REQUIRE(put_own(sim, 1.0, 1.0, {{1.01, 1.05}, {1.05, 1.01}, {1.015, 1.03}, {1.03, 1.015}}) == 4);
             }
             sim.map_to_lattice();
             const std::vector<double> x0(p.x), y0(p.y);
@@ -1078,8 +1104,7 @@ TEST_CASE("hard: SHIFT's guard empties a cell holding more than twice its area b
             for (std::size_t k = 0; k < p.size(); ++k) ++count[p.cell[k]];
             int most = 0;
             for (const auto& [c, n] : count) most = std::max(most, n);
-            const std::string name = std::string(mode == 0 ? "the paper's mapping" : mode == 1 ? "MAPPING SMOOTH" : "ADVECT FLIP") +
-                                     (variant == kFixed ? ", the cell's edges fixed" : variant == kFull ? ", its left and lower neighbours full" : "");
+            const std::string name = std::string(mode_name(mode)) + (variant == kFixed ? ", the cell's edges fixed" : variant == kFull ? ", its left and lower neighbours full" : "");
             MESSAGE(name << ": " << sim.shifted() << " moves, the cell holds " << count[target] << " points, no cell more than " << most);
             CHECK(mass_exact(sim));
             CHECK(std::fabs(sim.energy().error) < 1e-12);
@@ -1119,30 +1144,14 @@ TEST_CASE("hard: SHIFT's guard empties a cell holding more than twice its area b
 // lattice's edges, beyond which there is no cell: the two that move go right or up, to the
 // points nearest those edges, and every point stays on the lattice.
 TEST_CASE("hard: SHIFT's guard moves no point off the lattice") {
-    Scene s;
-    s.mx = 20; s.my = 20; s.cell_m = 0.1;
-    s.gravity_y = 0;
-    s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
-    s.clusters.push_back({1, {0, 0, 1, 1}, 2, {}});
-    s.shift = true;
-    s.steps = 1;
-    s.dt_s = 0.5 * stable_dt(s);
+    const Scene s = guard_block({0, 0, 1, 1});
     REQUIRE(validate(s).empty());
     Simulation sim(s);
     Points& p = sim.points();
+    const double from[6][2] = {{0.15, 0.05}, {0.05, 0.15}, {0.15, 0.15}, {0.25, 0.05}, {0.05, 0.25}, {0.25, 0.25}};
     const double spots[6][2] = {{0.04, 0.05}, {0.06, 0.05}, {0.05, 0.04}, {0.05, 0.062}, {0.045, 0.058}, {0.058, 0.043}};
-    int given = 0;
-    for (const auto& from : {std::pair{0.15, 0.05}, std::pair{0.05, 0.15}, std::pair{0.15, 0.15}, std::pair{0.25, 0.05}, std::pair{0.05, 0.25}, std::pair{0.25, 0.25}}) {
-        const int c = sim.cell_holding(from.first, from.second);
-        for (std::size_t k = 0; k < p.size(); ++k)
-            if (p.cell[k] == c) { p.x[k] = spots[given][0]; p.y[k] = spots[given][1]; p.cell[k] = 0; ++given; break; }
-    }
-    REQUIRE(given == 6);
-    const double near[4][2] = {{0.01, 0.05}, {0.05, 0.01}, {0.015, 0.03}, {0.03, 0.015}};  // the cell's own, nearest the lattice's edges
-    int m = 0;
-    for (std::size_t k = 0; k < p.size(); ++k)
-        if (p.cell[k] == 0 && (std::fabs(p.x[k] - 0.025) < 1e-9 || std::fabs(p.x[k] - 0.075) < 1e-9)) { p.x[k] = near[m][0]; p.y[k] = near[m][1]; ++m; }
-    REQUIRE(m == 4);
+    for (int n = 0; n < 6; ++n) REQUIRE(give(sim, from[n][0], from[n][1], spots[n][0], spots[n][1]));
+    REQUIRE(put_own(sim, 0, 0, {{0.01, 0.05}, {0.05, 0.01}, {0.015, 0.03}, {0.03, 0.015}}) == 4);  // the cell's own, nearest the lattice's edges
     sim.map_to_lattice();
     const std::vector<double> x0(p.x), y0(p.y);
     sim.step();
@@ -1171,35 +1180,19 @@ TEST_CASE("hard: SHIFT's guard moves no point off the lattice") {
 // the wall's cells) with its own points nearest its left edge, gives two, none to the
 // left.
 TEST_CASE("hard: SHIFT's guard moves no point out of or into the cells of a wall's face") {
-    Scene s;
-    s.mx = 30; s.my = 20; s.cell_m = 0.1;
-    s.gravity_y = 0;
-    s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
-    s.clusters.push_back({1, {0.5, 0.5, 2.0, 1.5}, 2, {}});
+    Scene s = guard_block({0.5, 0.5, 2.0, 1.5}, 30);
     Wall w;
     w.id = 1; w.box = {1.0, 0.3, 1.0, 1.7}; w.smooth = true;
     s.walls.push_back(w);
-    s.shift = true;
-    s.steps = 1;
-    s.dt_s = 0.5 * stable_dt(s);
     REQUIRE(validate(s).empty());
     Simulation sim(s);
     Points& p = sim.points();
-    auto give = [&](double fx, double fy, double tx, double ty) {
-        const int c = sim.cell_holding(fx, fy);
-        for (std::size_t k = 0; k < p.size(); ++k)
-            if (p.cell[k] == c) { p.x[k] = tx; p.y[k] = ty; p.cell[k] = sim.cell_holding(tx, ty); return true; }
-        return false;
-    };
     for (const double cx : {1.05, 1.35}) {  // cells (10, 10) and (13, 10)
         const double from[6][2] = {{cx + 0.1, 1.15}, {cx + 0.1, 0.95}, {cx, 1.25}, {cx, 0.85}, {cx + 0.2, 1.05}, {cx + 0.1, 1.05}};
-        for (int n = 0; n < 6; ++n) REQUIRE(give(from[n][0], from[n][1], cx - 0.01 + 0.004 * n, 1.04 + 0.004 * n));
+        for (int n = 0; n < 6; ++n) REQUIRE(give(sim, from[n][0], from[n][1], cx - 0.01 + 0.004 * n, 1.04 + 0.004 * n));
     }
     const int face = sim.cell_holding(1.05, 1.05), beside = sim.cell_holding(1.35, 1.05);
-    int m = 0;  // cell (13, 10)'s own four points put nearest its left edge
-    for (std::size_t k = 0; k < p.size(); ++k)
-        if (p.cell[k] == beside && (std::fabs(p.x[k] - 1.325) < 1e-9 || std::fabs(p.x[k] - 1.375) < 1e-9)) { p.x[k] = 1.305 + 0.002 * m; p.y[k] = 1.02 + 0.02 * m; ++m; }
-    REQUIRE(m == 4);
+    REQUIRE(put_own(sim, 1.3, 1.0, {{1.305, 1.02}, {1.307, 1.04}, {1.309, 1.06}, {1.311, 1.08}}) == 4);  // cell (13, 10)'s own, nearest its left edge
     sim.map_to_lattice();
     const std::vector<double> x0(p.x), y0(p.y);
     sim.step();
@@ -1228,30 +1221,20 @@ TEST_CASE("hard: SHIFT's guard moves no point out of or into the cells of a wall
 // with SHIFT is the other's plus w_shift; energy_error stays at its rounding.
 TEST_CASE("hard: SHIFT's guard puts the potential energy of its moves in w_shift") {
     for (int mode = 0; mode < 3; ++mode) {
-        Scene s;
-        s.mx = 20; s.my = 20; s.cell_m = 0.1;
-        s.gravity_x = 5; s.gravity_y = -9.81;
-        s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
-        s.clusters.push_back({1, {0.5, 0.5, 1.5, 1.5}, 2, {}});
-        if (mode > 0) s.mapping = Mapping::Smooth;
-        if (mode > 1) s.advect = Advect::Flip;
-        s.steps = 1;
-        s.dt_s = 0.5 * stable_dt(s);
-        Scene t = s;
-        t.shift = true;
+        Scene t = guard_block({0.5, 0.5, 1.5, 1.5}, 20, mode);
+        t.gravity_x = 5; t.gravity_y = -9.81;
+        t.dt_s = 0.5 * stable_dt(t);
+        Scene s = t;
+        s.shift = false;
         REQUIRE(validate(t).empty());
         Simulation a(t), b(s);
         for (Simulation* sim : {&a, &b}) {
-            Points& p = sim->points();
             int given = 0;
-            const int target = sim->cell_holding(1.05, 1.05);
             for (const double fx : {0.95, 1.15})
                 for (const double fy : {0.95, 1.05, 1.15}) {
-                    const int c = sim->cell_holding(fx, fy);
-                    for (std::size_t k = 0; k < p.size(); ++k)
-                        if (p.cell[k] == c) { p.x[k] = 1.04 + 0.004 * given; p.y[k] = 1.045 + 0.002 * given; p.cell[k] = target; ++given; break; }
+                    REQUIRE(give(*sim, fx, fy, 1.04 + 0.004 * given, 1.045 + 0.002 * given));
+                    ++given;
                 }
-            REQUIRE(given == 6);
             sim->map_to_lattice();
         }
         a.step();
@@ -1261,7 +1244,7 @@ TEST_CASE("hard: SHIFT's guard puts the potential energy of its moves in w_shift
         double w = 0;
         for (std::size_t k = 0; k < p.size(); ++k) w += -a.point_mass(k) * (s.gravity_x * (p.x[k] - q.x[k]) + s.gravity_y * (p.y[k] - q.y[k]));
         const Simulation::Energy ea = a.energy(), eb = b.energy();
-        MESSAGE(std::string(mode == 0 ? "the paper's mapping" : mode == 1 ? "MAPPING SMOOTH" : "ADVECT FLIP") << ": w_shift " << ea.w_shift << " J/m, the moves' -m g . dx " << w
+        MESSAGE(std::string(mode_name(mode)) << ": w_shift " << ea.w_shift << " J/m, the moves' -m g . dx " << w
                 << ", energy_error " << ea.error << " with, " << eb.error << " without");
         CHECK(std::fabs(w) > 1e-3);  // (a move of a few cm of 5 kg: not zero)
         CHECK(ea.w_shift == approx(w).epsilon(1e-9));
