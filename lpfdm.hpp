@@ -119,10 +119,11 @@
 #else
 #define LPFDM_INLINE
 #endif
-// LPFDM_WIDE: on x86-64 with GCC or Clang, the point loop (with the paper's motion rule)
-// and the regular lattice phases (eq. 5, the nodal forces, eq. 13-14) have a second
-// version built for AVX2, taken when the processor has it: four points, cells or nodes
-// per register instead of one or two, the same numbers bit for bit. Define LPFDM_NO_WIDE to
+// LPFDM_WIDE: on x86-64 with GCC or Clang, the point loop (with the paper's motion rule;
+// MAPPING SMOOTH's strain, stress and motion) and the regular lattice phases (eq. 5, the
+// nodal forces, eq. 13-14) have a second version built for AVX2, taken when the processor
+// has it: four points, cells or nodes per register instead of one or two, the same
+// numbers bit for bit. Define LPFDM_NO_WIDE to
 // leave it out. A build with fused multiply-add (-mfma, -march=native, x86-64-v3) leaves
 // it out too: the compiler fuses a*b - c*d on either product, not always alike in the two
 // versions, so they would no longer agree bit for bit. So does a build for AVX-512
@@ -960,8 +961,8 @@ public:
     static constexpr int kPhases = 5;
     static const char* phase_name(int k);
     void set_profiling(bool on) { profiling_ = on; }                 // time each phase from now on
-    // The AVX2 version of the point loop (with the paper's motion rule) and of the regular
-    // lattice phases: used when built in (LPFDM_WIDE) and the processor has AVX2;
+    // The AVX2 version of the point loop (with the paper's motion rule; MAPPING SMOOTH's
+    // strain, stress and motion) and of the regular lattice phases: used when built in (LPFDM_WIDE) and the processor has AVX2;
     // set_wide(false) takes the one-at-a-time loops (the same numbers, bit for bit).
     static bool have_wide();
     void set_wide(bool on);
@@ -1371,7 +1372,10 @@ private:
     void stop_at_edges(int c, double x0, double y0, double& x, double& y) const;
     LPFDM_INLINE void stop_at_edges(int ci, int cj, std::uint8_t fe, double x0, double y0, double& x, double& y) const;
     template <bool Trial> void smooth_move(std::size_t k);
-    template <class F> void each_point_consulted(const F& f);
+    template <bool Move, class F> void each_point_consulted(const F& f);
+#if LPFDM_WIDE
+    template <bool Move> void smooth_lanes(long b0, long b1);
+#endif
     void smooth_point_pass();
     void reference_nodal_forces();
     void reference_compensate();
@@ -2903,9 +2907,11 @@ LPFDM_DEF Modes modes_of(const Scene& s, Kernel asked) {
         m.scatter |= mat.scatter > 0;
     }
     m.kernel = asked;
-    // The AVX2 point loop follows the default modes only (choose_point_loop).
+    // The AVX2 point loop follows the default modes only (choose_point_loop); MAPPING
+    // SMOOTH's has lanes of its own (smooth_lanes).
     if (m.kernel == Kernel::Fast)
-        m.points_why = m.mapping == Mapping::Smooth ? "MAPPING SMOOTH: AVX2 for the Mohr-Coulomb consult only"
+        m.points_why = m.mapping == Mapping::Smooth && m.motion == Motion::Bilinear ? "MAPPING SMOOTH: its strain, stress and motion four at a time, its sums one at a time"
+                       : m.mapping == Mapping::Smooth ? "MAPPING SMOOTH with MOTION PAPER or CENTRE: AVX2 for the Mohr-Coulomb consult only"
                        : m.advect == Advect::Points ? "ADVECT POINTS has no AVX2 point loop"
                        : m.motion == Motion::Paper  ? "MOTION PAPER has no AVX2 point loop"
                        : m.motion == Motion::Bilinear ? "MOTION BILINEAR has no AVX2 point loop" : "";
@@ -4971,10 +4977,11 @@ inline void Simulation::nodal_kinetic(const Range& nodes) {
 //   gradients at the points locked the near-incompressible plastic flow, q 10 % high).
 //   Without gravity the wall of a plane-strain compression then reads the base reaction
 //   within 2.8 % at every sample (the paper's mapping: spikes of 16 % each time the cap's
-//   points cross the wall's line of nodes). The fast kernel calls the same per-point code
-//   (smooth_move) by threads, its Mohr-Coulomb consult four points at a time
-//   (each_point_consulted), and adds eq. 7, 8 by threads over bands of cell rows
-//   (smear_points): 3-9 times the paper's cost per particle-step on one thread
+//   points cross the wall's line of nodes). The fast kernel runs the same per-point code
+//   (smooth_move) by threads, with AVX2 four points at a time (smooth_lanes: the strain,
+//   eq. 6's trial and the motion; the Mohr-Coulomb consult after, each_point_consulted),
+//   and adds eq. 7, 8 by threads over bands of cell rows (smear_points), one point at a
+//   time: 3-7 times the paper's cost per particle-step on one thread
 //   (tools/README.md), with limit loads no closer (the footing's +17 % at 4 cells under it,
 //   against +10 %: its stiff points share the soil's cells at its edges), which is why
 //   it is not the default.
@@ -5166,7 +5173,7 @@ template <bool Trial> inline void Simulation::smooth_move(std::size_t k) {
     if (modes_.advect == Advect::Flip) { e.xx *= 0.5; e.yy *= 0.5; e.xy *= 0.5; e.yx *= 0.5; }  // the first half (flip_second_half)
     smooth_stress<Trial>(k, e);
     double x = x0 + dx, y = y0 + dy;
-    stop_at_edges(p_.cell[k], x0, y0, x, y);  // as in reference_points
+    if (fixed_edges_[std::size_t(p_.cell[k])]) stop_at_edges(p_.cell[k], x0, y0, x, y);  // as in reference_points (a cell with no fixed edge stops nothing)
     p_.x[k] = x; p_.y[k] = y;
 }
 
@@ -5192,18 +5199,23 @@ template <bool Trial> inline void Simulation::smooth_stress(std::size_t k, const
 }
 
 // f(k, trial) for every point k, where f writes point k's own values only and runs
-// smooth_stress<trial>: as each_point with trial false; in the fast kernel with AVX2 and a
-// Mohr-Coulomb material (no user's model), by blocks of kConsultBlock points, each
-// block's Mohr-Coulomb points consulted after its trials four at a time (consult_points,
+// smooth_stress<trial>: smooth_move (Move) or flip_second_strain (not Move). As
+// each_point with trial false; in the fast kernel with AVX2 and no user's model, by
+// blocks of kConsultBlock points, each block's trials four points at a time
+// (smooth_lanes, where it applies: with MOTION BILINEAR for smooth_move; else f with
+// trial true), its Mohr-Coulomb points then consulted four at a time (consult_points,
 // the AVX2 loop's consult): the same numbers.
-template <class F> inline void Simulation::each_point_consulted(const F& f) {
+template <bool Move, class F> inline void Simulation::each_point_consulted(const F& f) {
 #if LPFDM_WIDE
-    if (wide_ && mohr_groups_ && no_user_groups_) {
+    const bool lanes = !Move || modes_.motion == Motion::Bilinear;
+    if (wide_ && no_user_groups_ && (mohr_groups_ || lanes)) {
         const long n = long(p_.size()), blocks = (n + kConsultBlock - 1) / kConsultBlock;
         auto block = [&](long b) {
             const long b0 = b * kConsultBlock, b1 = std::min(n, b0 + kConsultBlock);
-            for (long k = b0; k < b1; ++k) f(std::size_t(k), std::true_type{});
-            consult_points(b0, b1);
+            if (lanes) smooth_lanes<Move>(b0, b1);
+            else
+                for (long k = b0; k < b1; ++k) f(std::size_t(k), std::true_type{});
+            if (mohr_groups_) consult_points(b0, b1);
         };
 #if defined(_OPENMP)
         if (!serial()) {
@@ -5231,13 +5243,23 @@ inline void Simulation::smooth_map(Landing& t) {
         overlap_[k] = p_.cell[k] >= 0 ? overlap_of(x, y, groups_[p_.group[k]].half) : detail::Overlap{};
     });
     // The mass inside, in point order, and follow_material's flags: the cells holding a point.
+    // (Local pointers and a local sum: a store through holds_point_'s bytes may alias anything,
+    // and would reload every member at every point.)
     std::fill(holds_point_.begin(), holds_point_.end(), std::uint8_t(0));
-    for (std::size_t k = 0; k < p_.size(); ++k) {
-        const int c = p_.cell[k];
-        if (c < 0) { ++t.departed; continue; }
-        t.mass += groups_[p_.group[k]].mass;
-        holds_point_[std::size_t(c)] = 1;
+    const std::int32_t* cell = p_.cell.data();
+    const std::uint16_t* group = p_.group.data();
+    const Group* groups = groups_.data();
+    std::uint8_t* holds = holds_point_.data();
+    double mass = t.mass;
+    long departed = 0;
+    for (std::size_t k = 0, n = p_.size(); k < n; ++k) {
+        const int c = cell[k];
+        if (c < 0) { ++departed; continue; }
+        mass += groups[group[k]].mass;
+        holds[c] = 1;
     }
+    t.mass = mass;
+    t.departed += departed;
     if (t.departed) {  // the squares kept as remove_departed keeps the points
         std::size_t w = 0;
         for (std::size_t k = 0; k < p_.size(); ++k)
@@ -5357,7 +5379,7 @@ template <Simulation::Smear S> inline void Simulation::smear_point(const detail:
 inline void Simulation::smooth_point_pass() {
     centroid_traces(strained_);  // the cells around those holding material (cell_strains)
     known_overlaps();
-    each_point_consulted([&](std::size_t k, auto trial) { smooth_move<decltype(trial)::value>(k); });
+    each_point_consulted<true>([&](std::size_t k, auto trial) { smooth_move<decltype(trial)::value>(k); });
     clear_cells();
     Landing t;
     smooth_map(t);
@@ -5560,7 +5582,7 @@ template <bool Trial> inline void Simulation::flip_second_strain(std::size_t k) 
 inline void Simulation::flip_second_half(const Range& nodes, const Range& cells) {
     flip_transfer(nodes);
     centroid_traces(cells);
-    each_point_consulted([&](std::size_t k, auto trial) { flip_second_strain<decltype(trial)::value>(k); });
+    each_point_consulted<false>([&](std::size_t k, auto trial) { flip_second_strain<decltype(trial)::value>(k); });
     // The first mapping's stress sums are zero (smear_points<Smear::Mass>), its masses those
     // of the points where they still are.
     zero_rows(cells, mx_, {&cvol_, &smu_, &smv_});
@@ -6913,6 +6935,132 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
     auto one_point = [&](long r, Stress s) { consult_one<Own>(mc, r, s, a); };
     q = detail::lanes::consult<Own>(mc, q, qend, consult_arrays(a), [&](int g) { return groups_[std::size_t(g)].vol0; }, one_point);
     for (; q < qend; ++q) one_point(q, Stress{a.sxx[q], a.syy[q], a.sxy[q], a.szz[q]});
+}
+#endif
+
+#if LPFDM_WIDE
+// MAPPING SMOOTH's trials of points b0 .. b1-1 (each_point_consulted's block): Move,
+// smooth_move<true> with MOTION BILINEAR; not Move, flip_second_strain<true>. Four points
+// at a time in the lanes of an AVX2 register where four neighbours in storage share an
+// elastic or Mohr-Coulomb group: smooth_strain (the square's node weights axis_shape, the
+// nine nodes' increments, the B-bar trace over the parts each_part visits), eq. 5f, the
+// volume and eq. 6's elastic trial (smooth_stress), and the motion with its edge stop, the
+// same operations in the same order as those functions, so the same bits; the others one
+// at a time by those functions.
+template <bool Move>
+__attribute__((target("avx2"))) inline void Simulation::smooth_lanes(const long b0, const long b1) {
+    using detail::v4d;
+    using detail::v4m;
+    auto one = [&](long k) {
+        if constexpr (Move) smooth_move<true>(std::size_t(k));
+        else flip_second_strain<true>(std::size_t(k));
+    };
+    const double L = L_, invL = invL_;
+    const bool half = !Move || modes_.advect == Advect::Flip;  // ADVECT FLIP: half the strain from each lattice
+    const int row = mx_ + 1;
+    const double *ux = dux_.data(), *uy = duy_.data(), *ct = centroid_trace_.data();
+    long k = b0;
+    for (; k + 4 <= b1; k += 4) {
+        const std::uint16_t g = p_.group[std::size_t(k)];
+        const MaterialConstants& mc = *group_consts_[g];
+        if (p_.group[std::size_t(k + 1)] != g || p_.group[std::size_t(k + 2)] != g || p_.group[std::size_t(k + 3)] != g ||
+            (mc.model != Model::Elastic && mc.model != Model::MohrCoulomb)) {
+            for (long q = k; q < k + 4; ++q) one(q);
+            continue;
+        }
+        // Each lane's square (overlap_), its nodes' increments, and its parts' traces (0
+        // where a part has no weight: each_part skips it). Each vector is made from four
+        // loads at once (values written lane by lane into a vector would go through memory).
+        const detail::Overlap* o[4] = {&overlap_[std::size_t(k)], &overlap_[std::size_t(k + 1)], &overlap_[std::size_t(k + 2)], &overlap_[std::size_t(k + 3)]};
+        const detail::Overlap &o0 = *o[0], &o1 = *o[1], &o2 = *o[2], &o3 = *o[3];
+        const v4d wx0 = {o0.wx[0], o1.wx[0], o2.wx[0], o3.wx[0]}, wx1 = {o0.wx[1], o1.wx[1], o2.wx[1], o3.wx[1]};
+        const v4d wy0 = {o0.wy[0], o1.wy[0], o2.wy[0], o3.wy[0]}, wy1 = {o0.wy[1], o1.wy[1], o2.wy[1], o3.wy[1]};
+        const v4d cx0 = {o0.cx[0], o1.cx[0], o2.cx[0], o3.cx[0]}, cx1 = {o0.cx[1], o1.cx[1], o2.cx[1], o3.cx[1]};
+        const v4d cy0 = {o0.cy[0], o1.cy[0], o2.cy[0], o3.cy[0]}, cy1 = {o0.cy[1], o1.cy[1], o2.cy[1], o3.cy[1]};
+        const v4d ax0 = {o0.a * L, o1.a * L, o2.a * L, o3.a * L}, ax1 = {(o0.a + 1) * L, (o1.a + 1) * L, (o2.a + 1) * L, (o3.a + 1) * L};  // axis_shape's
+        const v4d ay0 = {o0.b * L, o1.b * L, o2.b * L, o3.b * L}, ay1 = {(o0.b + 1) * L, (o1.b + 1) * L, (o2.b + 1) * L, (o3.b + 1) * L};
+        int at[3][3][4];  // node of row m, column c, lane l (smooth_strain's)
+        for (int l = 0; l < 4; ++l) {
+            const int i2 = std::min(o[l]->a + 2, mx_) - o[l]->a;
+            for (int m = 0; m < 3; ++m) {
+                const int n = std::min(o[l]->b + m, my_) * row + o[l]->a;
+                at[m][0][l] = n; at[m][1][l] = n + 1; at[m][2][l] = n + i2;
+            }
+        }
+        v4d nu[3][3], nv[3][3], pw[2][2], pt[2][2];
+        for (int m = 0; m < 3; ++m)
+            for (int c = 0; c < 3; ++c) {
+                const int* a = at[m][c];
+                nu[m][c] = v4d{ux[a[0]], ux[a[1]], ux[a[2]], ux[a[3]]};
+                nv[m][c] = v4d{uy[a[0]], uy[a[1]], uy[a[2]], uy[a[3]]};
+            }
+        for (int q = 0; q < 2; ++q)
+            for (int r = 0; r < 2; ++r) {
+                pw[q][r] = (r ? wx1 : wx0) * (q ? wy1 : wy0);  // each_part's w
+                const int some = detail::lane_bits(pw[q][r] > 0);
+                int c[4];
+                for (int l = 0; l < 4; ++l) c[l] = some >> l & 1 ? cell(o[l]->a + r, o[l]->b + q) : 0;
+                pt[q][r] = v4d{ct[c[0]], ct[c[1]], ct[c[2]], ct[c[3]]};
+            }
+        // axis_shape along each axis
+        const v4d u0 = (cx0 - ax0) * invL, u1 = (cx1 - ax1) * invL, v0 = (cy0 - ay0) * invL, v1 = (cy1 - ay1) * invL;
+        const v4d sx0 = wx0 * (1 - u0), sx1 = wx0 * u0 + wx1 * (1 - u1), sx2 = wx1 * u1;
+        const v4d sy0 = wy0 * (1 - v0), sy1 = wy0 * v0 + wy1 * (1 - v1), sy2 = wy1 * v1;
+        // smooth_strain
+        v4d xs[3], xd[3], ys[3], yd[3];
+        for (int m = 0; m < 3; ++m) {
+            const v4d *a = nu[m], *b = nv[m];
+            xs[m] = sx0 * a[0] + sx1 * a[1] + sx2 * a[2];
+            ys[m] = sx0 * b[0] + sx1 * b[1] + sx2 * b[2];
+            xd[m] = (wx0 * (a[1] - a[0]) + wx1 * (a[2] - a[1])) * invL;
+            yd[m] = (wx0 * (b[1] - b[0]) + wx1 * (b[2] - b[1])) * invL;
+        }
+        // (out through a reference: see smear_weight)
+        auto mean = [&](const v4d f[3], v4d& out) LPFDM_INLINE { out = sy0 * f[0] + sy1 * f[1] + sy2 * f[2]; };
+        auto across = [&](const v4d f[3], v4d& out) LPFDM_INLINE { out = (wy0 * (f[1] - f[0]) + wy1 * (f[2] - f[1])) * invL; };
+        v4d exx, eyy, exy, eyx;
+        mean(xd, exx); across(ys, eyy); across(xs, exy); mean(yd, eyx);
+        v4d trace{};
+        for (int q = 0; q < 2; ++q)
+            for (int r = 0; r < 2; ++r) {
+                const v4m some = pw[q][r] > 0;
+                const v4d added = trace + pw[q][r] * pt[q][r];
+                trace = v4d((v4m(added) & some) | (v4m(trace) & ~some));
+            }
+        const v4d half_change = 0.5 * (trace - (exx + eyy));
+        exx += half_change; eyy += half_change;
+        if (half) { exx *= 0.5; eyy *= 0.5; exy *= 0.5; eyx *= 0.5; }
+        // smooth_stress with Trial: eq. 5f, the volume, eq. 6's elastic trial
+        const double* pp[5] = {p_.sxx.data() + k, p_.syy.data() + k, p_.sxy.data() + k, p_.szz.data() + k, p_.vol.data() + k};
+        v4d rc, rs, sxx, syy, sxy, szz, vol;
+        jaumann_rotation(v4d(0.5 * (eyx - exy)), rc, rs);  // eq. 5f (StrainIncrement::theta)
+        detail::load(pp[4], vol);
+        vol *= 1 + exx + eyy;
+        detail::load(pp[0], sxx); detail::load(pp[1], syy); detail::load(pp[2], sxy); detail::load(pp[3], szz);
+        struct { v4d xx, yy, xy, zz; } de;
+        elastic_change(mc, exx, eyy, exy, eyx, de.xx, de.yy, de.xy, de.zz);
+        elastic_trial(sxx, syy, sxy, szz, de, rc, rs);  // eq. 6
+        detail::store(p_.sxx.data() + k, sxx); detail::store(p_.syy.data() + k, syy);
+        detail::store(p_.sxy.data() + k, sxy); detail::store(p_.szz.data() + k, szz);
+        detail::store(p_.vol.data() + k, vol);
+        if constexpr (Move) {  // MOTION BILINEAR: the mean of the increments over the square
+            v4d x0, y0;
+            detail::load(p_.x.data() + k, x0); detail::load(p_.y.data() + k, y0);
+            v4d dx, dy;
+            mean(xs, dx); mean(ys, dy);
+            v4d x = x0 + dx, y = y0 + dy;
+            for (int l = 0; l < 4; ++l) {
+                const int c = p_.cell[std::size_t(k + l)];
+                if (fixed_edges_[std::size_t(c)]) {
+                    double xl = x[l], yl = y[l];
+                    stop_at_edges(c, x0[l], y0[l], xl, yl);
+                    x[l] = xl; y[l] = yl;
+                }
+            }
+            detail::store(p_.x.data() + k, x); detail::store(p_.y.data() + k, y);
+        }
+    }
+    for (; k < b1; ++k) one(k);
 }
 #endif
 

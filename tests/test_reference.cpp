@@ -191,6 +191,9 @@ TEST_CASE("the options no shipped deck uses, on a flowing column and a hopper: t
         compare_kernels(std::string(deck) + " MAPPING SMOOTH", m, steps);
         m.reorder = 3;
         compare_kernels(std::string(deck) + " MAPPING SMOOTH REORDER 3", m, steps);
+        m.reorder = base.reorder;
+        m.motion = Motion::Centre;  // the fast kernel's other SMOOTH pass (no lanes for the motion)
+        compare_kernels(std::string(deck) + " MAPPING SMOOTH MOTION CENTRE", m, steps);
         Scene r = base;  // the storage sorted by cell every step
         r.reorder = 1;
         compare_kernels(std::string(deck) + " REORDER 1", r, steps);
@@ -314,8 +317,11 @@ TEST_CASE("modes: what a scene switches on, and which kernel runs it, and why") 
     CHECK(std::string(d.points_why).empty());  // the AVX2 point loop runs the default modes
     CHECK(!d.shake);
     s.mapping = Mapping::Smooth;
-    CHECK(std::string(modes_of(s, Kernel::Fast).points_why) == "MAPPING SMOOTH: AVX2 for the Mohr-Coulomb consult only");
+    CHECK(std::string(modes_of(s, Kernel::Fast).points_why) == "MAPPING SMOOTH: its strain, stress and motion four at a time, its sums one at a time");
     CHECK(std::string(modes_of(s, Kernel::Reference).points_why).empty());
+    s.motion = Motion::Centre;  // smooth_lanes follows MOTION BILINEAR, SMOOTH's default
+    CHECK(std::string(modes_of(s, Kernel::Fast).points_why) == "MAPPING SMOOTH with MOTION PAPER or CENTRE: AVX2 for the Mohr-Coulomb consult only");
+    s.motion = Motion::Default;
     s.hourglass = 0.05;
     CHECK(modes_of(s, Kernel::Scalar).motion == Motion::Bilinear);  // SMOOTH's default rule
     CHECK(modes_of(s, Kernel::Scalar).hourglass);
@@ -324,7 +330,7 @@ TEST_CASE("modes: what a scene switches on, and which kernel runs it, and why") 
         CHECK(modes_of(s, k).kernel == k);
         CHECK(Simulation(s, k).kernel() == k);
     }
-    CHECK(std::string(modes_of(s, Kernel::Fast).points_why) == "MAPPING SMOOTH: AVX2 for the Mohr-Coulomb consult only");
+    CHECK(std::string(modes_of(s, Kernel::Fast).points_why) == "MAPPING SMOOTH: its strain, stress and motion four at a time, its sums one at a time");
     Scene m;  // MOTION PAPER, and a user's model: named too
     REQUIRE(read_deck("decks/verify_collapse.deck", m).empty());
     m.motion = Motion::Paper;
