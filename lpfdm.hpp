@@ -1373,8 +1373,10 @@ private:
     LPFDM_INLINE void stop_at_edges(int ci, int cj, std::uint8_t fe, double x0, double y0, double& x, double& y) const;
     template <bool Trial> void smooth_move(std::size_t k);
     template <bool Move, class F> void each_point_consulted(const F& f);
+    template <class F> void each_block(const F& f);
 #if LPFDM_WIDE
-    template <bool Move> void smooth_lanes(long b0, long b1);
+    template <bool Move> __attribute__((target("avx2"))) void smooth_lanes(long b0, long b1);
+    template <class F> __attribute__((target("avx2"))) void squares_lanes(long b0, long b1, const F& one);
 #endif
     void smooth_point_pass();
     void reference_nodal_forces();
@@ -5198,6 +5200,21 @@ template <bool Trial> inline void Simulation::smooth_stress(std::size_t k, const
     p_.sxx[k] = s.xx; p_.syy[k] = s.yy; p_.sxy[k] = s.xy; p_.szz[k] = s.zz;
 }
 
+// f(b0, b1) for the blocks of kConsultBlock points (the last one shorter), where f writes
+// its block's points' own values only: by threads as each_point, in order otherwise.
+template <class F> inline void Simulation::each_block(const F& f) {
+    const long n = long(p_.size()), blocks = (n + kConsultBlock - 1) / kConsultBlock;
+    auto block = [&](long b) { f(b * kConsultBlock, std::min(n, (b + 1) * kConsultBlock)); };
+#if defined(_OPENMP)
+    if (!serial()) {
+        LPFDM_OMP(omp parallel for schedule(static) num_threads(team_))
+        for (long b = 0; b < blocks; ++b) block(b);
+        return;
+    }
+#endif
+    for (long b = 0; b < blocks; ++b) block(b);
+}
+
 // f(k, trial) for every point k, where f writes point k's own values only and runs
 // smooth_stress<trial>: smooth_move (Move) or flip_second_strain (not Move). As
 // each_point with trial false; in the fast kernel with AVX2 and no user's model, by
@@ -5209,22 +5226,12 @@ template <bool Move, class F> inline void Simulation::each_point_consulted(const
 #if LPFDM_WIDE
     const bool lanes = !Move || modes_.motion == Motion::Bilinear;
     if (wide_ && no_user_groups_ && (mohr_groups_ || lanes)) {
-        const long n = long(p_.size()), blocks = (n + kConsultBlock - 1) / kConsultBlock;
-        auto block = [&](long b) {
-            const long b0 = b * kConsultBlock, b1 = std::min(n, b0 + kConsultBlock);
+        each_block([&](long b0, long b1) {
             if (lanes) smooth_lanes<Move>(b0, b1);
             else
                 for (long k = b0; k < b1; ++k) f(std::size_t(k), std::true_type{});
             if (mohr_groups_) consult_points(b0, b1);
-        };
-#if defined(_OPENMP)
-        if (!serial()) {
-            LPFDM_OMP(omp parallel for schedule(static) num_threads(team_))
-            for (long b = 0; b < blocks; ++b) block(b);
-            return;
-        }
-#endif
-        for (long b = 0; b < blocks; ++b) block(b);
+        });
         return;
     }
 #endif
@@ -5237,11 +5244,16 @@ template <bool Move, class F> inline void Simulation::each_point_consulted(const
 inline void Simulation::smooth_map(Landing& t) {
     // Each point's cell and square where it is now (each point its own: by threads). A
     // point that left, or is not finite (remove_departed keeps it for the guard), has no parts.
-    each_point([&](std::size_t k) {
+    auto one = [&](std::size_t k) {
         const double x = p_.x[k], y = p_.y[k];
         p_.cell[k] = cell_holding(x, y);
         overlap_[k] = p_.cell[k] >= 0 ? overlap_of(x, y, groups_[p_.group[k]].half) : detail::Overlap{};
-    });
+    };
+#if LPFDM_WIDE
+    if (wide_) each_block([&](long b0, long b1) { squares_lanes(b0, b1, one); });
+    else
+#endif
+        each_point(one);
     // The mass inside, in point order, and follow_material's flags: the cells holding a point.
     // (Local pointers and a local sum: a store through holds_point_'s bytes may alias anything,
     // and would reload every member at every point.)
@@ -6935,6 +6947,63 @@ __attribute__((target("avx2"))) inline void Simulation::consult_lanes(const Mate
     auto one_point = [&](long r, Stress s) { consult_one<Own>(mc, r, s, a); };
     q = detail::lanes::consult<Own>(mc, q, qend, consult_arrays(a), [&](int g) { return groups_[std::size_t(g)].vol0; }, one_point);
     for (; q < qend; ++q) one_point(q, Stress{a.sxx[q], a.syy[q], a.sxy[q], a.szz[q]});
+}
+#endif
+
+#if LPFDM_WIDE
+namespace detail {
+// square_overlap of four points along one axis, in the lanes of AVX2 registers: the same
+// operations in the same order, each branch taken by a blend (a: the first cell, as a
+// double). A lane whose point lies outside the lattice gets numbers to throw away.
+__attribute__((always_inline, target("avx2"))) inline void square_overlap_lanes(const v4d& x, const v4d& l, double L, int m, v4d& a, v4d& w0, v4d& w1, v4d& c0, v4d& c1) {
+    auto pick = [](const v4m& on, const v4d& yes, const v4d& no, v4d& out) LPFDM_INLINE { out = v4d((v4m(yes) & on) | (v4m(no) & ~on)); };
+    const v4d lo = x - l, hi = x + l;
+    const v4d t = lo / L;
+    a = __builtin_ia32_cvtdq2pd256(__builtin_ia32_cvttpd2dq256(t));  // int(t)
+    pick(t < a, a - 1, a, a);                                         // floor(t)
+    const v4d edge = (a + 1) * L, one = v4d{} + 1, zero{};
+    const v4m inside = hi <= edge;
+    pick(inside, one, (edge - lo) / (hi - lo), w0);
+    pick(inside, zero, (hi - edge) / (hi - lo), w1);
+    pick(inside, x, 0.5 * (lo + edge), c0);
+    pick(inside, zero, 0.5 * (edge + hi), c1);
+    const v4m left = a < 0;  // the part left of the lattice
+    pick(left, zero, a, a); pick(left, one, w0, w0); pick(left, zero, w1, w1); pick(left, 0.5 * (0 + hi), c0, c0);
+    const v4m right = (a >= double(m - 1)) & (w1 > 0);  // right of it
+    pick(right, v4d{} + double(m - 1), a, a); pick(right, one, w0, w0); pick(right, zero, w1, w1); pick(right, 0.5 * (lo + m * L), c0, c0);
+}
+}  // namespace detail
+
+// smooth_map's first pass for points b0 .. b1-1, four at a time with AVX2: each point's
+// cell (cell_holding) and square (overlap_of) where it is now, the same numbers; a point
+// that left the lattice (or is not finite) the empty square; the last one to three by one(k).
+template <class F>
+__attribute__((target("avx2"))) inline void Simulation::squares_lanes(const long b0, const long b1, const F& one) {
+    using detail::v4d;
+    using detail::v4m;
+    const double X = mx_ * L_, Y = my_ * L_;
+    long k = b0;
+    for (; k + 4 <= b1; k += 4) {
+        v4d x, y;
+        detail::load(p_.x.data() + k, x); detail::load(p_.y.data() + k, y);
+        const std::uint16_t* g = p_.group.data() + k;
+        const v4d l = {groups_[g[0]].half, groups_[g[1]].half, groups_[g[2]].half, groups_[g[3]].half};
+        const int in = detail::lane_bits((x >= 0) & (x < X) & (y >= 0) & (y < Y));  // cell_holding's test
+        v4d ax, wx0, wx1, cx0, cx1, ay, wy0, wy1, cy0, cy1;
+        detail::square_overlap_lanes(x, l, L_, mx_, ax, wx0, wx1, cx0, cx1);
+        detail::square_overlap_lanes(y, l, L_, my_, ay, wy0, wy1, cy0, cy1);
+        const v4d u = x * invL_, v = y * invL_;
+        for (int q = 0; q < 4; ++q) {
+            const std::size_t r = std::size_t(k + q);
+            if (!(in >> q & 1)) { p_.cell[r] = -1; overlap_[r] = detail::Overlap{}; continue; }
+            p_.cell[r] = cell(std::min(mx_ - 1, int(u[q])), std::min(my_ - 1, int(v[q])));
+            detail::Overlap& o = overlap_[r];
+            o.a = int(ax[q]); o.b = int(ay[q]);
+            o.wx[0] = wx0[q]; o.wx[1] = wx1[q]; o.wy[0] = wy0[q]; o.wy[1] = wy1[q];
+            o.cx[0] = cx0[q]; o.cx[1] = cx1[q]; o.cy[0] = cy0[q]; o.cy[1] = cy1[q];
+        }
+    }
+    for (; k < b1; ++k) one(std::size_t(k));
 }
 #endif
 
