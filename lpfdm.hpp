@@ -1406,6 +1406,14 @@ private:
     // kinetic energy (leapfrog).
     std::vector<double> flip_mass_, flip_ax_, flip_ay_, flip_sx_, flip_sy_;
     std::vector<double> flip_gx_, flip_gy_;  // each point's change in a step (flip_return), scratch
+    // With AVX2, flip_transfer's and flip_return's nodal sums side by side, four doubles a
+    // node (flip_sums_lanes), from a 32-byte boundary (flip_records).
+    std::vector<double> flip_rec_;
+    double* flip_records();
+    void flip_sums(const Range& nodes, const double* vx, const double* vy, double* to0, double* to1, double* to2);
+#if LPFDM_WIDE
+    __attribute__((target("avx2"))) void flip_sums_lanes(int j0, int j1, double* rec, const double* vx, const double* vy);
+#endif
     // A node direction a support held at the transfer, and the points' increment there (flip_slip).
     struct HeldStart { std::int32_t node; std::uint8_t dirs; double bx, by; };
     std::vector<HeldStart> flip_held_;
@@ -2845,7 +2853,8 @@ LPFDM_DEF double estimate_bytes(const Scene& s, double points) {
         if (uses(s, u, true)) per_point += double(sizeof(v[0]));
     });
     const double shift = s.shift ? (8 * 8 + 32 + 4) * cells : 0;  // SHIFT: four sub-cells and about four sub-nodes a cell, the guard's sums
-    return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * (per_point + 2 * 8) + shift;  // (+ the initial positions)
+    const double flip = s.advect == Advect::Flip ? (5 + 4) * 8 * nodes : 0;  // ADVECT FLIP: five arrays a node, and flip_sums' four
+    return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * (per_point + 2 * 8) + shift + flip;  // (+ the initial positions)
 }
 
 // The points the scene's clusters make (made_points): exact, or for a lattice too large to
@@ -2944,8 +2953,10 @@ inline void Simulation::setup() {
         for (auto* v : {&mean_ux_, &mean_uy_}) v->assign(nodes, 0.0);
         mean_beta_ = sc_.dt_s / sc_.damping_window;
     }
-    if (modes_.advect == Advect::Flip)
+    if (modes_.advect == Advect::Flip) {
         for (auto* v : {&flip_mass_, &flip_ax_, &flip_ay_, &flip_sx_, &flip_sy_}) v->assign(nodes, 0.0);
+        if (LPFDM_WIDE && kernel_ != Kernel::Reference) flip_rec_.assign(4 * nodes + 4, 0.0);  // (flip_sums: with AVX2)
+    }
     fixed_.assign(nodes, 0);
     driven_.assign(nodes, 0);
     for (auto* v : {&cmass_, &cvol_, &svxx_, &svyy_, &svxy_}) v->assign(cells, 0.0);
@@ -5533,6 +5544,46 @@ inline Range Simulation::flip_nodes() const {
     return reference_only() ? Range{0, mx_ + 1, 0, my_ + 1} : now.unite(live_nodes_);
 }
 
+// FLIP's sums over the points into the nodes of the box `nodes` (zeroed first): to0[n] =
+// sum_p w_np m_p vx_p, to1 the same of vy, to2 (unless null) sum_p w_np m_p, each node's
+// terms in point order (flip_weights), by threads over bands of rows. With AVX2 the three
+// go side by side (flip_sums_lanes) and are copied out after: the same terms in the same
+// order, so the same bits.
+inline void Simulation::flip_sums(const Range& nodes, const double* vx, const double* vy, double* to0, double* to1, double* to2) {
+    const std::size_t row = std::size_t(mx_ + 1);
+    auto each_node = [&](const auto& f) {
+        for (int j = nodes.j0; j < nodes.j1; ++j)
+            for (int i = nodes.i0; i < nodes.i1; ++i) f(std::size_t(j) * row + std::size_t(i));
+    };
+#if LPFDM_WIDE
+    if (wide_) {
+        double* rec = flip_records();
+        each_node([&](std::size_t n) { rec[4 * n] = rec[4 * n + 1] = rec[4 * n + 2] = rec[4 * n + 3] = 0; });
+        by_rows(my_ + 1, [&](int j0, int j1) { flip_sums_lanes(j0, j1, rec, vx, vy); });
+        each_node([&](std::size_t n) {
+            to0[n] = rec[4 * n]; to1[n] = rec[4 * n + 1];
+            if (to2) to2[n] = rec[4 * n + 2];
+        });
+        return;
+    }
+#endif
+    each_node([&](std::size_t n) { to0[n] = to1[n] = 0; if (to2) to2[n] = 0; });
+    by_rows(my_ + 1, [&](int j0, int j1) {
+        for (std::size_t k = 0; k < p_.size(); ++k) {
+            const double m = groups_[p_.group[k]].mass, ux = vx[k], uy = vy[k];
+            flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE {
+                to0[n] += w * m * ux; to1[n] += w * m * uy;
+                if (to2) to2[n] += w * m;
+            }, j0, j1);
+        }
+    });
+}
+
+inline double* Simulation::flip_records() {
+    const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(flip_rec_.data());
+    return flip_rec_.data() + (32 - at % 32) % 32 / sizeof(double);
+}
+
 // 2: b_n and M_n from the points' increments where they are now.
 inline void Simulation::flip_transfer(const Range& nodes) {
     // The supports' increments of the last step: the walls', and the fixed nodes' (0, or
@@ -5542,15 +5593,7 @@ inline void Simulation::flip_transfer(const Range& nodes) {
             flip_sx_[std::size_t(u)] = dux_[std::size_t(u)];
             flip_sy_[std::size_t(u)] = duy_[std::size_t(u)];
         }
-    zero_rows(nodes, mx_ + 1, {&dux_, &duy_, &flip_mass_});
-    by_rows(my_ + 1, [&](int j0, int j1) {
-        for (std::size_t k = 0; k < p_.size(); ++k) {
-            const double m = groups_[p_.group[k]].mass, ux = p_.flip_ux[k], uy = p_.flip_uy[k];
-            flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE {
-                dux_[n] += w * m * ux; duy_[n] += w * m * uy; flip_mass_[n] += w * m;
-            }, j0, j1);
-        }
-    });
+    flip_sums(nodes, p_.flip_ux.data(), p_.flip_uy.data(), dux_.data(), duy_.data(), flip_mass_.data());
     for (int j = nodes.j0; j < nodes.j1; ++j)
         for (int i = nodes.i0; i < nodes.i1; ++i) {
             const std::size_t n = std::size_t(node(i, j));
@@ -5658,15 +5701,9 @@ inline void Simulation::flip_return(const Range& nodes) {
             if ((held & kFixY) && flip_mass_[n] > 0) flip_ay_[n] = duy_[n] - duy_old_[n];
         }
     flip_slip();
-    zero_rows(nodes, mx_ + 1, {&flip_sx_, &flip_sy_});
     double *gx = flip_gx_.data(), *gy = flip_gy_.data(), kinetic = 0;
     each_point([&](std::size_t k) { flip_point_change(k, gx[k], gy[k]); });
-    by_rows(my_ + 1, [&](int j0, int j1) {  // the points' shares of what the lattice gets back
-        for (std::size_t k = 0; k < p_.size(); ++k) {
-            const double m = groups_[p_.group[k]].mass;
-            flip_weights(k, [&](std::size_t n, double w) LPFDM_INLINE { flip_sx_[n] += w * m * gx[k]; flip_sy_[n] += w * m * gy[k]; }, j0, j1);
-        }
-    });
+    flip_sums(nodes, gx, gy, flip_sx_.data(), flip_sy_.data(), nullptr);  // the points' shares of what the lattice gets back
     for (std::size_t k = 0; k < p_.size(); ++k) kinetic += flip_point_return(k, gx[k], gy[k]);
     flip_kinetic_ = kinetic / dt2;
     for (int j = nodes.j0; j < nodes.j1; ++j)
@@ -7004,6 +7041,26 @@ __attribute__((target("avx2"))) inline void Simulation::squares_lanes(const long
         }
     }
     for (; k < b1; ++k) one(std::size_t(k));
+}
+#endif
+
+#if LPFDM_WIDE
+// flip_sums' band j0 .. j1-1 with AVX2: rec[4 n + q] += (w m) v[q], v = (vx, vy, 1, 0) of
+// the point, w flip_weights' at each node in its order: a node's three sums in one
+// register, one add where the one-value loop makes three, each lane the same operations.
+__attribute__((target("avx2"))) inline void Simulation::flip_sums_lanes(const int j0, const int j1, double* rec, const double* vx, const double* vy) {
+    using detail::v4d;
+    for (std::size_t k = 0, n = p_.size(); k < n; ++k) {
+        const double m = groups_[p_.group[k]].mass;
+        const v4d v = {vx[k], vy[k], 1.0, 0.0};
+        flip_weights(k, [&](std::size_t u, double w) LPFDM_INLINE {
+            double* r = rec + 4 * u;
+            v4d sum;
+            detail::load(r, sum);
+            sum += w * m * v;
+            detail::store(r, sum);
+        }, j0, j1);
+    }
 }
 #endif
 
