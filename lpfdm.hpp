@@ -1226,6 +1226,12 @@ private:
     template <Smear S> void smear_point(const detail::Overlap& o, double m, double v, double sxx, double syy, double sxy, int j0, int j1, Landing& t);
     template <Smear S> void smear_points(Landing& t);
     std::vector<long> row_points_;  // by_rows' share of rows between threads
+    // With AVX2, smear_points' nine sums of a cell side by side, twelve doubles a cell from a
+    // 32-byte boundary, zero between the passes (smear_lanes).
+    std::vector<double> cell_rec_;
+#if LPFDM_WIDE
+    template <Smear S> __attribute__((target("avx2"))) void smear_lanes(int j0, int j1, Landing& t);
+#endif
     template <class F> void by_rows(int n, const F& f) { by_rows(n, row_points_, f); }
     template <class F> void by_rows(int n, const std::vector<long>& counts, const F& f);
     // A thread's share of the threaded point pass (advance_parted): the cells own_lo ..
@@ -2854,7 +2860,8 @@ LPFDM_DEF double estimate_bytes(const Scene& s, double points) {
     });
     const double shift = s.shift ? (8 * 8 + 32 + 4) * cells : 0;  // SHIFT: four sub-cells and about four sub-nodes a cell, the guard's sums
     const double flip = s.advect == Advect::Flip ? (5 + 4) * 8 * nodes : 0;  // ADVECT FLIP: five arrays a node, and flip_sums' four
-    return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * (per_point + 2 * 8) + shift + flip;  // (+ the initial positions)
+    const double smooth = s.mapping == Mapping::Smooth ? 12 * 8 * cells : 0;   // MAPPING SMOOTH: smear_lanes' twelve a cell
+    return cells * (5 * 8 + 6 * 8) + nodes * (6 * 8 + 1) + points * (per_point + 2 * 8) + shift + flip + smooth;  // (+ the initial positions)
 }
 
 // The points the scene's clusters make (made_points): exact, or for a lattice too large to
@@ -3034,6 +3041,7 @@ inline void Simulation::setup() {
     if (sc_.geostatic) geostatic();
     if (modes_.mapping == Mapping::Smooth) {  // the step's scratch: the points never grow in number
         overlap_.assign(p_.size(), {});
+        if (LPFDM_WIDE && kernel_ != Kernel::Reference) cell_rec_.assign(12 * std::size_t(mx_) * std::size_t(my_) + 4, 0.0);  // (smear_lanes)
         row_points_.assign(std::size_t(my_) + 1, 0);
     }
     if (modes_.advect == Advect::Flip) {
@@ -5308,6 +5316,9 @@ inline void Simulation::smooth_map(Landing& t) {
 template <Simulation::Smear S> inline void Simulation::smear_points(Landing& t) {
     const bool flip = modes_.advect == Advect::Flip;
     auto rows = [&](int j0, int j1, Landing& u) {
+#if LPFDM_WIDE
+        if (wide_) { smear_lanes<S>(j0, j1, u); return; }
+#endif
         for (std::size_t k = 0; k < p_.size(); ++k) {
             const detail::Overlap& o = overlap_[k];
             if (o.b >= j1 || o.b + 1 < j0) continue;  // its square's rows are b and b + 1
@@ -7060,6 +7071,73 @@ __attribute__((target("avx2"))) inline void Simulation::flip_sums_lanes(const in
             sum += w * m * v;
             detail::store(r, sum);
         }, j0, j1);
+    }
+}
+#endif
+
+#if LPFDM_WIDE
+// smear_points' rows j0 .. j1-1 with AVX2: smear_point's terms for each part of each
+// point's square, the same operations in the same order, added to the part's cell's sums
+// side by side (cell_rec_: mass, V, V sxx, V syy | V sxy, the moments shx, shy, the
+// centroid's u | its v), two registers and one double a part where the one-value loop
+// makes nine adds; then the band's cells copied out to the arrays and their records
+// zeroed. The arrays hold zeros in every cell a pass adds to (clear_cells, and for ADVECT
+// FLIP's second mapping flip_second_half's zero_rows), so each takes the same terms in
+// the same order from the same zero: the same bits.
+template <Simulation::Smear S>
+__attribute__((target("avx2"))) inline void Simulation::smear_lanes(const int j0, const int j1, Landing& t) {
+    using detail::v4d;
+    using detail::v4m;
+    constexpr bool kMass = S != Smear::Stress, kStress = S != Smear::Mass;
+    // the lanes this pass adds to: of the first register (m, V, V sxx, V syy) and the second
+    constexpr v4m first = {kMass ? -1LL : 0, -1LL, kStress ? -1LL : 0, kStress ? -1LL : 0};
+    constexpr v4m second = {kStress ? -1LL : 0, kStress ? -1LL : 0, kStress ? -1LL : 0, -1LL};
+    const std::uintptr_t base = reinterpret_cast<std::uintptr_t>(cell_rec_.data());
+    double* rec = cell_rec_.data() + (32 - base % 32) % 32 / sizeof(double);
+    const bool flip = modes_.advect == Advect::Flip;
+    int lo = std::numeric_limits<int>::max(), hi = -1;  // the cells this band added to, and their columns
+    int imin = std::numeric_limits<int>::max(), imax = -1;  // (locals: through t they went to memory and back a part)
+    for (std::size_t k = 0, n = p_.size(); k < n; ++k) {
+        const detail::Overlap& o = overlap_[k];
+        if (o.b >= j1 || o.b + 1 < j0) continue;  // its square's rows are b and b + 1
+        const Group& g = groups_[p_.group[k]];
+        const double v = std::min(p_.vol[k], g.vol0), m = g.mass;
+        double sxx = 0, syy = 0, sxy = 0;
+        if constexpr (kStress) {
+            const double r = flip && v > 0 ? g.vol0 / v : 1.0;  // as smear_points
+            sxx = r * p_.sxx[k]; syy = r * p_.syy[k]; sxy = r * p_.sxy[k];
+        }
+        const double p = 0.5 * (sxx + syy);
+        each_part(o, [&](int ci, int cj, double px, double py, double w) LPFDM_INLINE {
+            if (cj < j0 || cj >= j1) return;
+            const int c = cell(ci, cj);
+            const double ru = (px - ci * L_) * invL_ - 0.5, rv = (py - cj * L_) * invL_ - 0.5;
+            const double wv = w * v;
+            lo = std::min(lo, c); hi = std::max(hi, c);
+            imin = std::min(imin, ci); imax = std::max(imax, ci);
+            double* r = rec + 12 * std::size_t(c);
+            v4d a, b;
+            detail::load(r, a); detail::load(r + 4, b);
+            const v4d ta = v4d{w, wv, wv, wv} * v4d{m, 1.0, sxx, syy};  // w m, V, V sxx, V syy
+            const v4d tb = wv * v4d{sxy, (sxx - p) * rv + sxy * ru, sxy * rv + (syy - p) * ru, ru};
+            const v4d na = a + ta, nb = b + tb;
+            a = v4d((v4m(na) & first) | (v4m(a) & ~first));
+            b = v4d((v4m(nb) & second) | (v4m(b) & ~second));
+            detail::store(r, a); detail::store(r + 4, b);
+            r[8] += wv * rv;
+        });
+    }
+    if constexpr (S != Smear::Stress) {  // smear_point's box
+        t.cmin = std::min(t.cmin, lo); t.cmax = std::max(t.cmax, hi);
+        t.imin = std::min(t.imin, imin); t.imax = std::max(t.imax, imax);
+    }
+    double* const to[9] = {cmass_.data(), cvol_.data(), svxx_.data(), svyy_.data(), svxy_.data(), shx_.data(), shy_.data(), smu_.data(), smv_.data()};
+    constexpr bool adds[9] = {kMass, true, kStress, kStress, kStress, kStress, kStress, true, true};
+    for (int c = lo; c <= hi; ++c) {
+        double* r = rec + 12 * std::size_t(c);
+        for (int q = 0; q < 9; ++q)
+            if (adds[q]) to[q][c] = r[q];
+        for (int q = 0; q < 12; ++q) r[q] = 0;
     }
 }
 #endif
