@@ -7007,7 +7007,7 @@ __attribute__((always_inline, target("avx2"))) inline void square_overlap_lanes(
     auto pick = [](const v4m& on, const v4d& yes, const v4d& no, v4d& out) LPFDM_INLINE { out = v4d((v4m(yes) & on) | (v4m(no) & ~on)); };
     const v4d lo = x - l, hi = x + l;
     const v4d t = lo / L;
-    a = __builtin_ia32_cvtdq2pd256(__builtin_ia32_cvttpd2dq256(t));  // int(t)
+    a = __builtin_convertvector(v4i(__builtin_ia32_cvttpd2dq256(t)), v4d);  // int(t)
     pick(t < a, a - 1, a, a);                                         // floor(t)
     const v4d edge = (a + 1) * L, one = v4d{} + 1, zero{};
     const v4m inside = hi <= edge;
