@@ -7095,7 +7095,7 @@ __attribute__((target("avx2"))) inline void Simulation::smear_lanes(const int j0
     const std::uintptr_t base = reinterpret_cast<std::uintptr_t>(cell_rec_.data());
     double* rec = cell_rec_.data() + (32 - base % 32) % 32 / sizeof(double);
     const bool flip = modes_.advect == Advect::Flip;
-    int lo = std::numeric_limits<int>::max(), hi = -1;  // the cells this band added to, and their columns
+    int lo = std::numeric_limits<int>::max(), hi = -1;  // the first and last cell this band added to, and their columns
     int imin = std::numeric_limits<int>::max(), imax = -1;  // (locals: through t they went to memory and back a part)
     for (std::size_t k = 0, n = p_.size(); k < n; ++k) {
         const detail::Overlap& o = overlap_[k];
@@ -7133,12 +7133,14 @@ __attribute__((target("avx2"))) inline void Simulation::smear_lanes(const int j0
     }
     double* const to[9] = {cmass_.data(), cvol_.data(), svxx_.data(), svyy_.data(), svxy_.data(), shx_.data(), shy_.data(), smu_.data(), smv_.data()};
     constexpr bool adds[9] = {kMass, true, kStress, kStress, kStress, kStress, kStress, true, true};
-    for (int c = lo; c <= hi; ++c) {
-        double* r = rec + 12 * std::size_t(c);
-        for (int q = 0; q < 9; ++q)
-            if (adds[q]) to[q][c] = r[q];
-        for (int q = 0; q < 12; ++q) r[q] = 0;
-    }
+    if (hi < 0) return;
+    for (int j = lo / mx_; j <= hi / mx_; ++j)  // the box of the cells touched, row by row
+        for (int c = cell(imin, j); c <= cell(imax, j); ++c) {
+            double* r = rec + 12 * std::size_t(c);
+            for (int q = 0; q < 9; ++q)
+                if (adds[q]) to[q][c] = r[q];
+            for (int q = 0; q < 12; ++q) r[q] = 0;
+        }
 }
 #endif
 
