@@ -5000,9 +5000,10 @@ inline void Simulation::nodal_kinetic(const Range& nodes) {
 //   within 2.8 % at every sample (the paper's mapping: spikes of 16 % each time the cap's
 //   points cross the wall's line of nodes). The fast kernel runs the same per-point code
 //   (smooth_move) by threads, with AVX2 four points at a time (smooth_lanes: the strain,
-//   eq. 6's trial and the motion; the Mohr-Coulomb consult after, each_point_consulted),
-//   and adds eq. 7, 8 by threads over bands of cell rows (smear_points), one point at a
-//   time: 3-7 times the paper's cost per particle-step on one thread
+//   eq. 6's trial and the motion; the Mohr-Coulomb consult after, each_point_consulted;
+//   squares_lanes: the cells and squares after the move), and adds eq. 7, 8 by threads
+//   over bands of cell rows (smear_points; with AVX2 a cell's nine sums side by side,
+//   smear_lanes): 2.8-6 times the paper's cost per particle-step on one thread
 //   (tools/README.md), with limit loads no closer (the footing's +17 % at 4 cells under it,
 //   against +10 %: its stiff points share the soil's cells at its edges), which is why
 //   it is not the default.
