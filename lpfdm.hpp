@@ -2928,7 +2928,7 @@ LPFDM_DEF Modes modes_of(const Scene& s, Kernel asked) {
     // The AVX2 point loop follows the default modes only (choose_point_loop); MAPPING
     // SMOOTH's has lanes of its own (smooth_lanes).
     if (m.kernel == Kernel::Fast)
-        m.points_why = m.mapping == Mapping::Smooth && m.motion == Motion::Bilinear ? "MAPPING SMOOTH: its strain, stress and motion four at a time, its sums one at a time"
+        m.points_why = m.mapping == Mapping::Smooth && m.motion == Motion::Bilinear ? "MAPPING SMOOTH: its sums a point at a time (a cell's side by side), the rest four points at a time"
                        : m.mapping == Mapping::Smooth ? "MAPPING SMOOTH with MOTION PAPER or CENTRE: AVX2 for the Mohr-Coulomb consult only"
                        : m.advect == Advect::Points ? "ADVECT POINTS has no AVX2 point loop"
                        : m.motion == Motion::Paper  ? "MOTION PAPER has no AVX2 point loop"
