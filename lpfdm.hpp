@@ -120,10 +120,10 @@
 #define LPFDM_INLINE
 #endif
 // LPFDM_WIDE: on x86-64 with GCC or Clang, the point loop (with the paper's motion rule;
-// MAPPING SMOOTH's strain, stress and motion) and the regular lattice phases (eq. 5, the
-// nodal forces, eq. 13-14) have a second version built for AVX2, taken when the processor
-// has it: four points, cells or nodes per register instead of one or two, the same
-// numbers bit for bit. Define LPFDM_NO_WIDE to
+// MAPPING SMOOTH's and ADVECT FLIP's passes over the points and their sums) and the regular
+// lattice phases (eq. 5, the nodal forces, eq. 13-14) have a second version built for
+// AVX2, taken when the processor has it: four points, cells or nodes per register instead
+// of one or two, the same numbers bit for bit. Define LPFDM_NO_WIDE to
 // leave it out. A build with fused multiply-add (-mfma, -march=native, x86-64-v3) leaves
 // it out too: the compiler fuses a*b - c*d on either product, not always alike in the two
 // versions, so they would no longer agree bit for bit. So does a build for AVX-512
@@ -962,7 +962,8 @@ public:
     static const char* phase_name(int k);
     void set_profiling(bool on) { profiling_ = on; }                 // time each phase from now on
     // The AVX2 version of the point loop (with the paper's motion rule; MAPPING SMOOTH's
-    // strain, stress and motion) and of the regular lattice phases: used when built in (LPFDM_WIDE) and the processor has AVX2;
+    // and ADVECT FLIP's passes) and of the regular lattice phases: used when built in
+    // (LPFDM_WIDE) and the processor has AVX2;
     // set_wide(false) takes the one-at-a-time loops (the same numbers, bit for bit).
     static bool have_wide();
     void set_wide(bool on);
@@ -1227,7 +1228,7 @@ private:
     template <Smear S> void smear_points(Landing& t);
     std::vector<long> row_points_;  // by_rows' share of rows between threads
     // With AVX2, smear_points' nine sums of a cell side by side, twelve doubles a cell from a
-    // 32-byte boundary, zero between the passes (smear_lanes).
+    // 32-byte boundary (detail::aligned32), zero between the passes (smear_lanes).
     std::vector<double> cell_rec_;
 #if LPFDM_WIDE
     template <Smear S> __attribute__((target("avx2"))) void smear_lanes(int j0, int j1, Landing& t);
@@ -1413,9 +1414,8 @@ private:
     std::vector<double> flip_mass_, flip_ax_, flip_ay_, flip_sx_, flip_sy_;
     std::vector<double> flip_gx_, flip_gy_;  // each point's change in a step (flip_return), scratch
     // With AVX2, flip_transfer's and flip_return's nodal sums side by side, four doubles a
-    // node (flip_sums_lanes), from a 32-byte boundary (flip_records).
+    // node (flip_sums_lanes), from a 32-byte boundary (detail::aligned32).
     std::vector<double> flip_rec_;
-    double* flip_records();
     void flip_sums(const Range& nodes, const double* vx, const double* vy, double* to0, double* to1, double* to2);
 #if LPFDM_WIDE
     __attribute__((target("avx2"))) void flip_sums_lanes(int j0, int j1, double* rec, const double* vx, const double* vy);
@@ -5556,6 +5556,15 @@ inline Range Simulation::flip_nodes() const {
     return reference_only() ? Range{0, mx_ + 1, 0, my_ + 1} : now.unite(live_nodes_);
 }
 
+namespace detail {
+// The first double of v at a 32-byte boundary (v holds four more than its records need):
+// records of four doubles then lie in one AVX2 register's load, never across a cache line.
+inline double* aligned32(std::vector<double>& v) {
+    const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(v.data());
+    return v.data() + (32 - at % 32) % 32 / sizeof(double);
+}
+}  // namespace detail
+
 // FLIP's sums over the points into the nodes of the box `nodes` (zeroed first): to0[n] =
 // sum_p w_np m_p vx_p, to1 the same of vy, to2 (unless null) sum_p w_np m_p, each node's
 // terms in point order (flip_weights), by threads over bands of rows. With AVX2 the three
@@ -5569,7 +5578,7 @@ inline void Simulation::flip_sums(const Range& nodes, const double* vx, const do
     };
 #if LPFDM_WIDE
     if (wide_) {
-        double* rec = flip_records();
+        double* rec = detail::aligned32(flip_rec_);
         each_node([&](std::size_t n) { rec[4 * n] = rec[4 * n + 1] = rec[4 * n + 2] = rec[4 * n + 3] = 0; });
         by_rows(my_ + 1, [&](int j0, int j1) { flip_sums_lanes(j0, j1, rec, vx, vy); });
         each_node([&](std::size_t n) {
@@ -5589,11 +5598,6 @@ inline void Simulation::flip_sums(const Range& nodes, const double* vx, const do
             }, j0, j1);
         }
     });
-}
-
-inline double* Simulation::flip_records() {
-    const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(flip_rec_.data());
-    return flip_rec_.data() + (32 - at % 32) % 32 / sizeof(double);
 }
 
 // 2: b_n and M_n from the points' increments where they are now.
@@ -7093,8 +7097,7 @@ __attribute__((target("avx2"))) inline void Simulation::smear_lanes(const int j0
     // the lanes this pass adds to: of the first register (m, V, V sxx, V syy) and the second
     constexpr v4m first = {kMass ? -1LL : 0, -1LL, kStress ? -1LL : 0, kStress ? -1LL : 0};
     constexpr v4m second = {kStress ? -1LL : 0, kStress ? -1LL : 0, kStress ? -1LL : 0, -1LL};
-    const std::uintptr_t base = reinterpret_cast<std::uintptr_t>(cell_rec_.data());
-    double* rec = cell_rec_.data() + (32 - base % 32) % 32 / sizeof(double);
+    double* rec = detail::aligned32(cell_rec_);
     const bool flip = modes_.advect == Advect::Flip;
     int lo = std::numeric_limits<int>::max(), hi = -1;  // the first and last cell this band added to, and their columns
     int imin = std::numeric_limits<int>::max(), imax = -1;  // (locals: through t they went to memory and back a part)
