@@ -1914,11 +1914,42 @@ namespace detail {
 // w, centres c: square_overlap) weighs node a + n by S[n], the mean over the square of the
 // node's linear shape function (GIMP's weight): the sum over the parts of w times the
 // shape function at the part's centre. S[2] is 0 where the square lies in cell a alone.
-inline void axis_shape(int a, const double w[2], const double c[2], double L, double invL, double S[3]) {
-    const double u0 = (c[0] - a * L) * invL, u1 = (c[1] - (a + 1) * L) * invL;  // the parts' centres in their cells
+// T: one value, or the lanes of a vector (four squares; smooth_lanes): a = a L and a1 =
+// (a + 1) L, the two cells' left edges.
+template <class T>
+LPFDM_INLINE inline void axis_shape(const T& a, const T& a1, const T w[2], const T c[2], double invL, T S[3]) {
+    const T u0 = (c[0] - a) * invL, u1 = (c[1] - a1) * invL;  // the parts' centres in their cells
     S[0] = w[0] * (1 - u0);
     S[1] = w[0] * u0 + w[1] * (1 - u1);
     S[2] = w[1] * u1;
+}
+inline void axis_shape(int a, const double w[2], const double c[2], double L, double invL, double S[3]) {
+    axis_shape(a * L, (a + 1) * L, w, c, invL, S);
+}
+// MAPPING SMOOTH's strain of a square (smooth_strain): ux[m][n], uy[m][n] the increments of
+// node a + n of row b + m, sx and sy axis_shape's weights, wx and wy the square's fractions
+// in its two cells along each axis. Along each row the mean of ux, uy over the square's x
+// (xs, ys) and of their gradients along x (xd, yd, a cell's difference over L being its
+// field's gradient); across the rows the mean of those (eq. 5a's d(ux)/dx, eq. 5d's d(uy)/dx,
+// and the motion) and their gradient along y (eq. 5b's d(uy)/dy, eq. 5c's d(ux)/dy). T: one
+// value, or the lanes of a vector (four squares; smooth_lanes).
+template <class T>
+LPFDM_INLINE inline void mean_over(const T s[3], const T f[3], T& out) { out = s[0] * f[0] + s[1] * f[1] + s[2] * f[2]; }
+template <class T>
+LPFDM_INLINE inline void slope_over(const T w[2], const T f[3], double invL, T& out) { out = (w[0] * (f[1] - f[0]) + w[1] * (f[2] - f[1])) * invL; }
+template <class T>
+LPFDM_INLINE inline void square_strain(const T sx[3], const T sy[3], const T wx[2], const T wy[2], const T ux[3][3], const T uy[3][3], double invL,
+                                       T& exx, T& eyy, T& exy, T& eyx, T& dx, T& dy) {
+    T xs[3], xd[3], ys[3], yd[3];
+    for (int m = 0; m < 3; ++m) {
+        mean_over(sx, ux[m], xs[m]); mean_over(sx, uy[m], ys[m]);
+        slope_over(wx, ux[m], invL, xd[m]); slope_over(wx, uy[m], invL, yd[m]);
+    }
+    mean_over(sy, xd, exx);          // eq. 5a's d(ux)/dx
+    slope_over(wy, ys, invL, eyy);   // eq. 5b's d(uy)/dy
+    slope_over(wy, xs, invL, exy);   // eq. 5c's d(ux)/dy
+    mean_over(sy, yd, eyx);          // eq. 5d's d(uy)/dx
+    mean_over(sy, xs, dx); mean_over(sy, ys, dy);  // the mean increment (MOTION BILINEAR)
 }
 }  // namespace detail
 
@@ -5067,24 +5098,16 @@ inline StrainIncrement Simulation::smooth_strain(const detail::Overlap& o, bool 
     // Nodes a .. a + 2 of rows b .. b + 2 (past the lattice's edge a node of weight 0: the
     // square lies in cell a alone, and a node inside is read in its place).
     const int i0 = o.a, i1 = o.a + 1, i2 = std::min(o.a + 2, mx_);
-    double xs[3], xd[3], ys[3], yd[3];  // along each row: the mean of ux, uy over the square's x, and their differences
+    double ux[3][3], uy[3][3];
     for (int m = 0; m < 3; ++m) {
-        const int n = std::min(o.b + m, my_) * (mx_ + 1);
-        const double u0 = dux_[std::size_t(n + i0)], u1 = dux_[std::size_t(n + i1)], u2 = dux_[std::size_t(n + i2)];
-        const double v0 = duy_[std::size_t(n + i0)], v1 = duy_[std::size_t(n + i1)], v2 = duy_[std::size_t(n + i2)];
-        xs[m] = sx[0] * u0 + sx[1] * u1 + sx[2] * u2;
-        ys[m] = sx[0] * v0 + sx[1] * v1 + sx[2] * v2;
-        xd[m] = (o.wx[0] * (u1 - u0) + o.wx[1] * (u2 - u1)) * invL_;
-        yd[m] = (o.wx[0] * (v1 - v0) + o.wx[1] * (v2 - v1)) * invL_;
+        const std::size_t n = std::size_t(std::min(o.b + m, my_) * (mx_ + 1));
+        ux[m][0] = dux_[n + std::size_t(i0)]; ux[m][1] = dux_[n + std::size_t(i1)]; ux[m][2] = dux_[n + std::size_t(i2)];
+        uy[m][0] = duy_[n + std::size_t(i0)]; uy[m][1] = duy_[n + std::size_t(i1)]; uy[m][2] = duy_[n + std::size_t(i2)];
     }
-    auto mean = [&](const double f[3]) { return sy[0] * f[0] + sy[1] * f[1] + sy[2] * f[2]; };
-    auto across = [&](const double f[3]) { return (o.wy[0] * (f[1] - f[0]) + o.wy[1] * (f[2] - f[1])) * invL_; };
     StrainIncrement e;
-    e.xx = mean(xd);    // eq. 5a's d(ux)/dx
-    e.yy = across(ys);  // eq. 5b's d(uy)/dy
-    e.xy = across(xs);  // eq. 5c's d(ux)/dy
-    e.yx = mean(yd);    // eq. 5d's d(uy)/dx
-    if (motion) { dx = mean(xs); dy = mean(ys); }
+    double mdx, mdy;
+    detail::square_strain(sx, sy, o.wx, o.wy, ux, uy, invL_, e.xx, e.yy, e.xy, e.yx, mdx, mdy);
+    if (motion) { dx = mdx; dy = mdy; }
     double trace = 0;  // B-bar: the parts' mean of the traces at their cells' centroids
     each_part(o, [&](int ci, int cj, double, double, double w) LPFDM_INLINE { trace += w * centroid_trace_[std::size_t(cell(ci, cj))]; });
     const double half_change = 0.5 * (trace - (e.xx + e.yy));
@@ -7124,9 +7147,8 @@ __attribute__((target("avx2"))) inline void Simulation::smear_lanes(const int j0
             detail::load(r, a); detail::load(r + 4, b);
             const v4d ta = v4d{w, wv, wv, wv} * v4d{m, 1.0, sxx, syy};  // w m, V, V sxx, V syy
             const v4d tb = wv * v4d{sxy, (sxx - p) * rv + sxy * ru, sxy * rv + (syy - p) * ru, ru};
-            const v4d na = a + ta, nb = b + tb;
-            a = v4d((v4m(na) & first) | (v4m(a) & ~first));
-            b = v4d((v4m(nb) & second) | (v4m(b) & ~second));
+            a = first ? v4d(a + ta) : a;
+            b = second ? v4d(b + tb) : b;
             detail::store(r, a); detail::store(r + 4, b);
             r[8] += wv * rv;
         });
@@ -7183,10 +7205,10 @@ __attribute__((target("avx2"))) inline void Simulation::smooth_lanes(const long 
         // loads at once (values written lane by lane into a vector would go through memory).
         const detail::Overlap* o[4] = {&overlap_[std::size_t(k)], &overlap_[std::size_t(k + 1)], &overlap_[std::size_t(k + 2)], &overlap_[std::size_t(k + 3)]};
         const detail::Overlap &o0 = *o[0], &o1 = *o[1], &o2 = *o[2], &o3 = *o[3];
-        const v4d wx0 = {o0.wx[0], o1.wx[0], o2.wx[0], o3.wx[0]}, wx1 = {o0.wx[1], o1.wx[1], o2.wx[1], o3.wx[1]};
-        const v4d wy0 = {o0.wy[0], o1.wy[0], o2.wy[0], o3.wy[0]}, wy1 = {o0.wy[1], o1.wy[1], o2.wy[1], o3.wy[1]};
-        const v4d cx0 = {o0.cx[0], o1.cx[0], o2.cx[0], o3.cx[0]}, cx1 = {o0.cx[1], o1.cx[1], o2.cx[1], o3.cx[1]};
-        const v4d cy0 = {o0.cy[0], o1.cy[0], o2.cy[0], o3.cy[0]}, cy1 = {o0.cy[1], o1.cy[1], o2.cy[1], o3.cy[1]};
+        const v4d wx[2] = {{o0.wx[0], o1.wx[0], o2.wx[0], o3.wx[0]}, {o0.wx[1], o1.wx[1], o2.wx[1], o3.wx[1]}};
+        const v4d wy[2] = {{o0.wy[0], o1.wy[0], o2.wy[0], o3.wy[0]}, {o0.wy[1], o1.wy[1], o2.wy[1], o3.wy[1]}};
+        const v4d cx[2] = {{o0.cx[0], o1.cx[0], o2.cx[0], o3.cx[0]}, {o0.cx[1], o1.cx[1], o2.cx[1], o3.cx[1]}};
+        const v4d cy[2] = {{o0.cy[0], o1.cy[0], o2.cy[0], o3.cy[0]}, {o0.cy[1], o1.cy[1], o2.cy[1], o3.cy[1]}};
         const v4d ax0 = {o0.a * L, o1.a * L, o2.a * L, o3.a * L}, ax1 = {(o0.a + 1) * L, (o1.a + 1) * L, (o2.a + 1) * L, (o3.a + 1) * L};  // axis_shape's
         const v4d ay0 = {o0.b * L, o1.b * L, o2.b * L, o3.b * L}, ay1 = {(o0.b + 1) * L, (o1.b + 1) * L, (o2.b + 1) * L, (o3.b + 1) * L};
         int at[3][3][4];  // node of row m, column c, lane l (smooth_strain's)
@@ -7206,47 +7228,33 @@ __attribute__((target("avx2"))) inline void Simulation::smooth_lanes(const long 
             }
         for (int q = 0; q < 2; ++q)
             for (int r = 0; r < 2; ++r) {
-                pw[q][r] = (r ? wx1 : wx0) * (q ? wy1 : wy0);  // each_part's w
+                pw[q][r] = wx[r] * wy[q];  // each_part's w
                 const int some = detail::lane_bits(pw[q][r] > 0);
                 int c[4];
                 for (int l = 0; l < 4; ++l) c[l] = some >> l & 1 ? cell(o[l]->a + r, o[l]->b + q) : 0;
                 pt[q][r] = v4d{ct[c[0]], ct[c[1]], ct[c[2]], ct[c[3]]};
             }
-        // axis_shape along each axis
-        const v4d u0 = (cx0 - ax0) * invL, u1 = (cx1 - ax1) * invL, v0 = (cy0 - ay0) * invL, v1 = (cy1 - ay1) * invL;
-        const v4d sx0 = wx0 * (1 - u0), sx1 = wx0 * u0 + wx1 * (1 - u1), sx2 = wx1 * u1;
-        const v4d sy0 = wy0 * (1 - v0), sy1 = wy0 * v0 + wy1 * (1 - v1), sy2 = wy1 * v1;
-        // smooth_strain
-        v4d xs[3], xd[3], ys[3], yd[3];
-        for (int m = 0; m < 3; ++m) {
-            const v4d *a = nu[m], *b = nv[m];
-            xs[m] = sx0 * a[0] + sx1 * a[1] + sx2 * a[2];
-            ys[m] = sx0 * b[0] + sx1 * b[1] + sx2 * b[2];
-            xd[m] = (wx0 * (a[1] - a[0]) + wx1 * (a[2] - a[1])) * invL;
-            yd[m] = (wx0 * (b[1] - b[0]) + wx1 * (b[2] - b[1])) * invL;
-        }
-        // (out through a reference: see smear_weight)
-        auto mean = [&](const v4d f[3], v4d& out) LPFDM_INLINE { out = sy0 * f[0] + sy1 * f[1] + sy2 * f[2]; };
-        auto across = [&](const v4d f[3], v4d& out) LPFDM_INLINE { out = (wy0 * (f[1] - f[0]) + wy1 * (f[2] - f[1])) * invL; };
-        v4d exx, eyy, exy, eyx;
-        mean(xd, exx); across(ys, eyy); across(xs, exy); mean(yd, eyx);
+        v4d sx[3], sy[3];
+        detail::axis_shape(ax0, ax1, wx, cx, invL, sx);
+        detail::axis_shape(ay0, ay1, wy, cy, invL, sy);
+        v4d exx, eyy, exy, eyx, dx, dy;
+        detail::square_strain(sx, sy, wx, wy, nu, nv, invL, exx, eyy, exy, eyx, dx, dy);
         v4d trace{};
         for (int q = 0; q < 2; ++q)
             for (int r = 0; r < 2; ++r) {
                 const v4m some = pw[q][r] > 0;
-                const v4d added = trace + pw[q][r] * pt[q][r];
-                trace = v4d((v4m(added) & some) | (v4m(trace) & ~some));
+                trace = some ? v4d(trace + pw[q][r] * pt[q][r]) : trace;
             }
         const v4d half_change = 0.5 * (trace - (exx + eyy));
         exx += half_change; eyy += half_change;
         if (half) { exx *= 0.5; eyy *= 0.5; exy *= 0.5; eyx *= 0.5; }
         // smooth_stress with Trial: eq. 5f, the volume, eq. 6's elastic trial
-        const double* pp[5] = {p_.sxx.data() + k, p_.syy.data() + k, p_.sxy.data() + k, p_.szz.data() + k, p_.vol.data() + k};
         v4d rc, rs, sxx, syy, sxy, szz, vol;
         jaumann_rotation(v4d(0.5 * (eyx - exy)), rc, rs);  // eq. 5f (StrainIncrement::theta)
-        detail::load(pp[4], vol);
+        detail::load(p_.vol.data() + k, vol);
         vol *= 1 + exx + eyy;
-        detail::load(pp[0], sxx); detail::load(pp[1], syy); detail::load(pp[2], sxy); detail::load(pp[3], szz);
+        detail::load(p_.sxx.data() + k, sxx); detail::load(p_.syy.data() + k, syy);
+        detail::load(p_.sxy.data() + k, sxy); detail::load(p_.szz.data() + k, szz);
         struct { v4d xx, yy, xy, zz; } de;
         elastic_change(mc, exx, eyy, exy, eyx, de.xx, de.yy, de.xy, de.zz);
         elastic_trial(sxx, syy, sxy, szz, de, rc, rs);  // eq. 6
@@ -7256,8 +7264,6 @@ __attribute__((target("avx2"))) inline void Simulation::smooth_lanes(const long 
         if constexpr (Move) {  // MOTION BILINEAR: the mean of the increments over the square
             v4d x0, y0;
             detail::load(p_.x.data() + k, x0); detail::load(p_.y.data() + k, y0);
-            v4d dx, dy;
-            mean(xs, dx); mean(ys, dy);
             v4d x = x0 + dx, y = y0 + dy;
             for (int l = 0; l < 4; ++l) {
                 const int c = p_.cell[std::size_t(k + l)];
