@@ -13,6 +13,8 @@
 
 #include <unistd.h>
 
+#include "../lpfdm.hpp"
+
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180;  // radians per degree
@@ -44,6 +46,20 @@ inline bool small_runs() {
 // would read each other's.
 // OwnDir made is that directory, created; gone with the object.
 inline std::string own_dir(const std::string& name) { return "build/" + name + "." + std::to_string(::getpid()); }
+// The three cycles a large-deformation case runs in: the paper's mapping with eq. 12 (the
+// default), MAPPING SMOOTH with eq. 12, and MAPPING SMOOTH with ADVECT FLIP.
+struct Cycle {
+    lpfdm::Mapping mapping;
+    lpfdm::Advect advect;
+    const char* name;
+    bool paper() const { return mapping == lpfdm::Mapping::Paper; }
+    bool flip() const { return advect == lpfdm::Advect::Flip; }
+    void apply(lpfdm::Scene& s) const { s.mapping = mapping; s.advect = advect; }
+};
+constexpr Cycle kCycles[] = {{lpfdm::Mapping::Paper, lpfdm::Advect::Eq12, "MAPPING PAPER"},
+                             {lpfdm::Mapping::Smooth, lpfdm::Advect::Eq12, "MAPPING SMOOTH"},
+                             {lpfdm::Mapping::Smooth, lpfdm::Advect::Flip, "MAPPING SMOOTH, ADVECT FLIP"}};
+
 struct OwnDir {
     std::string path;
     explicit OwnDir(const std::string& name) : path(own_dir(name)) { std::filesystem::create_directories(path); }

@@ -230,17 +230,12 @@ TEST_CASE("every verification deck and its mirror image give mirror-image result
                          Case{"decks/verify_footing.deck", true}, Case{"decks/verify_collapse.deck", false}, Case{"decks/verify_hopper.deck", false}}) {
         Scene s;
         REQUIRE(read_deck(c.deck, s).empty());
-        struct Mode {
-            Mapping mapping;
-            Advect advect;
-        };
-        for (const Mode mode : {Mode{Mapping::Paper, Advect::Eq12}, Mode{Mapping::Smooth, Advect::Eq12}, Mode{Mapping::Smooth, Advect::Flip}}) {
-            s.mapping = mode.mapping;
-            s.advect = mode.advect;
-            const bool smooth = mode.mapping == Mapping::Smooth, flip = mode.advect == Advect::Flip;
+        for (const Cycle& cycle : kCycles) {
+            cycle.apply(s);
+            const bool smooth = !cycle.paper(), flip = cycle.flip();
             const bool mixing = smooth && std::string(c.deck) == "decks/verify_hopper.deck";
             const MirrorDefect d = mirror_run(s);
-            const std::string name = std::string(c.deck) + (flip ? " (MAPPING SMOOTH, ADVECT FLIP)" : smooth ? " (MAPPING SMOOTH)" : "");
+            const std::string name = std::string(c.deck) + " (" + cycle.name + ")";
             MESSAGE(name << ": points moved up to " << d.travel << " L; mirror defect: position " << d.position << " L, stress " << d.stress
                          << " of the largest (neighbours differ by " << d.scatter << "), histories " << d.global << "; unmatched points " << d.unmatched);
             if (mixing) CHECK(double(d.unmatched) <= 1e-3 * count_points(s));

@@ -181,7 +181,7 @@ TEST_CASE("trapdoor: mass inside + outflow == initial at every step, outflow gro
 //   free in y and the sand beside it falls out of the lattice; the deck draws a warning
 //   naming the edge and the column of cells.
 // With both mappings.
-TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K0's thrust within 3 %, no point parked, with either mapping [slow]") {
+TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K0's thrust within 3 %, no point parked, in each cycle [slow]") {
     auto deck = [](const char* fix, const char* wall) {
         return std::string("GRID 40 24 0.25\n"
                            "MATERIAL 1 MOHR E=2E7 NU=0.3 RHO=2000 PHI=30 C=0\n"
@@ -189,11 +189,12 @@ TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K
                fix + "\nFIX X 10 0 10 6\n" + wall + "\nGRAVITY 0 -9.81\nDAMPING 0.8\nSTEP 1E-3 3000\n";
     };
     for (const char* wall : {"WALL 1 2 0 2 4 0 0 SMOOTH", "WALL 1 2 0.01 2 4 0 0 SMOOTH"})
-        for (const Mapping mapping : {Mapping::Paper, Mapping::Smooth}) {
+        for (const Cycle& cycle : kCycles) {
             Scene s;
             REQUIRE(read_deck_text(deck("FIX Y 0 0 10 0", wall), "smooth_wall.deck", s).empty());
             CHECK(warnings(s).empty());
-            s.mapping = mapping;
+            cycle.apply(s);
+            const Mapping mapping = s.mapping;
             Simulation sim(s);
             std::vector<int> made(std::size_t(s.mx * s.my), 0), now(made.size(), 0);
             for (const std::int32_t c : sim.points().cell) ++made[std::size_t(c)];
@@ -202,12 +203,12 @@ TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K
             for (long n = 0; n < steps; ++n) sim.step();
             for (const std::int32_t c : sim.points().cell) ++now[std::size_t(c)];
             const double k0 = 0.3 / 0.7 * 2000 * 9.81 * 4 * 4 / 2;
-            MESSAGE(std::string(wall) << std::string(mapping == Mapping::Paper ? ", MAPPING PAPER" : ", MAPPING SMOOTH") << ": thrust " << sim.walls()[0].fx
+            MESSAGE(std::string(wall) << ", " << std::string(cycle.name) << ": thrust " << sim.walls()[0].fx
                     << " N/m against K0's " << k0 << ", unbalanced-force ratio " << sim.unbalanced_ratio() << ", energy_error "
                     << sim.energy().error << ", parked " << sim.parked());
             CHECK(std::fabs(sim.walls()[0].fx) == approx(k0).epsilon(0.03));
             // The paper's mapping comes to rest to round-off (3e-11 by 3 s), MAPPING SMOOTH to
-            // 8e-9 by 8 s (the thrust 1.2 % below K0's). Before the nodes beyond the sand's
+            // 8e-9 by 8 s (the thrust 1.2 % below K0's), ADVECT FLIP to 8e-13 (0.2 % below). Before the nodes beyond the sand's
             // edge took their weight from the material's position (follow_material), those
             // behind the wall's face fell for as long as the run went on: the ratio stayed at
             // 4e-5, energy_error drifted to -2.9 % by 20 s, and at 64 s the run stopped as
@@ -263,11 +264,12 @@ void retreat(Simulation& sim, long settle, long steps, double ref, double& lo, d
 // reached the base node) this wall read 1.36 of Rankine's thrust with 37 % of the energy
 // in play created. Measured (L = 0.25 m, 3 to 12 mm): 0.998-1.037 (from the first step)
 // and 1.001-1.028 (settled) of Rankine's with the paper's mapping, 0.995-0.999 and
-// 0.998-1.001 with MAPPING SMOOTH; the paper's mapping climbs to 1.04-1.06 by 20-40 mm.
-// The energy account within 1 % (measured at most 7e-4 with either mapping; with MAPPING
+// 0.998-1.001 with MAPPING SMOOTH, 0.990-0.995 either way with ADVECT FLIP; the paper's
+// mapping climbs to 1.04-1.06 by 20-40 mm. The energy account within 1 % (measured at
+// most 7e-4 in each cycle, 6e-5 with ADVECT FLIP; with MAPPING
 // SMOOTH it read -0.24 before the nodes beyond the sand's edge behind the wall took their
 // weight from the material's position, follow_material).
-TEST_CASE("a SMOOTH wall moved away from sand at 1 mm/s, from the first step and after settling: Rankine's active thrust within 5 %, with either mapping [slow]") {
+TEST_CASE("a SMOOTH wall moved away from sand at 1 mm/s, from the first step and after settling: Rankine's active thrust within 5 %, in each cycle [slow]") {
     const std::string deck = "GRID 40 24 0.25\n"
                              "MATERIAL 1 MOHR E=2E7 NU=0.3 RHO=2000 PHI=30 C=0\n"
                              "CLUSTER 1 2 0 10 4\n"
@@ -278,19 +280,19 @@ TEST_CASE("a SMOOTH wall moved away from sand at 1 mm/s, from the first step and
                              "DAMPING 0.8\n"
                              "STEP 1E-3 12000\n";
     const double rankine = 2000 * 9.81 * 4 * 4 / 2 / 3.0;
-    for (const Mapping mapping : {Mapping::Paper, Mapping::Smooth})
+    for (const Cycle& cycle : kCycles)
         for (const long settle : {0L, 3000L}) {
             Scene s;
             REQUIRE(read_deck_text(deck, "retreat.deck", s).empty());
-            s.mapping = mapping;
+            cycle.apply(s);
             Simulation sim(s);
             double lo, hi;
             retreat(sim, settle, s.steps, rankine, lo, hi);
-            MESSAGE(std::string(mapping == Mapping::Paper ? "MAPPING PAPER" : "MAPPING SMOOTH") << std::string(settle ? ", settled first" : ", from the first step")
+            MESSAGE(std::string(cycle.name) << std::string(settle ? ", settled first" : ", from the first step")
                     << ": thrust " << lo << " to " << hi << " of Rankine's from 3 to 12 mm of travel (" << -sim.walls()[0].dx * 1e3 << " mm), parked " << sim.parked()
                     << ", energy_error " << sim.energy().error << ", packing " << sim.packing());
             CHECK(-sim.walls()[0].dx == approx(0.012).epsilon(1e-9));
-            CHECK(sim.packing() <= (mapping == Mapping::Paper ? 1.0 : 1.05));  // (SMOOTH's squares overlap: 1.017)
+            CHECK(sim.packing() <= (cycle.paper() ? 1.0 : 1.05));  // (SMOOTH's squares overlap: 1.017)
             CHECK(lo > 0.95);
             CHECK(hi < 1.05);
             CHECK(sim.parked() == 0);
@@ -302,7 +304,7 @@ TEST_CASE("a SMOOTH wall moved away from sand at 1 mm/s, from the first step and
 // The same sand behind a rough wall (bonded: it drives x and y of its nodes, so the sand
 // beside it shears at its own friction, delta = phi), moved away at 1 mm/s from the first
 // step and after 3 s held, read every 0.5 mm from 3 to 12 mm of travel, within 5 % at
-// every reading, with either mapping. Which thrust is the reference depends on the base:
+// every reading, in each cycle (kCycles). Which thrust is the reference depends on the base:
 // - On a rough base (FIX XY, the wall's column from the node above it) the wedge behind
 //   the wall slides on a plane through its heel, and the wall's friction holds it up:
 //   Coulomb's thrust, horizontal part K_a cos(delta) gamma H^2 / 2 with K_a cos(delta) =
@@ -320,11 +322,12 @@ TEST_CASE("a SMOOTH wall moved away from sand at 1 mm/s, from the first step and
 //   wall's box from 1 cm above the base (its column reaches the corner node, where the
 //   fixed y wins).
 // Measured (L = 0.25 m, 3 to 12 mm, from the first step and settled): rough base
-// 0.976-0.989 of Coulomb's (paper's mapping), 0.982-0.990 (SMOOTH); smooth base
-// 1.025-1.034 of Rankine's (paper's), 1.000-1.015 (SMOOTH), either writing; nothing
-// parked, |energy_error| at most 1.9e-3, the wall's vertical force 0.46-0.72 of its
+// 0.976-0.989 of Coulomb's (paper's mapping), 0.982-0.990 (SMOOTH), 0.980-0.985 (FLIP);
+// smooth base 1.025-1.034 of Rankine's (paper's), 1.000-1.015 (SMOOTH), 0.996-1.010
+// (FLIP), either writing; nothing parked, |energy_error| at most 1.9e-3 (FLIP 1.6e-4),
+// the wall's vertical force 0.46-0.72 of its
 // horizontal (the friction and the weight lumped on its nodes).
-TEST_CASE("a rough wall moved away from sand at 1 mm/s: Coulomb's thrust on a rough base, Rankine's on a smooth one, within 5 %, with either mapping [slow]") {
+TEST_CASE("a rough wall moved away from sand at 1 mm/s: Coulomb's thrust on a rough base, Rankine's on a smooth one, within 5 %, in each cycle [slow]") {
     const double gamma = 2000 * 9.81, H = 4, phi = 30 * kDeg;
     const double rankine = gamma * H * H / 6;
     const double coulomb = 0.5 * gamma * H * H * std::pow(std::cos(phi), 2) / std::pow(1 + std::sqrt(std::sin(2 * phi) * std::sin(phi) / std::cos(phi)), 2);
@@ -348,16 +351,16 @@ TEST_CASE("a rough wall moved away from sand at 1 mm/s: Coulomb's thrust on a ro
                           {"FIX Y 2.25 0 10 0", "WALL 1 2 0 2 4 -0.001 0", rankine, "smooth base (FIX Y from the next node), Rankine's", true},
                           {"FIX Y 0 0 10 0", "WALL 1 2 0.01 2 4 -0.001 0", rankine, "smooth base (the wall from 1 cm up), Rankine's", false}};
     for (const Case& c : cases)
-        for (const Mapping mapping : {Mapping::Paper, Mapping::Smooth})
+        for (const Cycle& cycle : kCycles)
             for (const long settle : {0L, 3000L}) {
                 if (settle && !c.settled_too) continue;
                 Scene s;
                 REQUIRE(read_deck_text(deck(c.base, c.wall), "rough_wall.deck", s).empty());
-                s.mapping = mapping;
+                cycle.apply(s);
                 Simulation sim(s);
                 double lo, hi;
                 retreat(sim, settle, s.steps, c.ref, lo, hi);
-                MESSAGE(std::string(c.name) << std::string(mapping == Mapping::Paper ? ", MAPPING PAPER" : ", MAPPING SMOOTH")
+                MESSAGE(std::string(c.name) << ", " << std::string(cycle.name)
                         << std::string(settle ? ", settled first" : ", from the first step") << ": thrust " << lo << " to " << hi
                         << " of it from 3 to 12 mm of travel, fy / fx " << std::fabs(sim.walls()[0].fy / sim.walls()[0].fx) << ", parked " << sim.parked()
                         << ", energy_error " << sim.energy().error << ", packing " << sim.packing());
@@ -365,7 +368,7 @@ TEST_CASE("a rough wall moved away from sand at 1 mm/s: Coulomb's thrust on a ro
                 CHECK(hi < 1.05);
                 CHECK(sim.parked() == 0);
                 CHECK(std::fabs(sim.energy().error) < 0.01);
-                CHECK(sim.packing() <= (mapping == Mapping::Paper ? 1.0 : 1.05));
+                CHECK(sim.packing() <= (cycle.paper() ? 1.0 : 1.05));
                 CHECK(sim.mass_outflow() == 0);
             }
 }
