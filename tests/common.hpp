@@ -1,4 +1,4 @@
-// Constants the unit tests share. The tests build in groups, several files to one
+// Constants and helpers the unit tests share. The tests build in groups, several files to one
 // translation unit (Makefile), so a name a file defines for itself must not be defined
 // by another file too: shared ones live here.
 #ifndef LPFDM_TESTS_COMMON_HPP
