@@ -70,13 +70,17 @@ struct ColumnResult {
     double strain = 0;         // largest strain, rho g H / M
 };
 
-ColumnResult column_at_rest(const char* deck) {
-    const Scene s = load(deck);
+ColumnResult column_at_rest(const char* deck, const Cycle& cycle = kCycles[0]) {
+    Scene s = load(deck);
+    cycle.apply(s);
     const double H = 12, rho = s.materials[0].rho, g = -s.gravity_y, M = constrained(s.materials[0]);
     Simulation sim(s);
     const TopRow top(sim);
     for (long n = 0; n < s.steps; ++n) sim.step();
-    REQUIRE(sim.kinetic_energy() < 1e-12);  // at rest
+    MESSAGE(std::string(cycle.name) << ": kinetic energy at the end " << sim.kinetic_energy() << " J/m, strain energy " << sim.energy().strain << " J/m");
+    // At rest: what still moves would swing the stress by about sqrt(kinetic / strain
+    // energy) of itself, below 1e-4 (measured: 3e-16, 2e-12 and 4e-10 J/m of 9 100-9 300).
+    REQUIRE(sim.kinetic_energy() < 1e-8 * sim.energy().strain);
     const Points& p = sim.points();
     double e2 = 0, r2 = 0, u = 0, uref = 0;
     int ntop = 0;
@@ -201,6 +205,18 @@ TEST_CASE("verify: confined column at 1 % strain: stress and settlement high by 
     CHECK(c.syy_l2 < c.representation + c.strain);
     CHECK(c.settlement_err > 0);
     CHECK(c.settlement_err < 1.5 * c.strain);
+}
+
+// #58's target for the column, in each cycle: sigma_yy within 2 % (L2) at 24 cells over H,
+// the coarsest rung. One stress per cell leaves rho g L/4 at every point (1.0 % in L2)
+// and the 1 % strain as much again (the case above). Measured 1.96 % (the paper's
+// mapping), 1.55 % (SMOOTH), 1.70 % (FLIP).
+TEST_CASE("verify: confined column at 1 % strain, 24 cells over H: sigma_yy within 2 % in each cycle [slow]") {
+    for (const Cycle& cycle : kCycles) {
+        const ColumnResult c = column_at_rest("decks/column.deck", cycle);
+        MESSAGE(std::string(cycle.name) << ": sigma_yy L2 error " << c.syy_l2 << ", top settlement error " << c.settlement_err);
+        CHECK(c.syy_l2 < 0.02);
+    }
 }
 
 TEST_CASE("verify: stiff ringing column: period 4H/c_p and peak twice the static settlement") {
