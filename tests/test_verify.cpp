@@ -410,18 +410,16 @@ TEST_CASE("verify: discharge through a slot grows as D^(3/2) (Beverloo), with a 
 }
 
 // MAPPING SMOOTH and ADVECT FLIP pass less through a narrow slot than the paper's
-// cycle: a point moves by the mean of the lattice's field over its square, which across
-// a slot two cells wide rises from 0 at the held edge nodes to its peak within a cell,
-// and under FLIP that field is itself the mass-weighted mean of the points' own
-// increments over a cell and a half, which lags the material where the speed changes
-// across a cell or two (the points in the slot move at about half their own
-// increments). That is a band of the order of a cell at each edge of the slot
-// (Beverloo's offset k: 1.2-1.4 cells with FLIP, 0.4-0.8 with SMOOTH), so at a slot of
-// fixed width the deficit halves with each halving of the cell: at D = 0.25 m and 2, 4,
-// 8 cells across it the paper's cycle passes 921 / 877 / 923 kg/s per m, SMOOTH 580 /
-// 817 / 899, FLIP 226 / 540 / 730. The paper's cycle is the reference (its rate within
-// 5 % of their mean at every rung); each cycle's deficit against the mean of the
-// paper's falls at first order (by 1.85 and 2.07 with FLIP), SMOOTH's faster.
+// cycle: they lose a band at each edge of the slot that grows with the points' squares
+// (Beverloo's offset k: 1.2-1.4 cells with FLIP, 0.4-0.8 with SMOOTH, 0-0.5 with the
+// paper's cycle; tests/README.md: under FLIP the material above the slot hardly moves,
+// and the points in it move at about half their own increments). A band of so many
+// cells falls with the cell, so at a slot of fixed width the deficit halves with each
+// halving of the cell: at D = 0.25 m and 2, 4, 8 cells across it the paper's cycle
+// passes 921 / 877 / 923 kg/s per m, SMOOTH 580 / 817 / 899, FLIP 226 / 540 / 730. The
+// paper's cycle is the reference (its rate within 5 % of their mean at every rung);
+// each cycle's deficit against the mean of the paper's falls at first order (by 1.85
+// and 2.07 with FLIP), SMOOTH's faster.
 // About four minutes (FLIP's finest rung, 71 000 points, 16 000 steps): make verify.
 TEST_CASE("verify: a narrow slot's discharge under MAPPING SMOOTH and ADVECT FLIP converges to the paper's cycle's as the cell halves [slow][verify]") {
     const double D = 0.25;  // two cells of the deck's lattice
