@@ -71,7 +71,7 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
                          Case{"decks/consolidation.deck", 300}}) {
         const Scene s = deck(c.deck, c.steps);
         const long n = news_in_steps(s, c.steps);
-        INFO(c.deck);
+        INFO(std::string(c.deck));
         CHECK(n == 0);
         CHECK(news_in_steps(s, 20, true) == 0);  // profiled steps too
         CHECK(news_in_steps(s, 50, false, Kernel::Reference) == 0);  // the reference cycle too
@@ -105,7 +105,7 @@ TEST_CASE("no allocation inside the time step, from the first step on") {
         Scene f = deck(c.deck, c.steps);
         f.mapping = Mapping::Smooth;
         f.advect = Advect::Flip;
-        INFO(c.deck);
+        INFO(std::string(c.deck));
         CHECK(news_in_steps(f, c.steps) == 0);
         CHECK(news_in_steps(f, 20, false, Kernel::Reference) == 0);
     }

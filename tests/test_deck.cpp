@@ -215,7 +215,7 @@ TEST_CASE("deck: a POLYGON with a box's corners fills exactly the box's cells, i
         const Scene box = read_ok("GRID 8 8 0.5\n" + kMaterial + "CLUSTER 1 " + b + "\n" + kStep);
         const Scene p1 = read_ok("GRID 8 8 0.5\n" + kMaterial + "CLUSTER 1 POLYGON " + ccw + "\n" + kStep);
         const Scene p2 = read_ok("GRID 8 8 0.5\n" + kMaterial + "CLUSTER 1 POLYGON " + cw + "\n" + kStep);
-        INFO("box " << b);
+        INFO("box " << std::string(b));
         CHECK(!cells_of(box, 0).empty());
         CHECK(cells_of(p1, 0) == cells_of(box, 0));
         CHECK(cells_of(p2, 0) == cells_of(box, 0));
@@ -403,7 +403,7 @@ TEST_CASE("deck: FILL=POINTS makes FILL=CELLS's points with PPC=1, and with a bo
     const char* shapes[] = {"0.25 0.25 2.75 1.75", "0.2495 0.5 1.7505 3.2", "POLYGON 0 0 4 0 4 1 1 1 1 4 0 4", "POLYGON 0.3 0.2 3.7 1.1 1.2 3.9",
                             "POLYGON 0 0 4 0 4 1.5 1.5 1.5 1.5 4 0 4"};
     for (const char* shape : shapes) {
-        INFO(shape);
+        INFO(std::string(shape));
         const std::string card = std::string("CLUSTER 1 ") + shape + " PPC=1";
         CHECK(same(made(read_ok(kGrid + kMaterial + card + " FILL=POINTS\n" + kStep)), made(read_ok(kGrid + kMaterial + card + "\n" + kStep))));
     }
@@ -460,7 +460,7 @@ TEST_CASE("deck: a later FILL=POINTS cluster replaces an earlier one at the plac
     }
     const std::vector<double> tri = {0.3, 0.2, 3.7, 1.1, 1.2, 3.9};
     for (const char* ppc : {"3", "2"}) {
-        INFO("PPC=" << ppc);
+        INFO("PPC=" << std::string(ppc));
         const std::vector<Made> over = made(read_ok(grid + mats + "CLUSTER 1 0 0 4 4 PPC=3\nCLUSTER 2 POLYGON 0.3 0.2 3.7 1.1 1.2 3.9 FILL=POINTS PPC=" + ppc + "\n" + kStep));
         std::size_t kept = 0, replaced = 0;
         for (const Made& p : box) (inside(tri, p.x, p.y) ? replaced : kept) += 1;
@@ -739,7 +739,7 @@ TEST_CASE("deck: Fortran real numbers") {
         {"+.25E1", 2.5}, {"0", 0.0},       {"-9.81", -9.81}, {"007", 7.0},    {"1E-310", 1e-310},
     };
     for (const Case& c : cases) {
-        CAPTURE(c.text);
+        INFO("c.text := " << std::string(c.text));
         const Scene s = read_ok(plus(std::string("GRAVITY 0 ") + c.text));
         CHECK(s.gravity_y == c.value);
     }
@@ -748,7 +748,7 @@ TEST_CASE("deck: Fortran real numbers") {
 TEST_CASE("deck: tokens that are not Fortran reals") {
     const char* bad[] = {"1.5.2", "e5", "E5", "5E", "5E+", "1d", ".", "-", "+-3", "0x10", "1_000", "5..", "five", "5m", "5E7.0", "--1"};
     for (const char* t : bad) {
-        CAPTURE(t);
+        INFO("t := " << std::string(t));
         const std::string card = std::string("GRAVITY 0 ") + t;
         Scene s;
         const Diagnostics d = read_text(plus(card), s);
@@ -1314,7 +1314,7 @@ TEST_CASE("deck: several independent errors of the scene are all reported, one e
         bool found = false;
         for (const auto& e : d) found |= e.pos.line == line && has(e.message, phrases[k]);
         CAPTURE(line);
-        CAPTURE(phrases[k]);
+        INFO("phrases[k] := " << std::string(phrases[k]));
         CHECK(found);
         ++k;
     }
@@ -1706,7 +1706,7 @@ TEST_CASE("deck warnings: radians, angles above 60 degrees, kPa, t/m^3, NU near 
         {"MATERIAL 2 ELASTIC E=5E7 NU=0.495 RHO=2000", "NU = 0.495 is nearly incompressible"},
     };
     for (const Case& c : cases) {
-        CAPTURE(c.material);
+        INFO("c.material := " << std::string(c.material));
         const Scene s = read_ok(plus(c.material));
         const Diagnostics w = lpfdm::warnings(s);
         INFO(listing(w));
@@ -1719,7 +1719,7 @@ TEST_CASE("deck warnings: radians, angles above 60 degrees, kPa, t/m^3, NU near 
     }
     for (const char* fine : {"MATERIAL 2 MOHR E=1E3 NU=0.494 RHO=100 PHI=1.6 C=1E3 PSI=0", "MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=60 C=1E3 PSI=1.6",
                              "MATERIAL 2 MOHR E=5E7 NU=0.3 RHO=2000 PHI=0 C=1E3"}) {
-        CAPTURE(fine);
+        INFO("fine := " << std::string(fine));
         const Diagnostics w = lpfdm::warnings(read_ok(plus(fine)));
         INFO(listing(w));
         CHECK(w.empty());

@@ -32,7 +32,7 @@ double worst_error(Simulation& sim, long steps, long every) {
 Simulation::Energy psc_account(Simulation& sim, const char* how) {
     const double worst = worst_error(sim, 10000, 100);
     const Simulation::Energy e = sim.energy();
-    MESSAGE("PSC" << how << ": wall work " << e.w_walls << ", plastic " << e.d_plastic << ", strain " << e.strain << ", damping " << e.d_damping
+    MESSAGE("PSC" << std::string(how) << ": wall work " << e.w_walls << ", plastic " << e.d_plastic << ", strain " << e.strain << ", damping " << e.d_damping
                   << "; largest |energy_error| " << worst);
     CHECK(worst < 0.01);
     CHECK(e.d_plastic > 0.7 * e.w_walls);

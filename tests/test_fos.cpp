@@ -322,7 +322,7 @@ TEST_CASE("--fos warns of a weak free face drawn across the lattice, and of noth
     CHECK(with(points + "2", "").at(0).message.find("unless drawn with FILL=POINTS and PPC=2 under MAPPING SMOOTH") != std::string::npos);
     CHECK(with(slope, "MAPPING SMOOTH\n").size() == 1);
     for (const char* ppc : {"1", "4"}) {
-        INFO("PPC=" << ppc);
+        INFO("PPC=" << std::string(ppc));
         const Diagnostics d = with(points + ppc, "MAPPING SMOOTH\n");
         REQUIRE(d.size() == 1);
         CHECK(d[0].message.find("with FILL=POINTS under MAPPING SMOOTH it is verified with PPC=2 and no ADVECT FLIP only") != std::string::npos);

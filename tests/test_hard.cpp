@@ -1311,11 +1311,11 @@ TEST_CASE("hard: SHIFT changes nothing in a scene whose cells never hold more th
         t.shift = true;
         Simulation a(s), b(t);
         for (long k = 0; k < s.steps; ++k) { a.step(); b.step(); }
-        CHECK_MESSAGE(b.shifted() == 0, deck);
-        CHECK_MESSAGE(a.points().x == b.points().x, deck);
-        CHECK_MESSAGE(a.points().y == b.points().y, deck);
-        CHECK_MESSAGE(a.points().syy == b.points().syy, deck);
-        CHECK_MESSAGE(a.energy().error == b.energy().error, deck);
+        CHECK_MESSAGE(b.shifted() == 0, std::string(deck));
+        CHECK_MESSAGE(a.points().x == b.points().x, std::string(deck));
+        CHECK_MESSAGE(a.points().y == b.points().y, std::string(deck));
+        CHECK_MESSAGE(a.points().syy == b.points().syy, std::string(deck));
+        CHECK_MESSAGE(a.energy().error == b.energy().error, std::string(deck));
     }
 }
 

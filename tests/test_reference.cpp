@@ -213,7 +213,7 @@ TEST_CASE("MAPPING SMOOTH with ADVECT FLIP, walls, softening, points leaving, SH
         s.advect = Advect::Flip;
         refine(s, 2);
         for (auto& sh : s.shakes) sh.start = 0;
-        REQUIRE_MESSAGE(validate(s).empty(), deck);
+        REQUIRE_MESSAGE(validate(s).empty(), std::string(deck));
         const bool column = std::string(deck) == "decks/quake_column_compliant.deck";  // (2 560 points: one thread)
         if (!column) REQUIRE(count_points(s) > 4096);  // the threaded passes' threshold (Simulation::serial)
         compare_kernels(std::string(deck) + " MAPPING SMOOTH ADVECT FLIP, twice as fine", s, steps_for(s));
@@ -238,7 +238,7 @@ TEST_CASE("SHIFT with the paper's cycle and with ADVECT FLIP, fixed edges, walls
         refine(s, c.refine);
         s.shift = true;
         s.shift_above = 1;
-        REQUIRE_MESSAGE(validate(s).empty(), c.deck);
+        REQUIRE_MESSAGE(validate(s).empty(), std::string(c.deck));
         REQUIRE(count_points(s) > 4096);  // the threaded passes' threshold (Simulation::serial)
         const long steps = small_runs() ? c.steps / 4 : c.steps;
         const std::string name = std::string(c.deck) + (c.flip ? " ADVECT FLIP" : "") + " SHIFT ABOVE=1, refined " + std::to_string(c.refine);
