@@ -180,7 +180,7 @@ TEST_CASE("trapdoor: mass inside + outflow == initial at every step, outflow gro
 // - the base's FIX stopping short of the wall (FIX Y 2.01 ...): the wall's base node is
 //   free in y and the sand beside it falls out of the lattice; the deck draws a warning
 //   naming the edge and the column of cells.
-// With both mappings.
+// In each cycle (kCycles).
 TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K0's thrust within 3 %, no point parked, in each cycle [slow]") {
     auto deck = [](const char* fix, const char* wall) {
         return std::string("GRID 40 24 0.25\n"
