@@ -11,6 +11,7 @@
 #endif
 
 #include "../lpfdm.hpp"
+#include "common.hpp"
 
 // The counter lives in tests/alloc_counter.cpp, which replaces the global operator new.
 namespace alloc_counter {
@@ -152,11 +153,9 @@ TEST_CASE("no allocation inside the time step with two threads, once the thread 
     const int before = omp_get_max_threads();
     omp_set_num_threads(2);
     Scene s = deck("decks/bench_mohr.deck", 20);
-    struct Mode { Mapping mapping; Advect advect; };
-    for (const Mode m : {Mode{Mapping::Paper, Advect::Eq12}, Mode{Mapping::Smooth, Advect::Eq12}, Mode{Mapping::Smooth, Advect::Flip}}) {
-        s.mapping = m.mapping;
-        s.advect = m.advect;
-        s.reorder = m.mapping == Mapping::Paper ? 5 : 0;
+    for (const Cycle& cycle : kCycles) {
+        cycle.apply(s);
+        s.reorder = cycle.paper() ? 5 : 0;
         Simulation sim(s);
         sim.step();
         g_news = 0;

@@ -1012,22 +1012,19 @@ namespace {
 
 // The guard's scenes: a weightless elastic block (nothing moves but what SHIFT moves), 2 x 2
 // points in cells of 0.1 m on a lattice of mx x 20 cells, one step with SHIFT (its
-// defaults); mode 0 the paper's mapping, 1 MAPPING SMOOTH, 2 with ADVECT FLIP.
-Scene guard_block(Box box, int mx = 20, int mode = 0) {
+// defaults), in the given cycle (the paper's mapping unless one is named).
+Scene guard_block(Box box, int mx = 20, const Cycle& cycle = kCycles[0]) {
     Scene s;
     s.mx = mx; s.my = 20; s.cell_m = 0.1;
     s.gravity_y = 0;
     s.materials.push_back(Material::elastic(1, 1e7, 0.3, 2000));
     s.clusters.push_back({1, box, 2, {}});
-    if (mode > 0) s.mapping = Mapping::Smooth;
-    if (mode > 1) s.advect = Advect::Flip;
+    cycle.apply(s);
     s.shift = true;
     s.steps = 1;
     s.dt_s = 0.5 * stable_dt(s);
     return s;
 }
-
-const char* mode_name(int mode) { return mode == 0 ? "the paper's mapping" : mode == 1 ? "MAPPING SMOOTH" : "ADVECT FLIP"; }
 
 // One point of the cell holding (fx, fy) moved to (tx, ty); false if that cell holds none.
 bool give(Simulation& sim, double fx, double fy, double tx, double ty) {
@@ -1067,9 +1064,9 @@ int put_own(Simulation& sim, double x0, double y0, const double (&to)[4][2]) {
 // go right or up. Each mapping, and ADVECT FLIP.
 TEST_CASE("hard: SHIFT's guard empties a cell holding more than twice its area by the smallest moves") {
     enum Variant { kOpen, kFixed, kFull };
-    for (int mode = 0; mode < 3; ++mode)
+    for (const Cycle& cycle : kCycles)
         for (const Variant variant : {kOpen, kFixed, kFull}) {
-            Scene s = guard_block({0.5, 0.5, 1.5, 1.5}, 20, mode);
+            Scene s = guard_block({0.5, 0.5, 1.5, 1.5}, 20, cycle);
             if (variant == kFixed)
                 for (const double x : {1.0, 1.1})
                     for (const double y : {1.0, 1.1}) s.fixes.push_back({kFixX | kFixY, {x, y, x, y}, {}});
@@ -1104,7 +1101,7 @@ TEST_CASE("hard: SHIFT's guard empties a cell holding more than twice its area b
             for (std::size_t k = 0; k < p.size(); ++k) ++count[p.cell[k]];
             int most = 0;
             for (const auto& [c, n] : count) most = std::max(most, n);
-            const std::string name = std::string(mode_name(mode)) + (variant == kFixed ? ", the cell's edges fixed" : variant == kFull ? ", its left and lower neighbours full" : "");
+            const std::string name = std::string(cycle.name) + (variant == kFixed ? ", the cell's edges fixed" : variant == kFull ? ", its left and lower neighbours full" : "");
             MESSAGE(name << ": " << sim.shifted() << " moves, the cell holds " << count[target] << " points, no cell more than " << most);
             CHECK(mass_exact(sim));
             CHECK(std::fabs(sim.energy().error) < 1e-12);
@@ -1220,8 +1217,8 @@ TEST_CASE("hard: SHIFT's guard moves no point out of or into the cells of a wall
 // alone, so w_shift is sum -m g . (x_with - x_without) and the potential energy of the run
 // with SHIFT is the other's plus w_shift; energy_error stays at its rounding.
 TEST_CASE("hard: SHIFT's guard puts the potential energy of its moves in w_shift") {
-    for (int mode = 0; mode < 3; ++mode) {
-        Scene t = guard_block({0.5, 0.5, 1.5, 1.5}, 20, mode);
+    for (const Cycle& cycle : kCycles) {
+        Scene t = guard_block({0.5, 0.5, 1.5, 1.5}, 20, cycle);
         t.gravity_x = 5; t.gravity_y = -9.81;
         t.dt_s = 0.5 * stable_dt(t);
         Scene s = t;
@@ -1244,7 +1241,7 @@ TEST_CASE("hard: SHIFT's guard puts the potential energy of its moves in w_shift
         double w = 0;
         for (std::size_t k = 0; k < p.size(); ++k) w += -a.point_mass(k) * (s.gravity_x * (p.x[k] - q.x[k]) + s.gravity_y * (p.y[k] - q.y[k]));
         const Simulation::Energy ea = a.energy(), eb = b.energy();
-        MESSAGE(std::string(mode_name(mode)) << ": w_shift " << ea.w_shift << " J/m, the moves' -m g . dx " << w
+        MESSAGE(std::string(cycle.name) << ": w_shift " << ea.w_shift << " J/m, the moves' -m g . dx " << w
                 << ", energy_error " << ea.error << " with, " << eb.error << " without");
         CHECK(std::fabs(w) > 1e-3);  // (a move of a few cm of 5 kg: not zero)
         CHECK(ea.w_shift == approx(w).epsilon(1e-9));

@@ -194,12 +194,11 @@ TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K
             REQUIRE(read_deck_text(deck("FIX Y 0 0 10 0", wall), "smooth_wall.deck", s).empty());
             CHECK(warnings(s).empty());
             cycle.apply(s);
-            const Mapping mapping = s.mapping;
             Simulation sim(s);
             std::vector<int> made(std::size_t(s.mx * s.my), 0), now(made.size(), 0);
             for (const std::int32_t c : sim.points().cell) ++made[std::size_t(c)];
             // (MAPPING SMOOTH settles later: points near the wall's top yield between 3 and 6 s)
-            const long steps = mapping == Mapping::Paper ? s.steps : 3 * s.steps;
+            const long steps = cycle.paper() ? s.steps : 3 * s.steps;
             for (long n = 0; n < steps; ++n) sim.step();
             for (const std::int32_t c : sim.points().cell) ++now[std::size_t(c)];
             const double k0 = 0.3 / 0.7 * 2000 * 9.81 * 4 * 4 / 2;
@@ -208,8 +207,8 @@ TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K
                     << sim.energy().error << ", parked " << sim.parked());
             CHECK(std::fabs(sim.walls()[0].fx) == approx(k0).epsilon(0.03));
             // The paper's mapping comes to rest to round-off (3e-11 by 3 s), MAPPING SMOOTH to
-            // 8e-9 by 8 s (the thrust 1.2 % below K0's), ADVECT FLIP to 8e-13 (0.2 % below). Before the nodes beyond the sand's
-            // edge took their weight from the material's position (follow_material), those
+            // 8e-9 by 8 s (the thrust 1.2 % below K0's), ADVECT FLIP to 8e-13 (0.2 % below).
+            // Before the nodes beyond the sand's edge took their weight from the material's position (follow_material), those
             // behind the wall's face fell for as long as the run went on: the ratio stayed at
             // 4e-5, energy_error drifted to -2.9 % by 20 s, and at 64 s the run stopped as
             // unstable.
@@ -221,7 +220,7 @@ TEST_CASE("a SMOOTH wall at rest on a smooth base, each way it can be written: K
             // Each cell's points hold its area, compressed a little by their weight; with
             // MAPPING SMOOTH their squares keep their made size and overlap by as much
             // (measured 1.0012). A point more in a cell of four would read 1.25.
-            CHECK(sim.packing() <= (mapping == Mapping::Paper ? 1.0 : 1.01));
+            CHECK(sim.packing() <= (cycle.paper() ? 1.0 : 1.01));
             CHECK(sim.packing() > 0.99);
         }
     Scene s;
