@@ -5505,8 +5505,8 @@ inline void Simulation::smooth_node_force(int c, bool right, bool left, bool abo
 //   - a held direction starts from its support's last increment, not the points': from
 //     theirs, the points beside a wall took d - b every step through the weights, which
 //     damped them (an undamped column compressed by a wall lost 8.6 % of the wall's work;
-//     now 1e-5 once the wall moves); never giving the points the wall's change (b = d
-//     always) left them behind the lattice, and lost 38 %.
+//     now its account ends at 2.7e-5 of the energy in play); never giving the points the
+//     wall's change (b = d always) left them behind the lattice, and lost 38 %.
 // The kinetic energy of the account is the points' leapfrog product, sum_p m_p d_p(old) .
 // d_p(new) / 2 dt^2. The supports read M_n and F_n + g (M_n - m_n) (inertia): the
 // reactions, the supports' work, and a wall's force, M_n (d - b_n) / dt^2 - F_n, which
@@ -9421,7 +9421,7 @@ LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
         for (const Cluster& c : s.clusters)
             if (c.ppc == 1) {
                 std::snprintf(b, sizeof b, "ADVECT FLIP with PPC=1: a checkerboard of the points' increments is invisible to the lattice and to damping, and rings on "
-                                           "(column.deck: unbalanced ratio 0.01 after 6000 steps, 3e-6 with PPC=2; the footing's q/c 22-29 %% high): use PPC=2 or more");
+                                           "(column.deck: unbalanced ratio 0.01 after 6000 steps, 3e-6 with PPC=2; the footing's q/c 22-33 %% high): use PPC=2 or more");
                 warn(c.pos);
             }
     // (measured: decks/README's RESERVOIR paragraph; the header's "Pore water and loads")
