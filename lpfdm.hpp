@@ -9427,7 +9427,7 @@ LPFDM_DEF Diagnostics warnings(const Scene& s, const Unread& unread) {
     // (measured: decks/README's RESERVOIR paragraph; the header's "Pore water and loads")
     if (s.reservoir.on && s.water.on && s.mapping == Mapping::Smooth && s.advect != Advect::Flip && !unread.mapping) {
         std::snprintf(b, sizeof b, "with MAPPING SMOOTH and no ADVECT FLIP the reservoir's pressure misses the parts of squares past the material's faces: "
-                                   "drawdown.deck swells there, draws water in and makes 38 %% of its energy; add ADVECT FLIP");
+                                   "drawdown.deck draws 0.11 m^3/m of water in as it stands (FLIP: 0.0006) and its crest settles 1.26 m (0.64); add ADVECT FLIP");
         warn(s.reservoir.pos);
     }
     if (!unread.step && s.steps >= 1)

@@ -486,10 +486,10 @@ Ringing column_ringing(int refine_by) {
     if (refine_by > 1) refine(s, refine_by);
     Simulation sim(s);
     const Points& p = sim.points();
-    std::vector<std::size_t> top;
+    const std::vector<double>& y0 = sim.initial_y();  // by point id: the storage is sorted by cell every REORDER steps
     const double H = 12;
-    for (std::size_t k = 0; k < p.size(); ++k) if (p.y[k] > H - 0.5 * s.cell_m) top.push_back(k);
-    const double ytop0 = p.y[top[0]];
+    double ytop0 = 0;
+    for (const double y : y0) ytop0 = std::max(ytop0, y);  // the top row of points
     const Material& m = s.materials[0];
     const double M = m.E * (1 - m.nu) / ((1 + m.nu) * (1 - 2 * m.nu));
     const double u_static = m.rho * 9.81 / M * (H * ytop0 - 0.5 * ytop0 * ytop0);
@@ -498,8 +498,10 @@ Ringing column_ringing(int refine_by) {
     for (long n = 1; n <= s.steps; ++n) {
         sim.step();
         double u = 0;
-        for (std::size_t k : top) u += ytop0 - p.y[k];
-        u /= double(top.size());
+        int top = 0;
+        for (std::size_t k = 0; k < p.size(); ++k)
+            if (y0[std::size_t(p.id[k])] > ytop0 - 1e-9) { u += y0[std::size_t(p.id[k])] - p.y[k]; ++top; }
+        u /= top;
         u_max = std::max(u_max, u);
         if (u_prev < u_static && u >= u_static) t_up.push_back(s.dt_s * (n - 1 + (u_static - u_prev) / (u - u_prev)));
         u_prev = u;
@@ -576,6 +578,7 @@ TEST_CASE("undamped column rings with period 4H/c_p and twice the static settlem
     const Ringing r2 = column_ringing(2);
     MESSAGE("ringing column, 48 cells over H: period " << r2.period << " s, peak / static " << r2.amplitude_ratio);
     CHECK(std::fabs(r2.period - T) < std::fabs(r1.period - T));
+    CHECK(std::fabs(r2.amplitude_ratio - 2) < std::fabs(r1.amplitude_ratio - 2));  // measured 2.020, then 2.006
 }
 
 TEST_CASE("mass: inside + outflow == initial exactly, while points fall out of the lattice") {

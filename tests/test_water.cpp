@@ -352,16 +352,16 @@ STEP 1.5E-4 5000
             CHECK(std::fabs(sim.energy().error) < 0.1);
         }
     }
-    SUBCASE("drawdown.deck at L = 1 m with MAPPING SMOOTH and ADVECT FLIP: it stands under its reservoir, the energy account closed") {
-        // The material's faces are the edges of the cells holding points: when a cell that
-        // held only a sliver of a square counted, the reservoir's pressure on its nodes (of
-        // that sliver's mass) moved one 80 m in the second step.
+    // drawdown.deck at L = 1 m under MAPPING SMOOTH, its reservoir kept, over the 4 s
+    // before the drawdown would start: the face's move, the account, the water drawn in.
+    struct Standing { double moved, error, drained; };
+    auto standing = [](Advect a) {
         Scene s;
         REQUIRE(read_deck("decks/drawdown.deck", s).empty());
         s.mx /= 2; s.my /= 2; s.cell_m *= 2; s.dt_s *= 2;
         s.outputs.clear();
         s.mapping = Mapping::Smooth;
-        s.advect = Advect::Flip;
+        s.advect = a;
         s.reservoir.to = s.reservoir.level;
         REQUIRE(validate(s).empty());
         Simulation sim(s);
@@ -369,10 +369,26 @@ STEP 1.5E-4 5000
         const long steps = std::lround(s.reservoir.start / s.dt_s);
         for (long n = 0; n < steps; ++n) sim.step();
         const double moved = sim.points().x[std::size_t(sim.slot_of(sim.tracked()[1]))] - x0;
-        MESSAGE("SMOOTH + FLIP, reservoir kept: the face moved " << moved << " m, energy error " << sim.energy().error << ", drained " << sim.drained());
-        CHECK(std::fabs(moved) < 0.01);                 // measured 3 mm, as with the paper's mapping
-        CHECK(std::fabs(sim.energy().error) < 1e-3);    // measured 4e-5
-        CHECK(sim.drained() > -0.002);                  // little water enters (0.0008 m^3/m in 4 s)
+        return Standing{moved, sim.energy().error, sim.drained()};
+    };
+    SUBCASE("drawdown.deck at L = 1 m with MAPPING SMOOTH and ADVECT FLIP: it stands under its reservoir, the energy account closed") {
+        // The material's faces are the edges of the cells holding points: when a cell that
+        // held only a sliver of a square counted, the reservoir's pressure on its nodes (of
+        // that sliver's mass) moved one 80 m in the second step.
+        const Standing r = standing(Advect::Flip);
+        MESSAGE("SMOOTH + FLIP, reservoir kept: the face moved " << r.moved << " m, energy error " << r.error << ", drained " << r.drained);
+        CHECK(std::fabs(r.moved) < 0.01);   // measured 3 mm, as with the paper's mapping
+        CHECK(std::fabs(r.error) < 1e-3);   // measured 4e-5
+        CHECK(r.drained > -0.002);          // little water enters (0.0008 m^3/m in 4 s)
+    }
+    SUBCASE("drawdown.deck at L = 1 m with MAPPING SMOOTH and no ADVECT FLIP draws water in through its faces (the reader's warning)") {
+        // The reservoir's pressure misses the parts of squares past the material's faces
+        // (the warning's words): the faces swell and draw water in, 56 times what FLIP lets in
+        // (measured 0.045 m^3/m in 4 s; 0.11 at L = 0.5 m, where the crest then settles
+        // 1.26 m against FLIP's 0.64 m). Should a cure come, this says the warning can go.
+        const Standing r = standing(Advect::Eq12);
+        MESSAGE("SMOOTH without FLIP, reservoir kept: the face moved " << r.moved << " m, energy error " << r.error << ", drained " << r.drained);
+        CHECK(r.drained < -0.01);
     }
 }
 
