@@ -8086,27 +8086,12 @@ LPFDM_DEF void Simulation::nodal_forces() {
         if (left && above) { at(c - 1); add_cell_force<2>(xx, yy, xy, fx, fy); m += ma; }
         if (right && below) { at(c - mx); add_cell_force<3>(xx, yy, xy, fx, fy); m += ma; }
         if (left && below) { at(c - mx - 1); add_cell_force<4>(xx, yy, xy, fx, fy); m += ma; }
-        if constexpr (!in) if (hourglass) {
-            // HOURGLASS: a viscous force on the zero-energy mode only, F[a] = -kappa
-            // (M_J / 4) q_J h[a] / dt^2. It is orthogonal to every affine increment
-            // field (sum h = sum h x = sum h y = 0), so uniform strain and rigid motion
-            // feel nothing, and it only ever takes energy out.
-            auto hg = [&](int a, double h) {
-                fx -= khg * cm[a] * hgx_[std::size_t(a)] * h;
-                fy -= khg * cm[a] * hgy_[std::size_t(a)] * h;
-            };
-            if (right && above) hg(c, 1);
-            if (left && above) hg(c - 1, -1);
-            if (right && below) hg(c - mx, -1);
-            if (left && below) hg(c - mx - 1, 1);
-        }
-        if constexpr (!in) if (smooth) {  // MAPPING SMOOTH: F[a] -= s_x s_y (shx, shy) / L
-            auto moment = [&](int a, double h) { fx -= h * shx_[std::size_t(a)]; fy -= h * shy_[std::size_t(a)]; };
-            if (right && above) moment(c, 1);
-            if (left && above) moment(c - 1, -1);
-            if (right && below) moment(c - mx, -1);
-            if (left && below) moment(c - mx - 1, 1);
-        }
+        // A node taken one value at a time (every node, with either option): MAPPING
+        // SMOOTH's moments, then HOURGLASS's viscous force on the zero-energy mode, by the
+        // functions reference_nodal_forces calls, in its order (the other order differed
+        // in the last bit where both are on).
+        if constexpr (!in) if (smooth) smooth_node_force(c, right, left, above, below, fx, fy);
+        if constexpr (!in) if (hourglass) hourglass_node_force(c, right, left, above, below, khg, fx, fy);
         const int n = j * (mx + 1) + i;
         const T mn = 0.25 * m;  // eq. 10: 1/4 of the connected cells' masses
         if (keep_prev) {

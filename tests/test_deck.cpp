@@ -7,6 +7,7 @@
 #include "common.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -578,7 +579,7 @@ TEST_CASE("deck: END ends the deck; the cards after it are not read") {
     CHECK(s.materials.size() == 1);
 }
 
-TEST_CASE("deck: every card of the deck language (decks/README.md) in one scene") {
+TEST_CASE("deck: the usual cards of a scene, read into the scene's fields") {
     const Scene s = read_ok(
         "TITLE  Sand heap pushed by a wall\n"
         "GRID   40 24 0.5\n"
@@ -607,6 +608,27 @@ TEST_CASE("deck: every card of the deck language (decks/README.md) in one scene"
     CHECK(s.walls.size() == 1);
     CHECK(s.outputs.size() == 2);
     CHECK(s.end_pos.line == 19);
+}
+
+// tests/decks/good_every_card.deck, which check_decks.sh and check_cli.sh run, is meant
+// to hold every card the reader knows: a card added to the language and not to it fails.
+TEST_CASE("deck: tests/decks/good_every_card.deck holds every card of the deck language") {
+    std::ifstream in("tests/decks/good_every_card.deck");
+    REQUIRE(in);
+    std::vector<std::string> first;  // each line's first word, upper case
+    for (std::string line; std::getline(in, line);) {
+        std::istringstream words(line);
+        std::string w;
+        if (!(words >> w)) continue;
+        std::transform(w.begin(), w.end(), w.begin(), [](unsigned char c) { return char(std::toupper(c)); });
+        first.push_back(w);
+    }
+    for (const std::string& card : lpfdm::card_names()) {
+        INFO("card " << card);
+        CHECK(std::find(first.begin(), first.end(), card) != first.end());
+    }
+    Scene s;
+    CHECK(lpfdm::read_deck("tests/decks/good_every_card.deck", s).empty());
 }
 
 // ======================================================= lexical rules ===

@@ -186,6 +186,10 @@ TEST_CASE("the options no shipped deck uses, on a flowing column and a hopper: t
         Scene h = base;
         h.hourglass = 0.05;
         compare_kernels(std::string(deck) + " HOURGLASS", h, steps);
+        h.mapping = Mapping::Smooth;  // (the fast kernel once added the two nodal terms in the other order)
+        compare_kernels(std::string(deck) + " HOURGLASS MAPPING SMOOTH", h, steps);
+        h.advect = Advect::Flip;
+        compare_kernels(std::string(deck) + " HOURGLASS MAPPING SMOOTH ADVECT FLIP", h, steps);
         Scene m = base;
         m.mapping = Mapping::Smooth;
         compare_kernels(std::string(deck) + " MAPPING SMOOTH", m, steps);
