@@ -863,8 +863,8 @@ LPFDM_DEF std::string record_problem(const Shake& k);
 // largest unbalanced nodal force over the mean gross one) is below this. The ratio takes
 // the largest force, not the mean, so the bound is FLAC's classic 1e-3 rather than its
 // 1e-5 for a mean: decks/column.deck falls below it at step 1900 of 6000 and ends at 1e-10,
-// a slope standing after an earthquake (decks/quake_slope.deck) ends at 3e-5, a collapsing
-// cliff stays above 0.3.
+// a slope still settling after an earthquake (decks/quake_slope.deck) ends at 0.01, a
+// collapsing cliff (decks/cliff.deck) stays above 0.19.
 inline constexpr double kAtRest = 1e-3;
 // Factor of safety by strength reduction (lpfdm --fos; the section FACTOR OF SAFETY).
 struct FosTrial {
@@ -2035,7 +2035,7 @@ LPFDM_INLINE inline void abs_of(double v, double& a) { a = std::fabs(v); }
 // between 0.2 and 1.1 times its mean with a period of about 30 steps). Taken about the
 // mean, the damping acts on the vibration alone and a steady flow is not held back; at
 // rest the mean falls to 0 and it is eq. 14. The window must outlast the vibration's
-// period (tests/README.md measures 100 and 500 steps alike on that deck).
+// period (tests/README.md measures windows of 2.4 and 1.2 ms alike on that deck).
 template <class T>
 LPFDM_INLINE inline void damped_increment(const T& u0, const T& f, const T& m, double dt2, double alpha, T& u, const T& mean = T{}) {
     const T zero{}, unit = zero + 1, d = u0 - mean;
@@ -3930,8 +3930,8 @@ LPFDM_DEF double Simulation::packing() const {
 //     reads 0.9 there, eq. 8's sum 2.25), and eq. 12's cell-wise motion brings them so
 //     between passes; the guard moves the nearest line's points a few hundredths of L;
 //   - every 10 steps, not every step: the pass costs about as much as the paper's step
-//     (bench_flow.deck: 7.9 s without, 19 s moving every step at r / 10 for the same
-//     packing, 9.7 s every 10 steps);
+//     (bench_flow.deck: 8.5 s without, 10.8 s every 10 steps, one thread, tests/README.md;
+//     every step at r / 10 for the same packing took twice as long as every 10 steps);
 //   - a point keeps its mass, volume, stress and (ADVECT FLIP) its own increment, so mass,
 //     and under FLIP momentum, are kept exactly; the potential energy the moves change is
 //     the account's w_shift, work in. Under eq. 12 the nodes keep their increments while
@@ -4730,8 +4730,9 @@ inline void Simulation::load_work() {
 //   brings its motion). With the paper's literal du = 0 a falling block is braked at
 //   every new row of cells it enters (tests: free fall at exactly g).
 //   Known: energy is not conserved exactly where stressed points cross cell edges. A 2 m
-//   drop of a block 4 cells across rebounds to 1.27 of its height; 8 cells across, to
-//   0.87. The excess falls with L (tests/test_hard.cpp gives the figures).
+//   drop of a block 4 cells across rebounds to 1.21 of its height (dt 0.5 of the limit;
+//   1.27 at 0.1); 8 cells across, to 0.87. The excess falls with L (tests/test_hard.cpp
+//   gives the figures).
 // ======================================================================================
 
 LPFDM_DEF void Simulation::step_reference() {

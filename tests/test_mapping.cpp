@@ -237,7 +237,7 @@ TEST_CASE("MAPPING SMOOTH at L = 0.25 m, with eq. 12 and with ADVECT FLIP: the w
 // plateau and peak within 3 % of q. The wall's overshoot is the specimen's inertia, which
 // FLIP does not take away in the transfer: at 0.01 m/s the wall read 1.035 q after 0.5 %
 // strain (1.062 q before); at 5 mm/s measured 1.029 q, the base 1.013 q, wall against
-// base 1.7 %. About a minute.
+// base 1.6 %. About a minute.
 TEST_CASE("ADVECT FLIP: without gravity the wall's force equals the base reaction; the base holds q [slow]") {
     const double q = 2 * 15000 * std::tan((45 + 10) * 3.14159265358979323846 / 180);
     const Compression c = compress(Mapping::Smooth, 0.3, 1, 0.005, Advect::Flip);
