@@ -5451,7 +5451,7 @@ inline void Simulation::smooth_point_pass() {
 // reference_nodal_forces' share of MAPPING SMOOTH at the node that is corner [1] of cell c
 // (which of its four cells exist: right, left, above, below): F[a] -= s_x s_y (shx, shy) / L,
 // s = the corner's signs of b.
-inline void Simulation::smooth_node_force(int c, bool right, bool left, bool above, bool below, double& fx, double& fy) const {
+LPFDM_INLINE inline void Simulation::smooth_node_force(int c, bool right, bool left, bool above, bool below, double& fx, double& fy) const {
     auto moment = [&](int a, double h) { fx -= h * shx_[std::size_t(a)]; fy -= h * shy_[std::size_t(a)]; };
     if (right && above) moment(c, 1);
     if (left && above) moment(c - 1, -1);
@@ -5888,7 +5888,7 @@ inline void Simulation::carried_row(int j, int i0, int i1) {
 
 // reference_nodal_forces' share of HOURGLASS at the node that is corner [1] of cell c:
 // F[a] = -kappa (M_J / 4) q_J h[a] / dt^2 (khg = kappa / 4 dt^2).
-inline void Simulation::hourglass_node_force(int c, bool right, bool left, bool above, bool below, double khg, double& fx, double& fy) const {
+LPFDM_INLINE inline void Simulation::hourglass_node_force(int c, bool right, bool left, bool above, bool below, double khg, double& fx, double& fy) const {
     auto hg = [&](int a, double h) {
         fx -= khg * cmass_[std::size_t(a)] * hgx_[std::size_t(a)] * h;
         fy -= khg * cmass_[std::size_t(a)] * hgy_[std::size_t(a)] * h;
