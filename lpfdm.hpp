@@ -3732,7 +3732,16 @@ inline void Simulation::drive_embedded(WallState& ws, double ddx, double ddy, do
                 drive(b, d);
             } else {
                 const double wa = 1 - f, wb = f;
-                const double m = mass[a] * wb * wb + mass[b] * wa * wa, force = wa * F[b] - wb * F[a];
+                // The pair's inertia: its masses by the line's weights. ADVECT FLIP's are the
+                // transfer's (inertia()); where the pair holds only slivers of squares past a
+                // face (a wall reaching out of the material), those are of order s^2 in the
+                // sliver's width s while eq. 8's forces are of order s, and the pair's mode
+                // ran away (test_hard.cpp: 0.5 m at step 4). Below 1 % of eq. 10's masses
+                // of the pair (a square inside a cell gives each of its nodes 1 / PPC^2 of
+                // eq. 10's share or more) the mode takes eq. 10's, whose ratio to the force
+                // is the paper's cycle's. (Without FLIP the two are the same masses.)
+                const double mf = mass[a] * wb * wb + mass[b] * wa * wa, m10 = nmass_[a] * wb * wb + nmass_[b] * wa * wa;
+                const double m = mf < 0.01 * m10 ? m10 : mf, force = wa * F[b] - wb * F[a];
                 double r = 0;
                 damped_increment(b0[b] - b0[a], force, m, dt2, sc_.damping, r, mean_at(mean_along, b) - mean_at(mean_along, a));  // eq. 13-14 for the pair's free motion
                 drive(a, d - wb * r);
