@@ -3736,10 +3736,12 @@ inline void Simulation::drive_embedded(WallState& ws, double ddx, double ddy, do
                 // transfer's (inertia()); where the pair holds only slivers of squares past a
                 // face (a wall reaching out of the material), those are of order s^2 in the
                 // sliver's width s while eq. 8's forces are of order s, and the pair's mode
-                // ran away (test_hard.cpp: 0.5 m at step 4). Below 1 % of eq. 10's masses
+                // ran away (test_hard.cpp: 0.3 m at step 4). Below 1 % of eq. 10's masses
                 // of the pair (a square inside a cell gives each of its nodes 1 / PPC^2 of
-                // eq. 10's share or more) the mode takes eq. 10's, whose ratio to the force
-                // is the paper's cycle's. (Without FLIP the two are the same masses.)
+                // eq. 10's share or more: 1 % or more up to PPC=10; above, a lone square in
+                // a cell's far corner may also switch, which only gives the pair the paper's
+                // inertia) the mode takes eq. 10's, whose ratio to the force is the paper's
+                // cycle's. (Without FLIP the two are the same masses.)
                 const double mf = mass[a] * wb * wb + mass[b] * wa * wa, m10 = nmass_[a] * wb * wb + nmass_[b] * wa * wa;
                 const double m = mf < 0.01 * m10 ? m10 : mf, force = wa * F[b] - wb * F[a];
                 double r = 0;
@@ -8080,8 +8082,8 @@ LPFDM_DEF void Simulation::nodal_forces() {
     // (i-1, j-1); with b = (+-1, +-1)/2L the transpose of eq. 5 gives the signs below (X,
     // Y, S = sum V sigma_xx, _yy, _xy, already divided by 2L). Cells outside the lattice
     // count as empty; empty cells hold zeros.
-    // Interior: a node with all four cells and no hourglass force, where the tests are
-    // known true at compile time (the same sums in the same order).
+    // Interior: a node with all four cells, no HOURGLASS and no MAPPING SMOOTH, where the
+    // tests are known true at compile time (the same sums in the same order).
     // T: node (i, j), or (interior only) the nodes i .. i + 3 in the lanes of a vector.
     auto node_force = [&](int i, int j, auto interior, auto tag, bool& gained) LPFDM_INLINE {
         using T = typename decltype(tag)::type;

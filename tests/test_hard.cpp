@@ -1415,7 +1415,7 @@ TEST_CASE("hard: SHIFT moves no point across a fixed edge, crowded against it") 
 // of its material line, and their free relative motion is eq. 13 on the pair's masses
 // (drive_embedded). Under FLIP those were the transfer's, of order s^2 in the width s of
 // the sliver of squares in the cell beyond the face, against eq. 8's force of order s: the
-// pair moved 0.5 m at step 4 and the run stopped. Now below 1 % of eq. 10's masses the pair
+// pair moved 0.3 m at step 4 and the run stopped. Now below 1 % of eq. 10's masses the pair
 // takes eq. 10's: the run stays healthy and makes no energy. (FLIP's account loses 45 % of
 // the little energy in play at step 2: the wall's start is an impact, whose change reaches
 // the points through the weights; at the end 1.5e-4, the paper's cycle 1.9e-3.)
